@@ -1,0 +1,222 @@
+// The radmesh program: subcommands `run` (mesh + solve + write results) and
+// `mesh` (mesh and quality only). Every error is caught here, once, and
+// printed as one line; the exit status is then non-zero.
+
+#include "io/obj_reader.h"
+#include "io/png_render.h"
+#include "io/probe_file.h"
+#include "io/summary.h"
+#include "io/vtk_writer.h"
+#include "meshing/errors.h"
+#include "meshing/mesh.h"
+#include "radiosity/probe.h"
+#include "radiosity/solve.h"
+
+#include <CLI/CLI.hpp>
+
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <optional>
+
+namespace {
+
+using namespace radmesh;
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+struct Params {
+  std::string scene;
+  std::string out_dir = "radmesh-out";
+  MeshingOptions meshing;
+  SolveOptions solve;
+  std::string probe_file;
+  bool quiet = false;
+  bool png = true;
+};
+
+// Progress on stderr for phases longer than a second: phase, percent, elapsed.
+class Reporter {
+public:
+  explicit Reporter(bool quiet) : quiet_(quiet) {}
+  void begin(const std::string& phase) {
+    phase_ = phase;
+    start_ = last_ = Clock::now();
+    shown_ = false;
+  }
+  void update(const std::string& phase, double fraction) {
+    if (quiet_) return;
+    if (phase != phase_) begin(phase);
+    const auto now = Clock::now();
+    const double elapsed = std::chrono::duration<double>(now - start_).count();
+    if (elapsed < 1.0 || std::chrono::duration<double>(now - last_).count() < 0.5) return;
+    last_ = now;
+    shown_ = true;
+    std::fprintf(stderr, "\r[radmesh] %-14s %5.1f%%  %6.1f s", phase.c_str(), 100.0 * fraction, elapsed);
+    std::fflush(stderr);
+  }
+  // Ends a phase; returns its wall time.
+  double end() {
+    const double s = std::chrono::duration<double>(Clock::now() - start_).count();
+    if (!quiet_ && (shown_ || s >= 1.0)) std::fprintf(stderr, "\r[radmesh] %-14s done    %6.1f s\n", phase_.c_str(), s);
+    return s;
+  }
+  void note(const std::string& line) const {
+    if (!quiet_) std::fprintf(stderr, "[radmesh] %s\n", line.c_str());
+  }
+
+private:
+  bool quiet_;
+  std::string phase_;
+  Clock::time_point start_, last_;
+  bool shown_ = false;
+};
+
+// Options that can be checked without reading anything: done before any work.
+void check_params(const Params& p, bool solving) {
+  if (p.meshing.max_edge < 0.0 || !std::isfinite(p.meshing.max_edge))
+    throw InputError("--max-edge " + std::to_string(p.meshing.max_edge) + " must be > 0 (or 0 for auto)");
+  if (solving) check_solve_options(p.solve);
+  if (fs::exists(p.out_dir) && !fs::is_directory(p.out_dir))
+    throw InputError("-o " + p.out_dir + ": exists and is not a directory");
+  if (!p.probe_file.empty() && !fs::exists(p.probe_file))
+    throw InputError("--probe " + p.probe_file + ": no such file");
+}
+
+int run(const Params& p, bool solving) {
+  check_params(p, solving);
+  Reporter rep(p.quiet);
+  RunInfo info;
+  info.command = solving ? "run" : "mesh";
+  info.scene_path = p.scene;
+  info.solve = p.solve;
+
+  rep.begin("read");
+  const Scene scene = read_obj_scene(p.scene);
+  info.seconds.push_back({"read", rep.end()});
+  for (const std::string& w : scene.report.warnings) rep.note("warning: " + w);
+  std::vector<Probe> probes;
+  if (!p.probe_file.empty()) probes = read_probes(p.probe_file);
+
+  info.meshing = resolve_meshing_options(scene, p.meshing);
+  rep.begin("mesh");
+  const Mesh mesh = mesh_scene(scene, info.meshing, &info.mesh_report);
+  const TriangleQuality quality = compute_quality(mesh);
+  info.seconds.push_back({"mesh", rep.end()});
+  rep.note(std::to_string(scene.patches.size()) + " patches, " + std::to_string(mesh.triangle_count()) +
+           " elements (max edge " + std::to_string(info.meshing.max_edge) + ")");
+
+  std::optional<Solution> sol;
+  std::vector<ProbeResult> probe_results;
+  if (solving) {
+    rep.begin("form factors");
+    sol = solve_matrix(scene, mesh, p.solve, [&](const std::string& ph, double f) { rep.update(ph, f); });
+    info.seconds.push_back({"form_factors", sol->stats.seconds_form_factors});
+    info.seconds.push_back({"solve", sol->stats.seconds_solve});
+    rep.end();
+    if (!probes.empty()) {
+      rep.begin("probes");
+      probe_results = evaluate_probes(scene, mesh, sol->element, probes, p.solve);
+      info.seconds.push_back({"probes", rep.end()});
+    }
+  }
+
+  // Everything is computed: only now is the output directory touched.
+  fs::create_directories(p.out_dir);
+  rep.begin("write");
+  std::vector<std::string> written;
+  const std::string vtu = (fs::path(p.out_dir) / (solving ? "radiosity.vtu" : "mesh.vtu")).string();
+  if (solving)
+    write_vtu(vtu, scene, mesh, quality, *sol);
+  else
+    write_mesh_vtu(vtu, scene, mesh, quality);
+  written.push_back(vtu);
+  if (!probes.empty()) {
+    const std::string csv = (fs::path(p.out_dir) / "probes.csv").string();
+    write_probe_csv(csv, scene, probes, probe_results);
+    written.push_back(csv);
+  }
+  if (solving && p.png) {
+    const std::string png = (fs::path(p.out_dir) / "radiosity.png").string();
+    std::string why;
+    if (render_png(png, scene, mesh, *sol, RenderOptions{}, &why))
+      written.push_back(png);
+    else
+      rep.note("PNG skipped: " + why);
+  }
+  info.seconds.push_back({"write", rep.end()});
+  const std::string summary = (fs::path(p.out_dir) / "summary.json").string();
+  write_json(summary, make_summary(info, scene, mesh, quality, sol ? &*sol : nullptr));
+  written.push_back(summary);
+
+  if (!p.quiet) {
+    if (sol) {
+      const auto& st = sol->stats;
+      std::fprintf(stderr, "[radmesh] %lld form factors, %lld rays cast, %lld skipped; residual %.2g; energy imbalance %.2g\n",
+                   st.form_factors, st.rays_cast, st.rays_skipped,
+                   std::max({st.residual[0], st.residual[1], st.residual[2]}),
+                   st.power_emitted.x > 0 ? (st.power_emitted.x - st.power_absorbed.x - st.power_escaped.x) / st.power_emitted.x : 0.0);
+    }
+  }
+  for (const std::string& w : written) std::printf("%s\n", w.c_str());
+  return 0;
+}
+
+void add_common(CLI::App* cmd, Params& p) {
+  cmd->add_option("SCENE", p.scene, "scene file (OBJ + MTL)")->required()->check(CLI::ExistingFile);
+  cmd->add_option("-o,--output", p.out_dir, "output directory (created; default radmesh-out)");
+  cmd->add_option("--max-edge", p.meshing.max_edge,
+                  "longest mesh edge, in scene units (default 0 = scene diagonal / 24)")
+      ->check(CLI::Range(0.0, 1e300));
+  cmd->add_option("--min-angle", p.meshing.min_angle, "smallest triangle angle wanted, degrees (default 20)")
+      ->check(CLI::Range(0.0, 30.0));
+  cmd->add_flag("-q,--quiet", p.quiet, "no progress on stderr");
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"radmesh: exact-geometry meshing and radiosity.\n"
+               "Lengths are in the scene file's units; emission (Ke) is radiant exitance, and\n"
+               "radiosity comes out in the same unit (per unit area of the file's unit)."};
+  app.require_subcommand(1);
+  Params run_p, mesh_p;
+
+  CLI::App* run_cmd = app.add_subcommand("run", "mesh the scene, solve radiosity, write .vtu, .png, summary.json");
+  add_common(run_cmd, run_p);
+  run_cmd->add_option("--tolerance", run_p.solve.tolerance,
+                      "Gauss-Seidel stops when a sweep changes radiosity by less than this fraction of the "
+                      "largest value (default 1e-6)")
+      ->check(CLI::Range(1e-15, 0.999));
+  run_cmd->add_option("--threads", run_p.solve.threads, "worker threads, 0 = all cores (default 0)")
+      ->check(CLI::Range(0, 4096));
+  run_cmd->add_option("--rays", run_p.solve.rays, "shadow rays per element pair (default 16)")
+      ->check(CLI::Range(1, 4096));
+  run_cmd->add_option("--max-memory", run_p.solve.max_memory_gb,
+                      "GiB the form-factor matrix may use (default 0 = half the memory)")
+      ->check(CLI::Range(0.0, 1e6));
+  run_cmd->add_option("--probe", run_p.probe_file,
+                      "probe file: lines 'label x y z nx ny nz'; writes probes.csv")
+      ->check(CLI::ExistingFile);
+  run_cmd->add_flag("!--no-png", run_p.png, "do not render radiosity.png");
+
+  CLI::App* mesh_cmd = app.add_subcommand("mesh", "mesh the scene and report quality; writes mesh.vtu and summary.json");
+  add_common(mesh_cmd, mesh_p);
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  }
+  try {
+    if (*run_cmd) return run(run_p, true);
+    return run(mesh_p, false);
+  } catch (const radmesh::Error& e) {
+    std::fprintf(stderr, "radmesh: error: %s\n", e.what());
+    return 1;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "radmesh: internal error: %s\n", e.what());
+    return 3;
+  }
+}

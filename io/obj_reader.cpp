@@ -1,0 +1,216 @@
+// OBJ + MTL reading. tinyobjloader parses; a line-by-line pre-scan of our own
+// checks every value first, because tinyobjloader reads "nan" or "x" as 0 and
+// keeps no line numbers, and we owe users a message with file:line and value.
+
+#include "io/obj_reader.h"
+
+#include "meshing/errors.h"
+
+#include <tiny_obj_loader.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <set>
+#include <sstream>
+
+namespace radmesh {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+std::vector<std::string> split_ws(const std::string& line) {
+  std::istringstream in(line);
+  std::vector<std::string> out;
+  for (std::string t; in >> t;) out.push_back(t);
+  return out;
+}
+
+bool parse_double(const std::string& s, double* v) {
+  if (s.empty()) return false;
+  char* end = nullptr;
+  *v = std::strtod(s.c_str(), &end);
+  return end == s.c_str() + s.size();
+}
+
+bool parse_int(const std::string& s, long* v) {
+  if (s.empty()) return false;
+  char* end = nullptr;
+  *v = std::strtol(s.c_str(), &end, 10);
+  return end == s.c_str() + s.size();
+}
+
+std::vector<std::string> read_lines(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw IoError(path + ": cannot open for reading");
+  std::vector<std::string> lines;
+  for (std::string l; std::getline(in, l);) {
+    if (!l.empty() && l.back() == '\r') l.pop_back();
+    lines.push_back(l);
+  }
+  if (in.bad()) throw IoError(path + ": read error");
+  return lines;
+}
+
+// Per material: where it and its Kd/Ke are in the MTL file.
+struct MtlInfo {
+  std::string file;
+  int line = 0, kd_line = 0, ke_line = 0;
+};
+
+void scan_mtl(const std::string& path, std::map<std::string, MtlInfo>* info) {
+  const auto lines = read_lines(path);
+  std::string current;
+  for (size_t i = 0; i < lines.size(); ++i) {
+    const int ln = static_cast<int>(i) + 1;
+    const auto tok = split_ws(lines[i]);
+    if (tok.empty() || tok[0][0] == '#') continue;
+    if (tok[0] == "newmtl") {
+      if (tok.size() < 2) throw InputError(where(path, ln) + "newmtl without a name");
+      current = tok[1];
+      (*info)[current] = {path, ln, 0, 0};
+    } else if (tok[0] == "Kd" || tok[0] == "Ke") {
+      if (current.empty()) throw InputError(where(path, ln) + tok[0] + " before any newmtl");
+      if (tok.size() != 4 && tok.size() != 2)
+        throw InputError(where(path, ln) + tok[0] + " needs 3 numbers (or 1), got '" + lines[i] + "'");
+      for (size_t k = 1; k < tok.size(); ++k) {
+        double v;
+        if (!parse_double(tok[k], &v))
+          throw InputError(where(path, ln) + tok[0] + " value '" + tok[k] + "' is not a number");
+      }
+      (tok[0] == "Kd" ? (*info)[current].kd_line : (*info)[current].ke_line) = ln;
+    }
+  }
+}
+
+struct ObjScan {
+  std::vector<int> face_lines;  // line of each f, in file order
+  std::map<std::string, MtlInfo> materials;
+};
+
+ObjScan scan_obj(const std::string& path) {
+  ObjScan scan;
+  const auto lines = read_lines(path);
+  const fs::path dir = fs::path(path).parent_path();
+  long vertices = 0;
+  std::set<std::string> used;
+  std::map<std::string, int> used_line;
+  for (size_t i = 0; i < lines.size(); ++i) {
+    const int ln = static_cast<int>(i) + 1;
+    const auto tok = split_ws(lines[i]);
+    if (tok.empty() || tok[0][0] == '#') continue;
+    const std::string& key = tok[0];
+    if (key == "v") {
+      if (tok.size() < 4 || tok.size() > 5)
+        throw InputError(where(path, ln) + "vertex needs 3 coordinates, got '" + lines[i] + "'");
+      for (size_t k = 1; k < 4; ++k) {
+        double v;
+        if (!parse_double(tok[k], &v))
+          throw InputError(where(path, ln) + "coordinate '" + tok[k] + "' is not a number");
+        if (!std::isfinite(v))
+          throw InputError(where(path, ln) + "coordinate '" + tok[k] + "' is not finite");
+      }
+      ++vertices;
+    } else if (key == "f") {
+      if (tok.size() < 4)
+        throw InputError(where(path, ln) + "face needs at least 3 vertices, got '" + lines[i] + "'");
+      for (size_t k = 1; k < tok.size(); ++k) {
+        const std::string idx = tok[k].substr(0, tok[k].find('/'));
+        long v;
+        if (!parse_int(idx, &v) || v == 0)
+          throw InputError(where(path, ln) + "face vertex index '" + tok[k] + "' is not a valid index");
+        const long abs = v > 0 ? v : vertices + v + 1;
+        if (abs < 1 || abs > vertices)
+          throw InputError(where(path, ln) + "face vertex index " + idx + " is out of range (" +
+                           std::to_string(vertices) + " vertices defined so far)");
+      }
+      scan.face_lines.push_back(ln);
+    } else if (key == "mtllib") {
+      for (size_t k = 1; k < tok.size(); ++k) {
+        const fs::path mtl = dir / tok[k];
+        if (!fs::exists(mtl))
+          throw InputError(where(path, ln) + "material library '" + tok[k] + "' not found (looked for " +
+                           mtl.string() + ")");
+        scan_mtl(mtl.string(), &scan.materials);
+      }
+    } else if (key == "usemtl") {
+      if (tok.size() < 2) throw InputError(where(path, ln) + "usemtl without a name");
+      if (!used.count(tok[1])) used_line[tok[1]] = ln;
+      used.insert(tok[1]);
+    } else if (key == "vt" || key == "vn" || key == "o" || key == "g" || key == "s" || key == "l" ||
+               key == "p") {
+      // accepted; texture coordinates, normals, lines and points are not used
+    } else {
+      throw InputError(where(path, ln) + "unknown OBJ statement '" + key + "'");
+    }
+  }
+  for (const std::string& name : used)
+    if (!scan.materials.count(name))
+      throw InputError(where(path, used_line[name]) + "material '" + name +
+                       "' is not defined in any mtllib file");
+  return scan;
+}
+
+}  // namespace
+
+Scene read_obj_scene(const std::string& path, const SceneOptions& options) {
+  if (!fs::exists(path)) throw IoError(path + ": no such file");
+  if (fs::is_directory(path)) throw IoError(path + ": is a directory, not an OBJ file");
+  const ObjScan scan = scan_obj(path);
+
+  tinyobj::ObjReaderConfig config;
+  config.triangulate = false;
+  config.vertex_color = false;
+  tinyobj::ObjReader reader;
+  if (!reader.ParseFromFile(path, config))
+    throw InputError(path + ": " + (reader.Error().empty() ? "cannot parse" : reader.Error()));
+
+  const auto& attrib = reader.GetAttrib();
+  const auto& shapes = reader.GetShapes();
+  std::vector<Material> materials;
+  for (const auto& m : reader.GetMaterials()) {
+    Material mat;
+    mat.name = m.name;
+    mat.reflectance = Rgb(m.diffuse[0], m.diffuse[1], m.diffuse[2]);
+    mat.emission = Rgb(m.emission[0], m.emission[1], m.emission[2]);
+    auto it = scan.materials.find(m.name);
+    if (it != scan.materials.end()) {
+      mat.file = it->second.file;
+      mat.line = it->second.line;
+      mat.reflectance_line = it->second.kd_line;
+      mat.emission_line = it->second.ke_line;
+    }
+    materials.push_back(std::move(mat));
+  }
+
+  std::vector<RawFace> faces;
+  size_t face_no = 0;
+  for (const auto& shape : shapes) {
+    size_t offset = 0;
+    for (size_t f = 0; f < shape.mesh.num_face_vertices.size(); ++f, ++face_no) {
+      RawFace face;
+      face.name = shape.name;
+      face.material = shape.mesh.material_ids[f];
+      face.file = path;
+      face.line = face_no < scan.face_lines.size() ? scan.face_lines[face_no] : 0;
+      const size_t nv = shape.mesh.num_face_vertices[f];
+      for (size_t k = 0; k < nv; ++k) {
+        const int vi = shape.mesh.indices[offset + k].vertex_index;
+        face.points.emplace_back(attrib.vertices[3 * static_cast<size_t>(vi)],
+                                 attrib.vertices[3 * static_cast<size_t>(vi) + 1],
+                                 attrib.vertices[3 * static_cast<size_t>(vi) + 2]);
+      }
+      offset += nv;
+      faces.push_back(std::move(face));
+    }
+  }
+  if (faces.size() != scan.face_lines.size())
+    throw InputError(path + ": read " + std::to_string(faces.size()) + " faces but the file has " +
+                     std::to_string(scan.face_lines.size()) + " face lines");
+  return build_scene(faces, std::move(materials), path, options);
+}
+
+}  // namespace radmesh

@@ -1,0 +1,121 @@
+#include "io/summary.h"
+
+#include "io/atomic_file.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace radmesh {
+
+namespace {
+
+nlohmann::json rgb(const Rgb& c) { return nlohmann::json::array({c.x, c.y, c.z}); }
+
+// Percentile of a copy of v (nearest rank), ignoring non-finite values.
+double percentile(std::vector<double> v, double q) {
+  v.erase(std::remove_if(v.begin(), v.end(), [](double x) { return !std::isfinite(x); }), v.end());
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  const size_t k = std::min(v.size() - 1, static_cast<size_t>(std::ceil(q * static_cast<double>(v.size()))) -
+                                              (q > 0.0 ? 1 : 0));
+  return v[k];
+}
+
+}  // namespace
+
+std::vector<Rgb> patch_mean_radiosity(const Scene& scene, const Mesh& mesh, const std::vector<Rgb>& element) {
+  std::vector<Rgb> sum(scene.patches.size(), Rgb(0.0));
+  std::vector<double> area(scene.patches.size(), 0.0);
+  for (int t = 0; t < mesh.triangle_count(); ++t) {
+    const size_t p = static_cast<size_t>(mesh.patch[static_cast<size_t>(t)]);
+    const double a = mesh.area(t);
+    sum[p] += a * element[static_cast<size_t>(t)];
+    area[p] += a;
+  }
+  for (size_t p = 0; p < sum.size(); ++p)
+    if (area[p] > 0.0) sum[p] /= area[p];
+  return sum;
+}
+
+nlohmann::json make_summary(const RunInfo& info, const Scene& scene, const Mesh& mesh,
+                            const TriangleQuality& quality, const Solution* solution) {
+  using nlohmann::json;
+  json doc;
+  doc["radmesh_version"] = "0.1.0";
+  doc["command"] = info.command;
+  doc["scene"] = info.scene_path;
+  doc["options"] = {{"max_edge", info.meshing.max_edge},
+                    {"min_angle", info.meshing.min_angle},
+                    {"tolerance", info.solve.tolerance},
+                    {"rays", info.solve.rays},
+                    {"threads", info.solve.threads},
+                    {"crease_angle", info.solve.crease_angle}};
+  doc["counts"] = {{"faces_read", scene.report.faces_read},
+                   {"patches", scene.patches.size()},
+                   {"materials", scene.materials.size()},
+                   {"vertices_welded", scene.report.vertices_welded},
+                   {"zero_area_faces_dropped", scene.report.zero_area_faces_dropped},
+                   {"nonplanar_faces_split", scene.report.nonplanar_faces_split},
+                   {"mesh_vertices", mesh.positions.size()},
+                   {"elements", mesh.triangles.size()},
+                   {"boundary_rounds", info.mesh_report.boundary_rounds}};
+  json seconds = json::object();
+  double total = 0.0;
+  for (const auto& [phase, s] : info.seconds) {
+    seconds[phase] = s;
+    total += s;
+  }
+  seconds["total"] = total;
+  doc["time_seconds"] = seconds;
+  doc["mesh_quality"] = {{"min_angle_min", percentile(quality.min_angle, 0.0)},
+                         {"min_angle_p05", percentile(quality.min_angle, 0.05)},
+                         {"min_angle_median", percentile(quality.min_angle, 0.5)},
+                         {"aspect_ratio_median", percentile(quality.aspect_ratio, 0.5)},
+                         {"aspect_ratio_p95", percentile(quality.aspect_ratio, 0.95)},
+                         {"aspect_ratio_max", percentile(quality.aspect_ratio, 1.0)}};
+  doc["warnings"] = scene.report.warnings;
+
+  json patches = json::array();
+  std::vector<Rgb> mean;
+  if (solution) mean = patch_mean_radiosity(scene, mesh, solution->element);
+  for (size_t p = 0; p < scene.patches.size(); ++p) {
+    const Patch& patch = scene.patches[p];
+    json j = {{"id", p},
+              {"name", patch.name},
+              {"material", scene.materials[static_cast<size_t>(patch.material)].name},
+              {"area", scene.patch_area(static_cast<int>(p))}};
+    if (solution) j["mean_radiosity"] = rgb(mean[p]);
+    patches.push_back(j);
+  }
+  doc["patches"] = patches;
+
+  if (solution) {
+    const SolveStats& st = solution->stats;
+    doc["counts"]["form_factors"] = st.form_factors;
+    doc["counts"]["form_factors_skipped"] = st.form_factors_skipped;
+    doc["counts"]["rays_cast"] = st.rays_cast;
+    doc["counts"]["rays_skipped"] = st.rays_skipped;
+    doc["counts"]["pairs_unoccludable"] = st.pairs_unoccludable;
+    doc["solver"] = {{"method", "matrix"},
+                     {"channels_solved", st.channels_solved},
+                     {"iterations", st.iterations},
+                     {"residual", st.residual},
+                     {"convex_enclosure", st.convex_enclosure}};
+    const Rgb imbalance = st.power_emitted - st.power_absorbed - st.power_escaped;
+    Rgb rel(0.0);
+    for (int c = 0; c < 3; ++c)
+      rel[c] = st.power_emitted[c] > 0.0 ? imbalance[c] / st.power_emitted[c] : 0.0;
+    doc["energy"] = {{"emitted", rgb(st.power_emitted)},
+                     {"absorbed", rgb(st.power_absorbed)},
+                     {"escaped", rgb(st.power_escaped)},
+                     {"relative_imbalance", rgb(rel)}};
+    doc["skips"] = st.skips;
+  }
+  return doc;
+}
+
+void write_json(const std::string& path, const nlohmann::json& doc) {
+  write_file_atomically(path, [&](std::ostream& out) { out << doc.dump(2) << '\n'; });
+}
+
+}  // namespace radmesh

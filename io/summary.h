@@ -1,0 +1,36 @@
+// Machine-readable summary of a run (summary.json).
+#pragma once
+
+#include "meshing/mesh.h"
+#include "meshing/scene.h"
+#include "radiosity/solution.h"
+#include "radiosity/solve.h"
+
+#include <nlohmann/json.hpp>
+
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace radmesh {
+
+struct RunInfo {
+  std::string command;  // "run" or "mesh"
+  std::string scene_path;
+  MeshingOptions meshing;  // as resolved
+  SolveOptions solve;
+  MeshReport mesh_report;
+  std::vector<std::pair<std::string, double>> seconds;  // phase -> wall seconds, in order
+};
+
+// Per patch: area-weighted mean of the element radiosity.
+std::vector<Rgb> patch_mean_radiosity(const Scene& scene, const Mesh& mesh, const std::vector<Rgb>& element);
+
+// The summary document; `solution` may be null (mesh only).
+nlohmann::json make_summary(const RunInfo& info, const Scene& scene, const Mesh& mesh,
+                            const TriangleQuality& quality, const Solution* solution);
+
+// Writes JSON atomically (tmp + rename). Throws IoError.
+void write_json(const std::string& path, const nlohmann::json& doc);
+
+}  // namespace radmesh

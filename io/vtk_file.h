@@ -1,0 +1,63 @@
+// Private to io/: running a VTK writer into memory so that its failures surface
+// as an IoError instead of text on stderr; the bytes then go to disk through
+// write_file_atomically. Includes VTK headers: include it from io/*.cpp only,
+// never from a public header.
+#pragma once
+
+#include "meshing/errors.h"
+
+#include <vtkAlgorithm.h>
+#include <vtkCommand.h>
+#include <vtkErrorCode.h>
+#include <vtkExecutive.h>
+#include <vtkNew.h>
+
+#include <string>
+
+namespace radmesh::io_detail {
+
+// Collects the error messages a VTK object reports. While an object has an
+// ErrorEvent observer, VTK hands its errors to the observer instead of printing
+// them, which keeps the library silent as DESIGN.md requires.
+class VtkErrorCatcher : public vtkCommand {
+public:
+  static VtkErrorCatcher* New() { return new VtkErrorCatcher; }
+
+  void Execute(vtkObject*, unsigned long, void* call_data) override {
+    // VTK's text is "ERROR: In <source file>, line N\n<Class> (0x...): <message>\n\n";
+    // keep only the first line of <message>, which is what a user can act on.
+    std::string text = call_data ? static_cast<const char*>(call_data) : "unknown VTK error";
+    if (const auto colon = text.find("): "); colon != std::string::npos) text.erase(0, colon + 3);
+    text = text.substr(0, text.find('\n'));
+    if (!message.empty()) message += "; ";
+    message += text;
+  }
+
+  std::string message;  // all errors seen, in order; empty when none
+};
+
+// Runs `writer` (a vtkXMLWriter or vtkImageWriter already set up to write to
+// memory, its input connected) and throws IoError "<path>: <VTK's reason>" if
+// VTK reports an error. `path` only names the file in the message.
+template <class Writer>
+void run_vtk_writer(Writer* writer, const std::string& path) {
+  vtkNew<VtkErrorCatcher> errors;
+  writer->AddObserver(vtkCommand::ErrorEvent, errors);
+  // When an algorithm fails, its executive reports that too ("Algorithm ...
+  // returned failure for request: <a dump of the request>"): caught to keep
+  // stderr quiet, used only when the writer itself said nothing.
+  vtkNew<VtkErrorCatcher> pipeline_errors;
+  writer->GetExecutive()->AddObserver(vtkCommand::ErrorEvent, pipeline_errors);
+  writer->Write();  // returns void for image writers: success is judged below
+
+  std::string why = errors->message;
+  if (why.empty() && writer->GetErrorCode() != vtkErrorCode::NoError) {
+    why = vtkErrorCode::GetStringFromErrorCode(writer->GetErrorCode());
+  }
+  if (why.empty()) why = pipeline_errors->message;
+  writer->RemoveObservers(vtkCommand::ErrorEvent);
+  writer->GetExecutive()->RemoveObservers(vtkCommand::ErrorEvent);
+  if (!why.empty()) throw IoError(path + ": " + why);
+}
+
+}  // namespace radmesh::io_detail

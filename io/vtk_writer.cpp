@@ -1,0 +1,174 @@
+// VTK XML unstructured grid (.vtu) writers. VTK stays inside this file.
+#include "io/vtk_writer.h"
+
+#include "io/atomic_file.h"
+#include "io/vtk_file.h"
+#include "meshing/errors.h"
+
+#include <vtkCellArray.h>
+#include <vtkCellData.h>
+#include <vtkCellType.h>
+#include <vtkDoubleArray.h>
+#include <vtkIdTypeArray.h>
+#include <vtkIntArray.h>
+#include <vtkNew.h>
+#include <vtkPointData.h>
+#include <vtkPoints.h>
+#include <vtkUnstructuredGrid.h>
+#include <vtkXMLUnstructuredGridWriter.h>
+
+#include <array>
+#include <ostream>
+#include <string>
+#include <vector>
+
+namespace radmesh {
+namespace {
+
+// Throws IoError naming `path` unless `count` == `expected`: the writer's inputs
+// come from different stages and must describe the same triangles.
+void check_count(const std::string& path, const char* what, std::size_t count,
+                 std::size_t expected) {
+  if (count != expected) {
+    throw IoError(path + ": " + what + " has " + std::to_string(count) +
+                  " entries, expected " + std::to_string(expected));
+  }
+}
+
+// A named 3-component double array, one tuple per entry of `values`.
+vtkNew<vtkDoubleArray> rgb_array(const char* name, const std::vector<Rgb>& values) {
+  vtkNew<vtkDoubleArray> array;
+  array->SetName(name);
+  array->SetNumberOfComponents(3);
+  array->SetNumberOfTuples(static_cast<vtkIdType>(values.size()));
+  for (std::size_t i = 0; i < values.size(); ++i) {
+    const double rgb[3] = {values[i].r, values[i].g, values[i].b};
+    array->SetTypedTuple(static_cast<vtkIdType>(i), rgb);
+  }
+  return array;
+}
+
+// A named 1-component double array.
+vtkNew<vtkDoubleArray> scalar_array(const char* name, const std::vector<double>& values) {
+  vtkNew<vtkDoubleArray> array;
+  array->SetName(name);
+  array->SetNumberOfValues(static_cast<vtkIdType>(values.size()));
+  for (std::size_t i = 0; i < values.size(); ++i) {
+    array->SetValue(static_cast<vtkIdType>(i), values[i]);
+  }
+  return array;
+}
+
+// A grid of VTK_TRIANGLE cells over `points` (double precision).
+vtkNew<vtkUnstructuredGrid> triangle_grid(const std::string& path, const std::vector<Vec3>& points,
+                                          const std::vector<std::array<int, 3>>& triangles) {
+  vtkNew<vtkPoints> vtk_points;
+  vtk_points->SetDataTypeToDouble();
+  vtk_points->SetNumberOfPoints(static_cast<vtkIdType>(points.size()));
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    vtk_points->SetPoint(static_cast<vtkIdType>(i), points[i].x, points[i].y, points[i].z);
+  }
+
+  vtkNew<vtkIdTypeArray> offsets;
+  vtkNew<vtkIdTypeArray> connectivity;
+  offsets->SetNumberOfValues(static_cast<vtkIdType>(triangles.size() + 1));
+  connectivity->SetNumberOfValues(static_cast<vtkIdType>(3 * triangles.size()));
+  offsets->SetValue(0, 0);
+  for (std::size_t t = 0; t < triangles.size(); ++t) {
+    for (int k = 0; k < 3; ++k) {
+      const int v = triangles[t][k];
+      if (v < 0 || static_cast<std::size_t>(v) >= points.size()) {
+        throw IoError(path + ": triangle " + std::to_string(t) +
+                      " has vertex index " + std::to_string(v) + " out of range [0, " +
+                      std::to_string(points.size()) + ")");
+      }
+      connectivity->SetValue(static_cast<vtkIdType>(3 * t + k), v);
+    }
+    offsets->SetValue(static_cast<vtkIdType>(t + 1), static_cast<vtkIdType>(3 * (t + 1)));
+  }
+  vtkNew<vtkCellArray> cells;
+  cells->SetData(offsets, connectivity);
+
+  vtkNew<vtkUnstructuredGrid> grid;
+  grid->SetPoints(vtk_points);
+  grid->SetCells(VTK_TRIANGLE, cells);
+  return grid;
+}
+
+// Cell data both writers share, one value per Mesh triangle: patch_id, area,
+// min_angle, aspect_ratio, and the patch material's reflectance and emission.
+void add_mesh_cell_data(const std::string& path, vtkCellData* cell_data, const Scene& scene,
+                        const Mesh& mesh, const TriangleQuality& quality) {
+  const auto n = static_cast<std::size_t>(mesh.triangle_count());
+  check_count(path, "Mesh::patch", mesh.patch.size(), n);
+  check_count(path, "TriangleQuality::min_angle", quality.min_angle.size(), n);
+  check_count(path, "TriangleQuality::aspect_ratio", quality.aspect_ratio.size(), n);
+
+  vtkNew<vtkIntArray> patch_id;
+  patch_id->SetName("patch_id");
+  patch_id->SetNumberOfValues(static_cast<vtkIdType>(n));
+  std::vector<double> area(n);
+  std::vector<Rgb> reflectance(n), emission(n);
+  for (std::size_t t = 0; t < n; ++t) {
+    const int p = mesh.patch[t];
+    if (p < 0 || static_cast<std::size_t>(p) >= scene.patches.size() ||
+        scene.patches[p].material < 0 ||
+        static_cast<std::size_t>(scene.patches[p].material) >= scene.materials.size()) {
+      throw IoError(path + ": triangle " + std::to_string(t) +
+                    " has patch " + std::to_string(p) + " without a valid material");
+    }
+    const Material& material = scene.materials[scene.patches[p].material];
+    patch_id->SetValue(static_cast<vtkIdType>(t), p);
+    area[t] = mesh.area(static_cast<int>(t));
+    reflectance[t] = material.reflectance;
+    emission[t] = material.emission;
+  }
+  cell_data->AddArray(patch_id);
+  cell_data->AddArray(scalar_array("area", area));
+  cell_data->AddArray(scalar_array("min_angle", quality.min_angle));
+  cell_data->AddArray(scalar_array("aspect_ratio", quality.aspect_ratio));
+  cell_data->AddArray(rgb_array("reflectance", reflectance));
+  cell_data->AddArray(rgb_array("emission", emission));
+}
+
+// Binary, zlib-compressed .vtu, built in memory and written through a temporary file.
+void write_grid(const std::string& path, vtkUnstructuredGrid* grid) {
+  vtkNew<vtkXMLUnstructuredGridWriter> writer;
+  writer->SetInputData(grid);
+  writer->SetDataModeToBinary();
+  writer->SetCompressorTypeToZLib();
+  writer->WriteToOutputStringOn();
+  io_detail::run_vtk_writer(writer.Get(), path);
+  const std::string bytes = writer->GetOutputString();
+  write_file_atomically(path, [&bytes](std::ostream& out) {
+    out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+  });
+}
+
+}  // namespace
+
+void write_vtu(const std::string& path, const Scene& scene, const Mesh& mesh,
+               const TriangleQuality& quality, const Solution& solution) {
+  const NodalField& nodal = solution.nodal;
+  const auto n = static_cast<std::size_t>(mesh.triangle_count());
+  check_count(path, "Solution::element", solution.element.size(), n);
+  check_count(path, "NodalField::corners", nodal.corners.size(), n);
+  check_count(path, "NodalField::radiosity", nodal.radiosity.size(), nodal.points.size());
+
+  // Cells are the display triangles: NodalField::corners[t] is Mesh triangle t
+  // with its vertices duplicated where radiosity must not be averaged.
+  auto grid = triangle_grid(path, nodal.points, nodal.corners);
+  grid->GetPointData()->AddArray(rgb_array("radiosity", nodal.radiosity));
+  grid->GetCellData()->AddArray(rgb_array("radiosity", solution.element));
+  add_mesh_cell_data(path, grid->GetCellData(), scene, mesh, quality);
+  write_grid(path, grid);
+}
+
+void write_mesh_vtu(const std::string& path, const Scene& scene, const Mesh& mesh,
+                    const TriangleQuality& quality) {
+  auto grid = triangle_grid(path, mesh.positions, mesh.triangles);
+  add_mesh_cell_data(path, grid->GetCellData(), scene, mesh, quality);
+  write_grid(path, grid);
+}
+
+}  // namespace radmesh

@@ -1,0 +1,30 @@
+// ParaView output: the solved mesh as a VTK XML unstructured grid (.vtu),
+// binary and zlib-compressed.
+#pragma once
+
+#include "meshing/mesh.h"
+#include "meshing/scene.h"
+#include "radiosity/solution.h"
+
+#include <string>
+
+namespace radmesh {
+
+// Writes the display mesh (points NodalField::points, triangles
+// NodalField::corners, which must have one entry per Mesh triangle) with
+//   point data: radiosity (RGB, NodalField::radiosity)
+//   cell data:  radiosity (RGB, Solution::element), patch_id, reflectance (RGB),
+//               emission (RGB) of the patch's material, area, min_angle, aspect_ratio
+// The file is written to `path + ".tmp"` and renamed, so a failure leaves no
+// half-written file and an existing file at `path` untouched. Throws IoError
+// naming `path` when writing fails or the inputs disagree in size or indices.
+void write_vtu(const std::string& path, const Scene& scene, const Mesh& mesh,
+               const TriangleQuality& quality, const Solution& solution);
+
+// Mesh only (radmesh mesh): points Mesh::positions, triangles Mesh::triangles,
+// cell data patch_id, area, min_angle, aspect_ratio, reflectance, emission.
+// Same temporary-file behaviour and errors as write_vtu.
+void write_mesh_vtu(const std::string& path, const Scene& scene, const Mesh& mesh,
+                    const TriangleQuality& quality);
+
+}  // namespace radmesh

@@ -1,0 +1,44 @@
+// radmesh typed errors. The library throws these and never prints or exits;
+// the CLI catches them once and prints their message on one line.
+#pragma once
+
+#include <stdexcept>
+#include <string>
+
+namespace radmesh {
+
+// Base of every radmesh error.
+class Error : public std::runtime_error {
+public:
+  using std::runtime_error::runtime_error;
+};
+
+// The input (scene file, probe file, options) is malformed or out of range.
+// The message names the file, the line and the offending value.
+class InputError : public Error {
+public:
+  using Error::Error;
+};
+
+// Geometry that cannot be processed (degenerate polygon, failed triangulation).
+class GeometryError : public Error {
+public:
+  using Error::Error;
+};
+
+// A numerical problem: non-convergence, NaN, a system too large for memory.
+class NumericalError : public Error {
+public:
+  using Error::Error;
+};
+
+// Reading or writing a file failed.
+class IoError : public Error {
+public:
+  using Error::Error;
+};
+
+// Helper: "file:line: " prefix (line omitted when <= 0, file omitted when empty).
+std::string where(const std::string& file, int line);
+
+}  // namespace radmesh

@@ -1,0 +1,22 @@
+#include "meshing/geometry.h"
+
+namespace radmesh {
+
+Vec3 newell_normal(const std::vector<Vec3>& loop) {
+  Vec3 n(0.0);
+  const size_t k = loop.size();
+  for (size_t i = 0; i < k; ++i) {
+    const Vec3& a = loop[i];
+    const Vec3& b = loop[(i + 1) % k];
+    n.x += (a.y - b.y) * (a.z + b.z);
+    n.y += (a.z - b.z) * (a.x + b.x);
+    n.z += (a.x - b.x) * (a.y + b.y);
+  }
+  return n;
+}
+
+double triangle_area(const Vec3& a, const Vec3& b, const Vec3& c) {
+  return 0.5 * glm::length(glm::cross(b - a, c - a));
+}
+
+}  // namespace radmesh

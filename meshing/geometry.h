@@ -1,0 +1,22 @@
+// Small geometric vocabulary shared by every module: plain GLM double vectors.
+#pragma once
+
+#include <glm/vec3.hpp>
+#include <glm/geometric.hpp>
+
+#include <array>
+#include <vector>
+
+namespace radmesh {
+
+using Vec3 = glm::dvec3;
+// RGB triple (reflectance, emission, radiosity).
+using Rgb = glm::dvec3;
+
+// Newell normal (not normalized): its length is twice the polygon's vector area.
+Vec3 newell_normal(const std::vector<Vec3>& loop);
+
+// Area of a triangle.
+double triangle_area(const Vec3& a, const Vec3& b, const Vec3& c);
+
+}  // namespace radmesh

@@ -1,0 +1,55 @@
+// The triangle mesh: flat arrays, plain types.
+#pragma once
+
+#include "meshing/geometry.h"
+#include "meshing/scene.h"
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+namespace radmesh {
+
+struct Mesh {
+  std::vector<Vec3> positions;                 // welded: patches sharing an edge share its vertices
+  std::vector<std::array<int, 3>> triangles;   // counter-clockwise around the patch normal
+  std::vector<int> patch;                      // per triangle: index into Scene::patches
+
+  int triangle_count() const { return static_cast<int>(triangles.size()); }
+  double area(int t) const;
+  Vec3 centroid(int t) const;
+};
+
+struct MeshingOptions {
+  // Longest edge allowed in the mesh, in scene units. 0 picks
+  // scene diagonal / 24, so that the default mesh does not depend on the unit.
+  double max_edge = 0.0;
+  // Smallest angle wanted in every triangle, degrees. CGAL's Delaunay mesher is
+  // guaranteed to terminate up to about 20.7 degrees; we accept up to 30.
+  double min_angle = 20.0;
+};
+
+struct MeshReport {
+  double max_edge = 0.0;       // the value used (after resolving 0 = auto)
+  int boundary_rounds = 0;     // rounds needed to agree on shared boundary vertices
+  int constrained_vertices = 0;
+};
+
+// Meshes every patch with a CGAL constrained Delaunay triangulation in its
+// plane, refined by CGAL's Delaunay mesher. Holes and concave polygons are
+// supported; vertices on a patch's boundary edges are shared with every
+// patch that touches that edge, so meshing creates no T-vertex.
+Mesh mesh_scene(const Scene& scene, const MeshingOptions& options, MeshReport* report = nullptr);
+
+// Resolves MeshingOptions::max_edge = 0 to its scene-relative default and
+// checks the options; throws InputError when out of range.
+MeshingOptions resolve_meshing_options(const Scene& scene, MeshingOptions options);
+
+// Per-triangle quality.
+struct TriangleQuality {
+  std::vector<double> min_angle;     // degrees
+  std::vector<double> aspect_ratio;  // longest edge / (2 sqrt(3) inradius): 1 for equilateral
+};
+TriangleQuality compute_quality(const Mesh& mesh);
+
+}  // namespace radmesh

@@ -1,0 +1,422 @@
+// Initial mesh of every patch: CGAL constrained Delaunay triangulation in the
+// patch's plane, refined by CGAL's Delaunay mesher. The only CGAL translation
+// unit of the meshing module.
+//
+// Conformity between patches: every boundary segment of every patch is split
+// at the same global points on both sides. Points on a segment are (1) scene
+// vertices lying on it, (2) an even pre-split to the maximum edge length, and
+// (3) the points CGAL's mesher adds when it splits an encroached boundary
+// edge; (3) are passed to every other patch with a collinear overlapping
+// segment, which is then meshed again. This repeats until no patch gains a
+// point; the last allowed round inserts the points without refinement, so the
+// result is always conforming.
+
+#include "meshing/errors.h"
+#include "meshing/mesh.h"
+
+#include <CGAL/Constrained_Delaunay_triangulation_2.h>
+#include <CGAL/Delaunay_mesh_face_base_2.h>
+#include <CGAL/Delaunay_mesh_size_criteria_2.h>
+#include <CGAL/Delaunay_mesh_vertex_base_2.h>
+#include <CGAL/Delaunay_mesher_2.h>
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/Triangulation_face_base_with_info_2.h>
+#include <CGAL/Triangulation_vertex_base_with_info_2.h>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <numbers>
+#include <queue>
+#include <set>
+#include <sstream>
+
+namespace radmesh {
+
+namespace {
+
+using K = CGAL::Exact_predicates_inexact_constructions_kernel;
+// Global vertex id; -1 for points CGAL created (default-constructed).
+struct VertexId {
+  int id = -1;
+};
+using Vb = CGAL::Triangulation_vertex_base_with_info_2<VertexId, K, CGAL::Delaunay_mesh_vertex_base_2<K>>;
+using Fb = CGAL::Triangulation_face_base_with_info_2<int, K, CGAL::Delaunay_mesh_face_base_2<K>>;
+using Tds = CGAL::Triangulation_data_structure_2<Vb, Fb>;
+using CDT = CGAL::Constrained_Delaunay_triangulation_2<K, Tds, CGAL::Exact_predicates_tag>;
+using Criteria = CGAL::Delaunay_mesh_size_criteria_2<CDT>;
+using Mesher = CGAL::Delaunay_mesher_2<CDT, Criteria>;
+using Point2 = K::Point_2;
+
+constexpr int kMaxRounds = 8;
+
+// One directed boundary segment of a patch loop, between global vertex ids.
+struct Segment {
+  int patch;
+  int a, b;
+};
+
+// Orthonormal frame of a patch's plane: (u, v, n) right-handed.
+struct Frame {
+  Vec3 origin, u, v;
+  Point2 to2(const Vec3& p) const {
+    const Vec3 d = p - origin;
+    return Point2(glm::dot(d, u), glm::dot(d, v));
+  }
+  Vec3 to3(const Point2& q) const { return origin + q.x() * u + q.y() * v; }
+};
+
+Frame make_frame(const Scene& scene, const Patch& patch) {
+  Frame f;
+  f.origin = scene.vertices[static_cast<size_t>(patch.outer[0])];
+  const Vec3 n = patch.normal;
+  const Vec3 axis = std::abs(n.x) < 0.6 ? Vec3(1, 0, 0) : Vec3(0, 1, 0);
+  f.u = glm::normalize(glm::cross(axis, n));
+  f.v = glm::cross(n, f.u);
+  return f;
+}
+
+// Marks faces inside the polygon (odd nesting depth across constraints).
+void mark_domain(CDT& cdt) {
+  for (auto f = cdt.all_faces_begin(); f != cdt.all_faces_end(); ++f) f->info() = -1;
+  std::queue<std::pair<CDT::Face_handle, int>> border;
+  border.push({cdt.infinite_face(), 0});
+  while (!border.empty()) {
+    auto [start, depth] = border.front();
+    border.pop();
+    if (start->info() != -1) continue;
+    std::queue<CDT::Face_handle> q;
+    start->info() = depth;
+    q.push(start);
+    while (!q.empty()) {
+      CDT::Face_handle f = q.front();
+      q.pop();
+      for (int i = 0; i < 3; ++i) {
+        CDT::Face_handle nb = f->neighbor(i);
+        if (nb->info() != -1) continue;
+        if (cdt.is_constrained(CDT::Edge(f, i))) {
+          border.push({nb, depth + 1});
+        } else {
+          nb->info() = depth;
+          q.push(nb);
+        }
+      }
+    }
+  }
+  for (auto f = cdt.all_faces_begin(); f != cdt.all_faces_end(); ++f)
+    f->set_in_domain(f->info() % 2 == 1);
+}
+
+// Shared state of one mesh_scene call.
+class SceneMesher {
+public:
+  SceneMesher(const Scene& scene, const MeshingOptions& opt) : scene_(scene), opt_(opt) {
+    positions_ = scene.vertices;
+    eps_ = 1e-9 * std::max(scene.diagonal(), std::numeric_limits<double>::min());
+    collect_segments();
+    find_overlaps();
+    seed_points();
+  }
+
+  Mesh run(MeshReport* report) {
+    const int np = static_cast<int>(scene_.patches.size());
+    std::vector<char> dirty(static_cast<size_t>(np), 1);
+    std::vector<std::vector<std::array<int, 3>>> tris(static_cast<size_t>(np));
+    int rounds = 0;
+    for (bool any = true; any; ++rounds) {
+      any = false;
+      const bool refine = rounds + 1 < kMaxRounds;
+      for (int p = 0; p < np; ++p) {
+        if (!dirty[static_cast<size_t>(p)]) continue;
+        dirty[static_cast<size_t>(p)] = 0;
+        std::vector<int> touched;
+        tris[static_cast<size_t>(p)] = mesh_patch(p, refine, &touched);
+        for (int q : touched)
+          if (q != p && !dirty[static_cast<size_t>(q)]) dirty[static_cast<size_t>(q)] = 1;
+      }
+      for (char d : dirty) any = any || d;
+      if (any && rounds >= kMaxRounds)
+        throw GeometryError(scene_.source + ": patches did not agree on shared boundary vertices after " +
+                            std::to_string(rounds + 1) + " rounds");
+    }
+    Mesh mesh;
+    mesh.positions = std::move(positions_);
+    for (int p = 0; p < np; ++p)
+      for (const auto& t : tris[static_cast<size_t>(p)]) {
+        mesh.triangles.push_back(t);
+        mesh.patch.push_back(p);
+      }
+    compact(mesh);
+    if (report) {
+      report->max_edge = opt_.max_edge;
+      report->boundary_rounds = rounds;
+      int c = 0;
+      for (const auto& pts : seg_points_) c += static_cast<int>(pts.size());
+      report->constrained_vertices = c;
+    }
+    return mesh;
+  }
+
+private:
+  void collect_segments() {
+    for (int p = 0; p < static_cast<int>(scene_.patches.size()); ++p) {
+      const Patch& patch = scene_.patches[static_cast<size_t>(p)];
+      auto add_loop = [&](const std::vector<int>& loop) {
+        for (size_t i = 0; i < loop.size(); ++i)
+          segments_.push_back({p, loop[i], loop[(i + 1) % loop.size()]});
+      };
+      add_loop(patch.outer);
+      for (const auto& h : patch.holes) add_loop(h);
+    }
+    seg_points_.resize(segments_.size());
+    overlaps_.resize(segments_.size());
+  }
+
+  // Parameter of p along segment s, and whether p lies on its line.
+  bool on_line(size_t s, const Vec3& p, double* t) const {
+    const Vec3 A = positions_[static_cast<size_t>(segments_[s].a)];
+    const Vec3 B = positions_[static_cast<size_t>(segments_[s].b)];
+    const Vec3 d = B - A;
+    const double len2 = glm::dot(d, d);
+    *t = glm::dot(p - A, d) / len2;
+    const Vec3 foot = A + *t * d;
+    return glm::length(p - foot) <= eps_;
+  }
+  bool strictly_inside(size_t s, const Vec3& p, double* t) const {
+    if (!on_line(s, p, t)) return false;
+    const double len = glm::length(positions_[static_cast<size_t>(segments_[s].b)] -
+                                   positions_[static_cast<size_t>(segments_[s].a)]);
+    const double tol = eps_ / len;
+    return *t > tol && *t < 1.0 - tol;
+  }
+
+  // Segments on a common line whose parameter ranges overlap (positive length).
+  void find_overlaps() {
+    const size_t n = segments_.size();
+    std::vector<Vec3> lo(n), hi(n);
+    for (size_t s = 0; s < n; ++s) {
+      const Vec3 A = positions_[static_cast<size_t>(segments_[s].a)];
+      const Vec3 B = positions_[static_cast<size_t>(segments_[s].b)];
+      lo[s] = glm::min(A, B) - Vec3(eps_);
+      hi[s] = glm::max(A, B) + Vec3(eps_);
+    }
+    for (size_t s = 0; s < n; ++s)
+      for (size_t r = s + 1; r < n; ++r) {
+        if (glm::any(glm::lessThan(hi[s], lo[r])) || glm::any(glm::lessThan(hi[r], lo[s]))) continue;
+        double ta, tb;
+        if (!on_line(s, positions_[static_cast<size_t>(segments_[r].a)], &ta) ||
+            !on_line(s, positions_[static_cast<size_t>(segments_[r].b)], &tb))
+          continue;
+        const double len = glm::length(positions_[static_cast<size_t>(segments_[s].b)] -
+                                       positions_[static_cast<size_t>(segments_[s].a)]);
+        const double overlap = std::min(1.0, std::max(ta, tb)) - std::max(0.0, std::min(ta, tb));
+        if (overlap * len <= eps_) continue;
+        overlaps_[s].push_back(static_cast<int>(r));
+        overlaps_[r].push_back(static_cast<int>(s));
+      }
+  }
+
+  // Adds global point id g to segment s (and to every segment overlapping s
+  // that contains it). Records the patches whose boundary gained the point.
+  void add_point(size_t s, int g, std::vector<int>* touched) {
+    auto put = [&](size_t seg) {
+      double t;
+      if (!strictly_inside(seg, positions_[static_cast<size_t>(g)], &t)) return;
+      auto& pts = seg_points_[seg];
+      if (std::find(pts.begin(), pts.end(), g) != pts.end()) return;
+      pts.push_back(g);
+      if (touched) touched->push_back(segments_[seg].patch);
+    };
+    put(s);
+    for (int r : overlaps_[s]) put(static_cast<size_t>(r));
+  }
+
+  // Scene vertices on segments (T-junctions), then the even pre-split.
+  void seed_points() {
+    for (size_t s = 0; s < segments_.size(); ++s) {
+      for (int r : overlaps_[s]) {
+        add_point(s, segments_[static_cast<size_t>(r)].a, nullptr);
+        add_point(s, segments_[static_cast<size_t>(r)].b, nullptr);
+      }
+    }
+    // Vertices of non-collinear patches touching a segment's interior.
+    for (size_t s = 0; s < segments_.size(); ++s) {
+      const Vec3 A = positions_[static_cast<size_t>(segments_[s].a)];
+      const Vec3 B = positions_[static_cast<size_t>(segments_[s].b)];
+      const Vec3 lo = glm::min(A, B) - Vec3(eps_), hi = glm::max(A, B) + Vec3(eps_);
+      for (int v = 0; v < static_cast<int>(scene_.vertices.size()); ++v) {
+        const Vec3& p = scene_.vertices[static_cast<size_t>(v)];
+        if (glm::any(glm::lessThan(p, lo)) || glm::any(glm::greaterThan(p, hi))) continue;
+        add_point(s, v, nullptr);
+      }
+    }
+    // Even pre-split of every segment to the maximum edge length; points are
+    // created once per distinct segment (shared by the segments overlapping it
+    // through add_point).
+    std::map<std::pair<int, int>, bool> done;
+    for (size_t s = 0; s < segments_.size(); ++s) {
+      const int a = segments_[s].a, b = segments_[s].b;
+      if (done.count({std::min(a, b), std::max(a, b)})) continue;
+      done[{std::min(a, b), std::max(a, b)}] = true;
+      const Vec3 A = positions_[static_cast<size_t>(std::min(a, b))];
+      const Vec3 B = positions_[static_cast<size_t>(std::max(a, b))];
+      // Existing points on the segment split it already; pre-split each gap.
+      std::vector<double> ts = {0.0, 1.0};
+      for (int g : seg_points_[s]) {
+        double t;
+        on_line(s, positions_[static_cast<size_t>(g)], &t);
+        ts.push_back(a < b ? t : 1.0 - t);
+      }
+      std::sort(ts.begin(), ts.end());
+      const double len = glm::length(B - A);
+      for (size_t i = 0; i + 1 < ts.size(); ++i) {
+        const double gap = (ts[i + 1] - ts[i]) * len;
+        const int parts = static_cast<int>(std::ceil(gap / opt_.max_edge - 1e-9));
+        for (int k = 1; k < parts; ++k) {
+          const double t = ts[i] + (ts[i + 1] - ts[i]) * k / parts;
+          const int g = static_cast<int>(positions_.size());
+          positions_.push_back(A + t * (B - A));
+          add_point(s, g, nullptr);
+        }
+      }
+    }
+  }
+
+  // Triangulates and refines one patch. New points on its boundary are made
+  // global and shared; `touched` receives the patches that gained points.
+  std::vector<std::array<int, 3>> mesh_patch(int p, bool refine, std::vector<int>* touched) {
+    const Patch& patch = scene_.patches[static_cast<size_t>(p)];
+    const Frame frame = make_frame(scene_, patch);
+    CDT cdt;
+    std::vector<size_t> my_segments;
+    for (size_t s = 0; s < segments_.size(); ++s)
+      if (segments_[s].patch == p) my_segments.push_back(s);
+
+    auto insert_vertex = [&](int g) {
+      auto vh = cdt.insert(frame.to2(positions_[static_cast<size_t>(g)]));
+      vh->info().id = g;
+      return vh;
+    };
+    for (size_t s : my_segments) {
+      // Points sorted along the segment.
+      std::vector<std::pair<double, int>> pts = {{0.0, segments_[s].a}, {1.0, segments_[s].b}};
+      for (int g : seg_points_[s]) {
+        double t;
+        on_line(s, positions_[static_cast<size_t>(g)], &t);
+        pts.push_back({t, g});
+      }
+      std::sort(pts.begin(), pts.end());
+      CDT::Vertex_handle prev = insert_vertex(pts[0].second);
+      for (size_t i = 1; i < pts.size(); ++i) {
+        CDT::Vertex_handle cur = insert_vertex(pts[i].second);
+        if (prev != cur) cdt.insert_constraint(prev, cur);
+        prev = cur;
+      }
+    }
+    mark_domain(cdt);
+
+    if (refine) {
+      const double s = std::sin(opt_.min_angle * std::numbers::pi / 180.0);
+      Mesher mesher(cdt, Criteria(s * s, opt_.max_edge));
+      mesher.init(true);
+      mesher.refine_mesh();
+      mark_domain(cdt);
+    }
+
+    // Global ids for new vertices. Those on a boundary segment get the
+    // segment's exact 3-D point and are shared.
+    for (auto v = cdt.finite_vertices_begin(); v != cdt.finite_vertices_end(); ++v) {
+      if (v->info().id >= 0) continue;
+      const Vec3 p3 = frame.to3(v->point());
+      int best = -1;
+      double best_d = std::numeric_limits<double>::infinity(), best_t = 0.0;
+      for (size_t s : my_segments) {
+        const Vec3 A = positions_[static_cast<size_t>(segments_[s].a)];
+        const Vec3 B = positions_[static_cast<size_t>(segments_[s].b)];
+        const double t = std::clamp(glm::dot(p3 - A, B - A) / glm::dot(B - A, B - A), 0.0, 1.0);
+        const double d = glm::length(p3 - (A + t * (B - A)));
+        if (d < best_d) {
+          best_d = d;
+          best = static_cast<int>(s);
+          best_t = t;
+        }
+      }
+      const int g = static_cast<int>(positions_.size());
+      if (best >= 0 && best_d <= 1e-7 * scene_.diagonal() && is_on_constraint(cdt, v)) {
+        const Vec3 A = positions_[static_cast<size_t>(segments_[static_cast<size_t>(best)].a)];
+        const Vec3 B = positions_[static_cast<size_t>(segments_[static_cast<size_t>(best)].b)];
+        positions_.push_back(A + best_t * (B - A));
+        add_point(static_cast<size_t>(best), g, touched);
+      } else {
+        positions_.push_back(p3);
+      }
+      v->info().id = g;
+    }
+
+    std::vector<std::array<int, 3>> tris;
+    for (auto f = cdt.finite_faces_begin(); f != cdt.finite_faces_end(); ++f) {
+      if (!f->is_in_domain()) continue;
+      tris.push_back({f->vertex(0)->info().id, f->vertex(1)->info().id, f->vertex(2)->info().id});
+    }
+    if (tris.empty()) {
+      std::ostringstream m;
+      m << where(patch.file, patch.line) << "face '" << patch.name
+        << "': triangulation produced no triangles (self-intersecting outline?)";
+      throw GeometryError(m.str());
+    }
+    return tris;
+  }
+
+  static bool is_on_constraint(CDT& cdt, CDT::Vertex_handle v) {
+    auto e = cdt.incident_edges(v), end = e;
+    if (e == nullptr) return false;
+    do {
+      if (cdt.is_constrained(*e)) return true;
+    } while (++e != end);
+    return false;
+  }
+
+  // Drops positions no triangle uses (points of a previous round that a
+  // re-meshed patch no longer has) and renumbers.
+  static void compact(Mesh& mesh) {
+    std::vector<int> remap(mesh.positions.size(), -1);
+    std::vector<Vec3> pos;
+    for (auto& t : mesh.triangles)
+      for (int& v : t) {
+        if (remap[static_cast<size_t>(v)] < 0) {
+          remap[static_cast<size_t>(v)] = static_cast<int>(pos.size());
+          pos.push_back(mesh.positions[static_cast<size_t>(v)]);
+        }
+        v = remap[static_cast<size_t>(v)];
+      }
+    mesh.positions = std::move(pos);
+  }
+
+  const Scene& scene_;
+  MeshingOptions opt_;
+  double eps_ = 0.0;
+  std::vector<Vec3> positions_;
+  std::vector<Segment> segments_;
+  std::vector<std::vector<int>> seg_points_;
+  std::vector<std::vector<int>> overlaps_;
+};
+
+}  // namespace
+
+MeshingOptions resolve_meshing_options(const Scene& scene, MeshingOptions options) {
+  if (!std::isfinite(options.max_edge) || options.max_edge < 0.0)
+    throw InputError("--max-edge " + std::to_string(options.max_edge) + " must be >= 0 (0 = auto)");
+  if (!std::isfinite(options.min_angle) || options.min_angle < 0.0 || options.min_angle > 30.0)
+    throw InputError("--min-angle " + std::to_string(options.min_angle) +
+                     " must be in [0, 30] degrees (CGAL's mesher may not terminate above ~30)");
+  if (options.max_edge == 0.0) options.max_edge = scene.diagonal() / 24.0;
+  return options;
+}
+
+Mesh mesh_scene(const Scene& scene, const MeshingOptions& options, MeshReport* report) {
+  const MeshingOptions opt = resolve_meshing_options(scene, options);
+  SceneMesher mesher(scene, opt);
+  return mesher.run(report);
+}
+
+}  // namespace radmesh

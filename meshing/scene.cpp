@@ -1,0 +1,259 @@
+#include "meshing/scene.h"
+
+#include "meshing/errors.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <sstream>
+#include <unordered_map>
+
+namespace radmesh {
+
+std::vector<Vec3> Scene::loop_points(const std::vector<int>& loop) const {
+  std::vector<Vec3> pts;
+  pts.reserve(loop.size());
+  for (int v : loop) pts.push_back(vertices[static_cast<size_t>(v)]);
+  return pts;
+}
+
+double Scene::patch_area(int p) const {
+  const Patch& patch = patches[static_cast<size_t>(p)];
+  double a = 0.5 * glm::length(newell_normal(loop_points(patch.outer)));
+  for (const auto& h : patch.holes) a -= 0.5 * glm::length(newell_normal(loop_points(h)));
+  return a;
+}
+
+void Scene::bounds(Vec3& lo, Vec3& hi) const {
+  lo = Vec3(std::numeric_limits<double>::infinity());
+  hi = -lo;
+  for (const Vec3& v : vertices) {
+    lo = glm::min(lo, v);
+    hi = glm::max(hi, v);
+  }
+}
+
+double Scene::diagonal() const {
+  if (vertices.empty()) return 0.0;
+  Vec3 lo, hi;
+  bounds(lo, hi);
+  return glm::length(hi - lo);
+}
+
+bool Scene::has_emitter() const {
+  for (const Patch& p : patches) {
+    const Rgb& e = materials[static_cast<size_t>(p.material)].emission;
+    if (e.x > 0.0 || e.y > 0.0 || e.z > 0.0) return true;
+  }
+  return false;
+}
+
+namespace {
+
+std::string fmt(double v) {
+  std::ostringstream s;
+  s.precision(9);
+  s << v;
+  return s.str();
+}
+
+std::string fmt(const Vec3& v) { return fmt(v.x) + " " + fmt(v.y) + " " + fmt(v.z); }
+
+bool finite(const Vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
+
+void check_material(const Material& m) {
+  auto at = [&](int line) {
+    return where(m.file, line > 0 ? line : m.line) + "material '" + m.name + "': ";
+  };
+  for (int c = 0; c < 3; ++c) {
+    const double r = m.reflectance[c];
+    if (!std::isfinite(r) || r < 0.0 || r >= 1.0)
+      throw InputError(at(m.reflectance_line) + "reflectance (Kd) " + fmt(m.reflectance) +
+                       " is outside [0, 1) (a reflectance of 1 or more makes the system singular)");
+    const double e = m.emission[c];
+    if (!std::isfinite(e) || e < 0.0)
+      throw InputError(at(m.emission_line) + "emission (Ke) " + fmt(m.emission) + " must be finite and >= 0");
+  }
+}
+
+// Welds points closer than eps with a uniform hash grid of cell size eps.
+class Welder {
+public:
+  explicit Welder(double eps) : eps_(eps > 0.0 ? eps : std::numeric_limits<double>::min()) {}
+
+  int add(const Vec3& p, std::vector<Vec3>& out, bool* welded) {
+    const long long cx = cell(p.x), cy = cell(p.y), cz = cell(p.z);
+    for (long long dx = -1; dx <= 1; ++dx)
+      for (long long dy = -1; dy <= 1; ++dy)
+        for (long long dz = -1; dz <= 1; ++dz) {
+          auto it = grid_.find(key(cx + dx, cy + dy, cz + dz));
+          if (it == grid_.end()) continue;
+          for (int id : it->second)
+            if (glm::length(out[static_cast<size_t>(id)] - p) <= eps_) {
+              *welded = true;
+              return id;
+            }
+        }
+    const int id = static_cast<int>(out.size());
+    out.push_back(p);
+    grid_[key(cx, cy, cz)].push_back(id);
+    *welded = false;
+    return id;
+  }
+
+private:
+  long long cell(double x) const { return static_cast<long long>(std::floor(x / eps_)); }
+  static uint64_t key(long long x, long long y, long long z) {
+    return (static_cast<uint64_t>(x) * 73856093ULL) ^ (static_cast<uint64_t>(y) * 19349663ULL) ^
+           (static_cast<uint64_t>(z) * 83492791ULL);
+  }
+  double eps_;
+  std::unordered_map<uint64_t, std::vector<int>> grid_;
+};
+
+double diameter(const std::vector<Vec3>& pts) {
+  double d = 0.0;
+  for (size_t i = 0; i < pts.size(); ++i)
+    for (size_t j = i + 1; j < pts.size(); ++j) d = std::max(d, glm::length(pts[i] - pts[j]));
+  return d;
+}
+
+// Removes consecutive repeated indices (cyclically).
+std::vector<int> dedupe_loop(std::vector<int> loop) {
+  std::vector<int> out;
+  for (int v : loop)
+    if (out.empty() || out.back() != v) out.push_back(v);
+  while (out.size() > 1 && out.front() == out.back()) out.pop_back();
+  return out;
+}
+
+}  // namespace
+
+Scene build_scene(const std::vector<RawFace>& faces, std::vector<Material> materials,
+                  const std::string& source, const SceneOptions& options) {
+  Scene scene;
+  scene.source = source;
+  for (const Material& m : materials) check_material(m);
+  scene.materials = std::move(materials);
+
+  // Every coordinate finite, every face with a material; bounding box for tolerances.
+  Vec3 lo(std::numeric_limits<double>::infinity()), hi(-std::numeric_limits<double>::infinity());
+  for (const RawFace& f : faces) {
+    const std::string at = where(f.file, f.line) + "face '" + f.name + "': ";
+    if (f.material < 0 || f.material >= static_cast<int>(scene.materials.size()))
+      throw InputError(at + "has no material (use usemtl with a material from the MTL file)");
+    auto check = [&](const std::vector<Vec3>& loop) {
+      for (const Vec3& p : loop) {
+        if (!finite(p)) throw InputError(at + "coordinate " + fmt(p) + " is not finite");
+        lo = glm::min(lo, p);
+        hi = glm::max(hi, p);
+      }
+    };
+    check(f.points);
+    for (const auto& h : f.holes) check(h);
+    ++scene.report.faces_read;
+    scene.report.vertices_read += static_cast<int>(f.points.size());
+  }
+  const double diag = faces.empty() ? 0.0 : glm::length(hi - lo);
+  Welder welder(options.weld_tolerance * diag);
+
+  auto weld_loop = [&](const std::vector<Vec3>& pts) {
+    std::vector<int> loop;
+    for (const Vec3& p : pts) {
+      bool welded = false;
+      loop.push_back(welder.add(p, scene.vertices, &welded));
+      if (welded) ++scene.report.vertices_welded;
+    }
+    return dedupe_loop(std::move(loop));
+  };
+  auto distinct = [](std::vector<int> loop) {
+    std::sort(loop.begin(), loop.end());
+    return static_cast<int>(std::unique(loop.begin(), loop.end()) - loop.begin());
+  };
+
+  for (const RawFace& f : faces) {
+    const std::string at = where(f.file, f.line) + "face '" + f.name + "': ";
+    std::vector<int> outer = weld_loop(f.points);
+    if (distinct(outer) < 3)
+      throw InputError(at + "has " + std::to_string(distinct(outer)) +
+                       " distinct vertices; a face needs at least 3");
+    std::vector<Vec3> pts = scene.loop_points(outer);
+    const Vec3 newell = newell_normal(pts);
+    const double area = 0.5 * glm::length(newell);
+    const double diam = diameter(pts);
+    if (!(area > options.area_tolerance * diam * diam)) {
+      if (++scene.report.zero_area_faces_dropped <= 5)
+        scene.report.warnings.push_back(where(f.file, f.line) + "face '" + f.name +
+                                        "' has zero area: dropped");
+      continue;
+    }
+    const Vec3 n = newell / (2.0 * area);
+    Vec3 centroid(0.0);
+    for (const Vec3& p : pts) centroid += p;
+    centroid /= static_cast<double>(pts.size());
+    double deviation = 0.0;
+    for (const Vec3& p : pts) deviation = std::max(deviation, std::abs(glm::dot(p - centroid, n)));
+
+    Patch patch;
+    patch.name = f.name;
+    patch.material = f.material;
+    patch.file = f.file;
+    patch.line = f.line;
+
+    if (deviation > options.planarity_tolerance * diam) {
+      if (!f.holes.empty())
+        throw InputError(at + "is not planar (deviation " + fmt(deviation) +
+                         ") and has holes; split it into planar faces");
+      // Fan-split into triangles; each keeps the face's name and material.
+      int made = 0;
+      for (size_t i = 1; i + 1 < outer.size(); ++i) {
+        const std::vector<int> tri = {outer[0], outer[i], outer[i + 1]};
+        const std::vector<Vec3> tp = scene.loop_points(tri);
+        const Vec3 tn = newell_normal(tp);
+        const double ta = 0.5 * glm::length(tn);
+        if (!(ta > options.area_tolerance * diam * diam)) continue;
+        Patch t = patch;
+        t.outer = tri;
+        t.normal = tn / (2.0 * ta);
+        scene.patches.push_back(std::move(t));
+        ++made;
+      }
+      ++scene.report.nonplanar_faces_split;
+      scene.report.warnings.push_back(where(f.file, f.line) + "face '" + f.name +
+                                      "' is not planar (a vertex lies " + fmt(deviation) +
+                                      " from its plane, " + fmt(deviation / diam) +
+                                      " of its size): split into " + std::to_string(made) +
+                                      " triangles");
+      continue;
+    }
+
+    patch.outer = std::move(outer);
+    patch.normal = n;
+    for (const auto& hp : f.holes) {
+      std::vector<int> hole = weld_loop(hp);
+      if (distinct(hole) < 3)
+        throw InputError(at + "has a hole with fewer than 3 distinct vertices");
+      const std::vector<Vec3> hpts = scene.loop_points(hole);
+      for (const Vec3& p : hpts)
+        if (std::abs(glm::dot(p - centroid, n)) > options.planarity_tolerance * diam)
+          throw InputError(at + "hole vertex " + fmt(p) + " is not in the face's plane");
+      if (glm::dot(newell_normal(hpts), n) > 0.0) std::reverse(hole.begin(), hole.end());
+      patch.holes.push_back(std::move(hole));
+    }
+    scene.patches.push_back(std::move(patch));
+  }
+
+  if (scene.report.zero_area_faces_dropped > 5)
+    scene.report.warnings.push_back(source + ": dropped " +
+                                    std::to_string(scene.report.zero_area_faces_dropped) +
+                                    " zero-area faces in all");
+  if (scene.patches.empty()) throw InputError(source + ": the scene has no faces with area");
+  if (!scene.has_emitter())
+    scene.report.warnings.push_back(source +
+                                    ": no face emits light (no Ke > 0): every radiosity will be "
+                                    "zero and the picture black");
+  return scene;
+}
+
+}  // namespace radmesh

@@ -1,0 +1,174 @@
+#include "radiosity/form_factor.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numbers>
+
+namespace radmesh {
+
+namespace {
+
+// Clips a polygon to the half-space dot(n, p - x) >= 0 (Sutherland-Hodgman).
+int clip_to_plane(const Vec3* in, int count, const Vec3& x, const Vec3& n, Vec3* out) {
+  int m = 0;
+  for (int i = 0; i < count; ++i) {
+    const Vec3& a = in[i];
+    const Vec3& b = in[(i + 1) % count];
+    const double da = glm::dot(n, a - x);
+    const double db = glm::dot(n, b - x);
+    if (da >= 0.0) out[m++] = a;
+    if ((da >= 0.0) != (db >= 0.0)) out[m++] = a + (b - a) * (da / (da - db));
+  }
+  return m;
+}
+
+}  // namespace
+
+double point_polygon_form_factor(const Vec3& x, const Vec3& n, const Vec3* pts, int count,
+                                 const Vec3& poly_normal) {
+  // The source emits from its front only.
+  if (glm::dot(x - pts[0], poly_normal) <= 0.0) return 0.0;
+  Vec3 clipped[40];
+  const int m = clip_to_plane(pts, std::min(count, 32), x, n, clipped);
+  if (m < 3) return 0.0;
+  double sum = 0.0;
+  for (int i = 0; i < m; ++i) {
+    const Vec3 r0 = clipped[i] - x;
+    const Vec3 r1 = clipped[(i + 1) % m] - x;
+    const Vec3 c = glm::cross(r0, r1);
+    const double s = glm::length(c);
+    if (s <= 0.0) continue;  // edge seen end-on: contributes nothing
+    const double angle = std::atan2(s, glm::dot(r0, r1));
+    sum += angle * glm::dot(n, c) / s;
+  }
+  return std::abs(sum) / (2.0 * std::numbers::pi);
+}
+
+double Triangle::radius() const {
+  const Vec3 c = centroid();
+  return std::max({glm::length(v[0] - c), glm::length(v[1] - c), glm::length(v[2] - c)});
+}
+
+Triangle make_triangle(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& normal) {
+  Triangle t;
+  t.v = {a, b, c};
+  t.normal = normal;
+  t.area = triangle_area(a, b, c);
+  return t;
+}
+
+bool facing_away(const Triangle& r, const Triangle& s) {
+  auto any_in_front = [](const Triangle& plane, const Triangle& t) {
+    const double scale = std::max(plane.radius(), t.radius());
+    const double eps = 1e-12 * scale;
+    for (const Vec3& p : t.v)
+      if (glm::dot(p - plane.v[0], plane.normal) > eps) return true;
+    return false;
+  };
+  return !any_in_front(r, s) || !any_in_front(s, r);
+}
+
+namespace {
+
+// Closest point of a triangle to p (Ericson's closest-point method).
+Vec3 closest_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c) {
+  const Vec3 ab = b - a, ac = c - a, ap = p - a;
+  const double d1 = glm::dot(ab, ap), d2 = glm::dot(ac, ap);
+  if (d1 <= 0 && d2 <= 0) return a;
+  const Vec3 bp = p - b;
+  const double d3 = glm::dot(ab, bp), d4 = glm::dot(ac, bp);
+  if (d3 >= 0 && d4 <= d3) return b;
+  const double vc = d1 * d4 - d3 * d2;
+  if (vc <= 0 && d1 >= 0 && d3 <= 0) return a + ab * (d1 / (d1 - d3));
+  const Vec3 cp = p - c;
+  const double d5 = glm::dot(ab, cp), d6 = glm::dot(ac, cp);
+  if (d6 >= 0 && d5 <= d6) return c;
+  const double vb = d5 * d2 - d1 * d6;
+  if (vb <= 0 && d2 >= 0 && d6 <= 0) return a + ac * (d2 / (d2 - d6));
+  const double va = d3 * d6 - d5 * d4;
+  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0)
+    return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
+  const double denom = 1.0 / (va + vb + vc);
+  return a + ab * (vb * denom) + ac * (vc * denom);
+}
+
+void subdivide(const Vec3& a, const Vec3& b, const Vec3& c, int level, double total_area,
+               const std::function<double(const Vec3&)>& distance, const QuadratureOptions& opt,
+               ReceiverPoints& out) {
+  const double size = std::max({glm::length(a - b), glm::length(b - c), glm::length(c - a)});
+  if (level < opt.max_level) {
+    const Vec3 centre = (a + b + c) / 3.0;
+    const double dist = std::max(0.0, distance(centre) - size / std::sqrt(3.0));
+    if (size > opt.closeness * dist) {
+      const Vec3 ab = 0.5 * (a + b), bc = 0.5 * (b + c), ca = 0.5 * (c + a);
+      subdivide(a, ab, ca, level + 1, total_area, distance, opt, out);
+      subdivide(ab, b, bc, level + 1, total_area, distance, opt, out);
+      subdivide(ca, bc, c, level + 1, total_area, distance, opt, out);
+      subdivide(ab, bc, ca, level + 1, total_area, distance, opt, out);
+      return;
+    }
+  }
+  // Degree-2 rule: the three points at barycentrics (2/3, 1/6, 1/6), equal weights.
+  const double w = triangle_area(a, b, c) / total_area / 3.0;
+  out.x.push_back((4.0 * a + b + c) / 6.0);
+  out.x.push_back((a + 4.0 * b + c) / 6.0);
+  out.x.push_back((a + b + 4.0 * c) / 6.0);
+  out.w.insert(out.w.end(), 3, w);
+}
+
+}  // namespace
+
+ReceiverPoints receiver_points(const Triangle& receiver, const std::function<double(const Vec3&)>& distance,
+                               const QuadratureOptions& options) {
+  ReceiverPoints r;
+  r.normal = receiver.normal;
+  if (receiver.area > 0.0)
+    subdivide(receiver.v[0], receiver.v[1], receiver.v[2], 0, receiver.area, distance, options, r);
+  return r;
+}
+
+double form_factor(const ReceiverPoints& r, const Triangle& source) {
+  double f = 0.0;
+  for (size_t q = 0; q < r.x.size(); ++q)
+    f += r.w[q] * point_polygon_form_factor(r.x[q], r.normal, source.v.data(), 3, source.normal);
+  return f;
+}
+
+double element_form_factor(const Triangle& receiver, const Triangle& source, const QuadratureOptions& options) {
+  const ReceiverPoints r = receiver_points(
+      receiver, [&](const Vec3& p) { return distance_to_triangle(p, source); }, options);
+  return form_factor(r, source);
+}
+
+double distance_to_triangle(const Vec3& p, const Triangle& t) {
+  return glm::length(p - closest_on_triangle(p, t.v[0], t.v[1], t.v[2]));
+}
+
+double distance_to_polygon(const Vec3& p, const std::vector<Vec3>& poly, const Vec3& normal) {
+  // Inside the outline (winding number in the plane): the distance to the plane.
+  const double h = glm::dot(p - poly[0], normal);
+  const Vec3 q = p - h * normal;
+  const Vec3 u = glm::normalize(poly[1] - poly[0]);
+  const Vec3 v = glm::cross(normal, u);
+  int winding = 0;
+  double edge_dist = std::numeric_limits<double>::infinity();
+  for (size_t i = 0; i < poly.size(); ++i) {
+    const Vec3& a3 = poly[i];
+    const Vec3& b3 = poly[(i + 1) % poly.size()];
+    const Vec3 ab = b3 - a3;
+    const double t = std::clamp(glm::dot(p - a3, ab) / std::max(glm::dot(ab, ab), 1e-300), 0.0, 1.0);
+    edge_dist = std::min(edge_dist, glm::length(p - (a3 + t * ab)));
+    const double ay = glm::dot(a3 - q, v), by = glm::dot(b3 - q, v);
+    const double ax = glm::dot(a3 - q, u), bx = glm::dot(b3 - q, u);
+    const double cross = ax * by - bx * ay;
+    if (ay <= 0.0) {
+      if (by > 0.0 && cross > 0.0) ++winding;
+    } else if (by <= 0.0 && cross < 0.0) {
+      --winding;
+    }
+  }
+  return winding != 0 ? std::abs(h) : edge_dist;
+}
+
+}  // namespace radmesh

@@ -1,0 +1,74 @@
+// Form factors: Lambert's exact point-to-polygon formula and the quadrature
+// of it over a receiving triangle.
+#pragma once
+
+#include "meshing/geometry.h"
+
+#include <array>
+#include <functional>
+#include <vector>
+
+namespace radmesh {
+
+// Unoccluded form factor from a differential area at x with unit normal n to
+// a planar polygon (vertices pts[0..count), count <= 32) with unit normal
+// `poly_normal`. Only the front of the polygon (the side its normal points
+// to) emits; the part of the polygon behind x's tangent plane is clipped
+// away. Exact (Lambert's contour integral).
+double point_polygon_form_factor(const Vec3& x, const Vec3& n, const Vec3* pts, int count,
+                                 const Vec3& poly_normal);
+
+// A flat triangle with its unit normal and area.
+struct Triangle {
+  std::array<Vec3, 3> v;
+  Vec3 normal{0.0};
+  double area = 0.0;
+  Vec3 centroid() const { return (v[0] + v[1] + v[2]) / 3.0; }
+  double radius() const;  // largest distance from the centroid to a vertex
+};
+
+Triangle make_triangle(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& normal);
+
+// Quadrature of the point form factor over a receiving triangle: a 3-point
+// degree-2 rule on a graded subdivision of the receiver. A piece is split in
+// four while its size exceeds `closeness` times its distance to the nearest
+// surface that can send it light, up to `max_level` levels: pieces next to a
+// contact get many points, pieces far from everything get three.
+//
+// All sources of one receiver are integrated at the same points, so in a
+// closed scene each row of form factors sums to 1 up to rounding (Lambert's
+// formula is exact at every point and the point form factors to a closed
+// enclosure add up to 1).
+struct QuadratureOptions {
+  double closeness = 1.0;
+  int max_level = 6;
+};
+
+struct ReceiverPoints {
+  Vec3 normal{0.0};
+  std::vector<Vec3> x;
+  std::vector<double> w;  // weights, summing to 1 (fractions of the receiver's area)
+};
+
+// `distance(p)` returns a lower bound of the distance from p to the nearest
+// surface that can send light to the receiver.
+ReceiverPoints receiver_points(const Triangle& receiver, const std::function<double(const Vec3&)>& distance,
+                               const QuadratureOptions& options);
+
+// Unoccluded F(receiver -> source) = sum_q w_q F(x_q -> source).
+double form_factor(const ReceiverPoints& receiver, const Triangle& source);
+
+// F(receiver -> source) for one pair, with the points graded toward `source`.
+double element_form_factor(const Triangle& receiver, const Triangle& source,
+                           const QuadratureOptions& options = {});
+
+// Distance from p to a triangle, and to a planar polygon (holes ignored: a lower bound).
+double distance_to_triangle(const Vec3& p, const Triangle& t);
+double distance_to_polygon(const Vec3& p, const std::vector<Vec3>& poly, const Vec3& normal);
+
+// True when no point of `source` lies strictly in front of `receiver`'s plane
+// or no point of `receiver` lies strictly in front of `source`'s plane:
+// then F is exactly zero in both directions.
+bool facing_away(const Triangle& receiver, const Triangle& source);
+
+}  // namespace radmesh

@@ -1,0 +1,352 @@
+// The classic full-matrix radiosity solve.
+
+#include "meshing/errors.h"
+#include "radiosity/occlusion.h"
+#include "radiosity/sampling.h"
+#include "radiosity/solve.h"
+#include "radiosity/visibility.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/combinable.h>
+#include <tbb/global_control.h>
+#include <tbb/parallel_for.h>
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <functional>
+#include <limits>
+#include <cmath>
+#include <numeric>
+#include <optional>
+#include <sstream>
+
+namespace radmesh {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point t) {
+  return std::chrono::duration<double>(Clock::now() - t).count();
+}
+
+double physical_memory_bytes() {
+  const long pages = sysconf(_SC_PHYS_PAGES);
+  const long page = sysconf(_SC_PAGE_SIZE);
+  return pages > 0 && page > 0 ? static_cast<double>(pages) * static_cast<double>(page) : 8e9;
+}
+
+struct Counters {
+  long long form_factors = 0, zero_pairs = 0, rays_cast = 0, rays_skipped = 0, unoccludable = 0,
+            receiver_points = 0;
+};
+
+}  // namespace
+
+double matrix_bytes(long long n) { return static_cast<double>(n) * static_cast<double>(n) * 8.0; }
+
+void check_solve_options(const SolveOptions& o) {
+  auto bad = [](const std::string& what, double v, const std::string& range) {
+    std::ostringstream m;
+    m << what << " " << v << " is out of range: " << range;
+    throw InputError(m.str());
+  };
+  if (!(o.tolerance > 0.0 && o.tolerance < 1.0)) bad("--tolerance", o.tolerance, "(0, 1)");
+  if (o.max_iterations < 1) bad("max_iterations", o.max_iterations, ">= 1");
+  if (o.threads < 0) bad("--threads", o.threads, ">= 0 (0 = all cores)");
+  if (o.rays < 1 || o.rays > 4096) bad("--rays", o.rays, "[1, 4096]");
+  if (!(o.quadrature.closeness > 0.0)) bad("closeness", o.quadrature.closeness, "> 0");
+  if (o.quadrature.max_level < 0 || o.quadrature.max_level > 10)
+    bad("max_level", o.quadrature.max_level, "[0, 10]");
+  if (!(o.max_memory_gb >= 0.0)) bad("--max-memory", o.max_memory_gb, ">= 0 GiB");
+  if (!(o.crease_angle >= 0.0 && o.crease_angle <= 180.0)) bad("crease_angle", o.crease_angle, "[0, 180]");
+}
+
+std::vector<Triangle> element_triangles(const Scene& scene, const Mesh& mesh) {
+  std::vector<Triangle> tri;
+  tri.reserve(mesh.triangles.size());
+  for (size_t i = 0; i < mesh.triangles.size(); ++i) {
+    const auto& t = mesh.triangles[i];
+    const Patch& p = scene.patches[static_cast<size_t>(mesh.patch[i])];
+    tri.push_back(make_triangle(mesh.positions[static_cast<size_t>(t[0])], mesh.positions[static_cast<size_t>(t[1])],
+                                mesh.positions[static_cast<size_t>(t[2])], p.normal));
+  }
+  return tri;
+}
+
+std::vector<double> form_factor_matrix(const Scene& scene, const Mesh& mesh, const SolveOptions& options,
+                                       SolveStats& st, const ProgressFn& progress) {
+  const long long n = mesh.triangle_count();
+  const std::vector<Triangle> tri = element_triangles(scene, mesh);
+  const auto t0 = Clock::now();
+  const Occlusion occlusion(scene);
+  st.convex_enclosure = occlusion.convex_enclosure();
+  std::optional<Visibility> vis;
+  if (!st.convex_enclosure) vis.emplace(mesh);
+  const int side = strata_side(options.rays);
+  const int rays = side * side;
+
+  std::vector<double> F(static_cast<size_t>(n * n), 0.0);
+  tbb::combinable<Counters> counters;
+
+  // Runs body(i, counters) for every row, in chunks of about equal cost, and
+  // reports progress from this thread between chunks.
+  auto rows = [&](const std::string& phase, double phase_start, double phase_share,
+                  const std::function<double(long long)>& cost, const std::function<void(long long, Counters&)>& body) {
+    double total = 0.0;
+    for (long long i = 0; i < n; ++i) total += cost(i);
+    const int chunks = 50;
+    long long row = 0;
+    double done = 0.0;
+    for (int c = 1; c <= chunks && row < n; ++c) {
+      long long end = row;
+      const double goal = total * c / chunks;
+      while (end < n && (done < goal || c == chunks)) done += cost(end++);
+      tbb::parallel_for(tbb::blocked_range<long long>(row, end, 1), [&](const tbb::blocked_range<long long>& r) {
+        Counters& cnt = counters.local();
+        for (long long i = r.begin(); i != r.end(); ++i) body(i, cnt);
+      });
+      row = end;
+      if (progress) progress(phase, phase_start + phase_share * done / std::max(total, 1.0));
+    }
+  };
+
+  // Pass 1, per unordered pair: zero when the elements face away or are
+  // coplanar; otherwise the visible fraction from stratified shadow rays (or 1
+  // when no patch can be in between). Stored in both F_ij and F_ji.
+  rows("form factors", 0.0, 0.5, [&](long long i) { return static_cast<double>(n - i); },
+       [&](long long i, Counters& c) {
+    const Triangle& ti = tri[static_cast<size_t>(i)];
+    const int pi = mesh.patch[static_cast<size_t>(i)];
+    std::vector<int> perm(static_cast<size_t>(rays));
+    for (long long j = i + 1; j < n; ++j) {
+      const Triangle& tj = tri[static_cast<size_t>(j)];
+      if (facing_away(ti, tj)) {
+        ++c.zero_pairs;
+        continue;
+      }
+      const int pj = mesh.patch[static_cast<size_t>(j)];
+      double visible = 1.0;
+      if (vis && occlusion.may_occlude(pi, pj, ti, tj)) {
+        SplitMix rng(pair_seed(static_cast<uint64_t>(i), static_cast<uint64_t>(j)));
+        // Stratified on both triangles; the source strata are visited in a
+        // shuffled order so that receiver and source strata pair at random.
+        std::iota(perm.begin(), perm.end(), 0);
+        for (int k = rays - 1; k > 0; --k)
+          std::swap(perm[static_cast<size_t>(k)],
+                    perm[static_cast<size_t>(rng.next() % static_cast<uint64_t>(k + 1))]);
+        int hits = 0;
+        for (int k = 0; k < rays; ++k) {
+          const int a = k, b = perm[static_cast<size_t>(k)];
+          const Vec3 x = triangle_point(ti.v[0], ti.v[1], ti.v[2], ((a % side) + rng.uniform()) / side,
+                                        ((a / side) + rng.uniform()) / side);
+          const Vec3 y = triangle_point(tj.v[0], tj.v[1], tj.v[2], ((b % side) + rng.uniform()) / side,
+                                        ((b / side) + rng.uniform()) / side);
+          if (vis->visible(x, y, pi, pj)) ++hits;
+        }
+        c.rays_cast += rays;
+        visible = static_cast<double>(hits) / rays;
+      } else {
+        c.rays_skipped += rays;
+        ++c.unoccludable;
+      }
+      F[static_cast<size_t>(i * n + j)] = visible;
+      F[static_cast<size_t>(j * n + i)] = visible;
+    }
+  });
+
+  // Pass 2, per row: the unoccluded form factors at the receiver's points,
+  // times the visible fraction. All sources of a row share the points.
+  std::vector<std::vector<int>> facing(scene.patches.size());
+  for (size_t p = 0; p < scene.patches.size(); ++p)
+    for (size_t q = 0; q < scene.patches.size(); ++q)
+      if (p != q && occlusion.facing(static_cast<int>(p), static_cast<int>(q)))
+        facing[p].push_back(static_cast<int>(q));
+  rows("form factors", 0.5, 0.5, [&](long long) { return 1.0; }, [&](long long i, Counters& c) {
+    const int pi = mesh.patch[static_cast<size_t>(i)];
+    const ReceiverPoints pts = receiver_points(
+        tri[static_cast<size_t>(i)],
+        [&](const Vec3& x) {
+          double d = std::numeric_limits<double>::infinity();
+          for (int q : facing[static_cast<size_t>(pi)]) d = std::min(d, occlusion.distance(q, x));
+          return d;
+        },
+        options.quadrature);
+    c.receiver_points += static_cast<long long>(pts.x.size());
+    double* fi = &F[static_cast<size_t>(i * n)];
+    for (long long j = 0; j < n; ++j) {
+      if (fi[j] == 0.0) continue;
+      fi[j] *= form_factor(pts, tri[static_cast<size_t>(j)]);
+      ++c.form_factors;
+    }
+  });
+  counters.combine_each([&](const Counters& c) {
+    st.form_factors += c.form_factors;
+    st.form_factors_skipped += 2 * c.zero_pairs;
+    st.rays_cast += c.rays_cast;
+    st.rays_skipped += c.rays_skipped;
+    st.pairs_unoccludable += c.unoccludable;
+    st.receiver_points += c.receiver_points;
+  });
+  st.seconds_form_factors = seconds_since(t0);
+  if (st.convex_enclosure)
+    st.skips.push_back("visibility: the scene is one convex enclosure, so no shadow ray was cast");
+  if (st.pairs_unoccludable > 0 && !st.convex_enclosure)
+    st.skips.push_back("visibility: " + std::to_string(st.pairs_unoccludable) +
+                       " element pairs have no patch in their shaft; their rays were not cast");
+  if (st.form_factors_skipped > 0)
+    st.skips.push_back("form factors: " + std::to_string(st.form_factors_skipped) +
+                       " entries are zero because the elements face away or are coplanar");
+
+  return F;
+}
+
+Solution solve_matrix(const Scene& scene, const Mesh& mesh, const SolveOptions& options,
+                      const ProgressFn& progress) {
+  check_solve_options(options);
+  const long long n = mesh.triangle_count();
+  const double limit = options.max_memory_gb > 0.0 ? options.max_memory_gb * 1024.0 * 1024.0 * 1024.0
+                                                   : 0.5 * physical_memory_bytes();
+  if (matrix_bytes(n) > limit) {
+    std::ostringstream m;
+    m.precision(3);
+    m << scene.source << ": the full matrix of " << n << " elements needs "
+      << matrix_bytes(n) / (1024.0 * 1024.0 * 1024.0) << " GiB, more than the "
+      << limit / (1024.0 * 1024.0 * 1024.0)
+      << " GiB allowed; use a larger --max-edge (the element count falls with its square) "
+         "or raise --max-memory";
+    throw NumericalError(m.str());
+  }
+  std::optional<tbb::global_control> threads;
+  if (options.threads > 0)
+    threads.emplace(tbb::global_control::max_allowed_parallelism, static_cast<size_t>(options.threads));
+
+  Solution sol;
+  SolveStats& st = sol.stats;
+  st.elements = n;
+
+  // Element materials.
+  const std::vector<Triangle> tri = element_triangles(scene, mesh);
+  std::vector<Rgb> rho(static_cast<size_t>(n)), emit(static_cast<size_t>(n));
+  for (long long i = 0; i < n; ++i) {
+    const Patch& p = scene.patches[static_cast<size_t>(mesh.patch[static_cast<size_t>(i)])];
+    rho[static_cast<size_t>(i)] = scene.materials[static_cast<size_t>(p.material)].reflectance;
+    emit[static_cast<size_t>(i)] = scene.materials[static_cast<size_t>(p.material)].emission;
+  }
+  const std::vector<double> F = form_factor_matrix(scene, mesh, options, st, progress);
+
+  // ---- Solve, per distinct channel ----
+  const auto t1 = Clock::now();
+  int source_of[3] = {0, 1, 2};
+  for (int c = 1; c < 3; ++c)
+    for (int d = 0; d < c; ++d) {
+      if (source_of[d] != d) continue;
+      bool same = true;
+      for (long long i = 0; i < n && same; ++i)
+        same = rho[static_cast<size_t>(i)][c] == rho[static_cast<size_t>(i)][d] &&
+               emit[static_cast<size_t>(i)][c] == emit[static_cast<size_t>(i)][d];
+      if (same) {
+        source_of[c] = d;
+        break;
+      }
+    }
+  std::vector<int> solve_channels;
+  for (int c = 0; c < 3; ++c)
+    if (source_of[c] == c) solve_channels.push_back(c);
+  st.channels_solved = static_cast<int>(solve_channels.size());
+  if (st.channels_solved < 3)
+    st.skips.push_back("solve: " + std::to_string(3 - st.channels_solved) +
+                       " colour channel(s) identical to another were solved once");
+  long long black = 0;
+  for (long long i = 0; i < n; ++i)
+    if (rho[static_cast<size_t>(i)] == Rgb(0.0)) ++black;
+  if (black > 0)
+    st.skips.push_back("solve: " + std::to_string(black) +
+                       " elements with reflectance 0 take B = E without iterating");
+
+  std::vector<std::vector<double>> B(3, std::vector<double>(static_cast<size_t>(n)));
+  tbb::parallel_for(size_t(0), solve_channels.size(), [&](size_t k) {
+    const int c = solve_channels[k];
+    std::vector<double>& b = B[static_cast<size_t>(c)];
+    for (long long i = 0; i < n; ++i) b[static_cast<size_t>(i)] = emit[static_cast<size_t>(i)][c];
+    int it = 0;
+    double max_b = 0.0;
+    for (; it < options.max_iterations; ++it) {
+      double change = 0.0;
+      max_b = 0.0;
+      for (long long i = 0; i < n; ++i) {
+        const double r = rho[static_cast<size_t>(i)][c];
+        double value = emit[static_cast<size_t>(i)][c];
+        if (r > 0.0) {
+          const double* fi = &F[static_cast<size_t>(i * n)];
+          double h = 0.0;
+          for (long long j = 0; j < n; ++j) h += fi[j] * b[static_cast<size_t>(j)];
+          value += r * h;
+        }
+        change = std::max(change, std::abs(value - b[static_cast<size_t>(i)]));
+        b[static_cast<size_t>(i)] = value;
+        max_b = std::max(max_b, std::abs(value));
+      }
+      if (change <= options.tolerance * max_b) {
+        ++it;
+        break;
+      }
+    }
+    st.iterations[static_cast<size_t>(c)] = it;
+  });
+  for (int c = 0; c < 3; ++c)
+    if (source_of[c] != c) {
+      B[static_cast<size_t>(c)] = B[static_cast<size_t>(source_of[c])];
+      st.iterations[static_cast<size_t>(c)] = st.iterations[static_cast<size_t>(source_of[c])];
+    }
+  for (int c : solve_channels)
+    if (st.iterations[static_cast<size_t>(c)] >= options.max_iterations)
+      throw NumericalError(scene.source + ": Gauss-Seidel did not converge to tolerance " +
+                           std::to_string(options.tolerance) + " in " +
+                           std::to_string(options.max_iterations) + " iterations");
+
+  // Residual and energy balance from H = F B (rows in parallel, each row summed in order).
+  std::vector<Rgb> H(static_cast<size_t>(n), Rgb(0.0));
+  std::vector<double> row_sum(static_cast<size_t>(n), 0.0);
+  tbb::parallel_for(tbb::blocked_range<long long>(0, n), [&](const tbb::blocked_range<long long>& r) {
+    for (long long i = r.begin(); i != r.end(); ++i) {
+      const double* fi = &F[static_cast<size_t>(i * n)];
+      Rgb h(0.0);
+      double s = 0.0;
+      for (long long j = 0; j < n; ++j) {
+        s += fi[j];
+        for (int c = 0; c < 3; ++c) h[c] += fi[j] * B[static_cast<size_t>(c)][static_cast<size_t>(j)];
+      }
+      H[static_cast<size_t>(i)] = h;
+      row_sum[static_cast<size_t>(i)] = s;
+    }
+  });
+  sol.element.resize(static_cast<size_t>(n));
+  for (int c = 0; c < 3; ++c) {
+    double max_b = 0.0, max_r = 0.0;
+    for (long long i = 0; i < n; ++i) {
+      const size_t u = static_cast<size_t>(i);
+      const double b = B[static_cast<size_t>(c)][u];
+      sol.element[u][c] = b;
+      max_b = std::max(max_b, std::abs(b));
+      max_r = std::max(max_r, std::abs(emit[u][c] + rho[u][c] * H[u][c] - b));
+      const double a = tri[u].area;
+      st.power_emitted[c] += emit[u][c] * a;
+      st.power_absorbed[c] += (1.0 - rho[u][c]) * H[u][c] * a;
+      st.power_escaped[c] += b * a * (1.0 - row_sum[u]);
+    }
+    st.residual[static_cast<size_t>(c)] = max_b > 0.0 ? max_r / max_b : 0.0;
+  }
+  for (const Rgb& b : sol.element)
+    if (!std::isfinite(b.x) || !std::isfinite(b.y) || !std::isfinite(b.z))
+      throw NumericalError(scene.source + ": the solve produced a non-finite radiosity");
+  st.seconds_solve = seconds_since(t1);
+  if (progress) progress("solve", 1.0);
+
+  sol.nodal = compute_nodal(scene, mesh, sol.element, options.crease_angle);
+  return sol;
+}
+
+}  // namespace radmesh

@@ -1,0 +1,91 @@
+// Per-vertex radiosity for display.
+
+#include "radiosity/solve.h"
+
+#include <cmath>
+#include <numbers>
+#include <functional>
+#include <numeric>
+
+namespace radmesh {
+
+NodalField compute_nodal(const Scene& scene, const Mesh& mesh, const std::vector<Rgb>& element,
+                         double crease_angle_degrees) {
+  const size_t nv = mesh.positions.size();
+  const size_t nt = mesh.triangles.size();
+  const double cos_crease = std::cos(crease_angle_degrees * std::numbers::pi / 180.0);
+
+  // Triangles around each vertex (CSR).
+  std::vector<int> start(nv + 1, 0);
+  for (const auto& t : mesh.triangles)
+    for (int v : t) ++start[static_cast<size_t>(v) + 1];
+  std::partial_sum(start.begin(), start.end(), start.begin());
+  std::vector<int> around(static_cast<size_t>(start[nv]));
+  std::vector<int> fill(start.begin(), start.end() - 1);
+  for (size_t t = 0; t < nt; ++t)
+    for (int v : mesh.triangles[t]) around[static_cast<size_t>(fill[static_cast<size_t>(v)]++)] = static_cast<int>(t);
+
+  auto compatible = [&](int a, int b) {
+    const Patch& pa = scene.patches[static_cast<size_t>(mesh.patch[static_cast<size_t>(a)])];
+    const Patch& pb = scene.patches[static_cast<size_t>(mesh.patch[static_cast<size_t>(b)])];
+    return pa.material == pb.material && glm::dot(pa.normal, pb.normal) >= cos_crease;
+  };
+  auto share_edge_at = [&](int a, int b, int v) {
+    // Triangles a and b both contain v; they share an edge through v when they
+    // have a second vertex in common.
+    for (int x : mesh.triangles[static_cast<size_t>(a)])
+      if (x != v)
+        for (int y : mesh.triangles[static_cast<size_t>(b)])
+          if (x == y) return true;
+    return false;
+  };
+
+  NodalField field;
+  field.corners.assign(nt, {-1, -1, -1});
+  std::vector<int> group;
+  for (size_t v = 0; v < nv; ++v) {
+    const int b = start[v], e = start[v + 1];
+    const int k = e - b;
+    // Union-find over the triangles around v, joining compatible neighbours.
+    group.resize(static_cast<size_t>(k));
+    std::iota(group.begin(), group.end(), 0);
+    std::function<int(int)> find = [&](int x) {
+      while (group[static_cast<size_t>(x)] != x) x = group[static_cast<size_t>(x)] = group[static_cast<size_t>(group[static_cast<size_t>(x)])];
+      return x;
+    };
+    for (int i = 0; i < k; ++i)
+      for (int j = i + 1; j < k; ++j) {
+        const int ta = around[static_cast<size_t>(b + i)], tb = around[static_cast<size_t>(b + j)];
+        if (compatible(ta, tb) && share_edge_at(ta, tb, static_cast<int>(v))) group[static_cast<size_t>(find(i))] = find(j);
+      }
+    // One display vertex per group: the area-weighted mean of its elements.
+    std::vector<int> display(static_cast<size_t>(k), -1);
+    for (int i = 0; i < k; ++i) {
+      const int root = find(i);
+      if (display[static_cast<size_t>(root)] < 0) {
+        display[static_cast<size_t>(root)] = static_cast<int>(field.points.size());
+        field.points.push_back(mesh.positions[v]);
+        field.source_vertex.push_back(static_cast<int>(v));
+        field.radiosity.push_back(Rgb(0.0));
+      }
+    }
+    std::vector<double> weight(static_cast<size_t>(k), 0.0);
+    for (int i = 0; i < k; ++i) {
+      const int t = around[static_cast<size_t>(b + i)];
+      const int root = find(i);
+      const int d = display[static_cast<size_t>(root)];
+      const double a = mesh.area(t);
+      field.radiosity[static_cast<size_t>(d)] += a * element[static_cast<size_t>(t)];
+      weight[static_cast<size_t>(root)] += a;
+      auto& tri = mesh.triangles[static_cast<size_t>(t)];
+      for (int c = 0; c < 3; ++c)
+        if (tri[static_cast<size_t>(c)] == static_cast<int>(v)) field.corners[static_cast<size_t>(t)][static_cast<size_t>(c)] = d;
+    }
+    for (int i = 0; i < k; ++i)
+      if (find(i) == i && weight[static_cast<size_t>(i)] > 0.0)
+        field.radiosity[static_cast<size_t>(display[static_cast<size_t>(i)])] /= weight[static_cast<size_t>(i)];
+  }
+  return field;
+}
+
+}  // namespace radmesh

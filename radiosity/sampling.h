@@ -1,0 +1,43 @@
+// Deterministic stratified sampling of triangles, seeded per element pair so
+// that results do not depend on the thread that computes them.
+#pragma once
+
+#include "meshing/geometry.h"
+
+#include <cmath>
+#include <cstdint>
+
+namespace radmesh {
+
+// SplitMix64: small, fast, and good enough for stratification jitter.
+class SplitMix {
+public:
+  explicit SplitMix(uint64_t seed) : s_(seed) {}
+  uint64_t next() {
+    uint64_t z = (s_ += 0x9E3779B97F4A7C15ULL);
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
+    return z ^ (z >> 31);
+  }
+  double uniform() { return static_cast<double>(next() >> 11) * 0x1.0p-53; }
+
+private:
+  uint64_t s_;
+};
+
+inline uint64_t pair_seed(uint64_t a, uint64_t b) { return (a * 0x100000001B3ULL) ^ (b + 0x9E3779B97F4A7C15ULL); }
+
+// Maps the unit square onto triangle (a, b, c), area-uniformly.
+inline Vec3 triangle_point(const Vec3& a, const Vec3& b, const Vec3& c, double u, double v) {
+  const double s = std::sqrt(u);
+  return (1.0 - s) * a + s * (1.0 - v) * b + s * v * c;
+}
+
+// Side of the stratification grid for at least `rays` samples.
+inline int strata_side(int rays) {
+  int k = 1;
+  while (k * k < rays) ++k;
+  return k;
+}
+
+}  // namespace radmesh

@@ -1,0 +1,55 @@
+// Radiosity solvers. The classic full-matrix method is the reference.
+#pragma once
+
+#include "meshing/mesh.h"
+#include "meshing/progress.h"
+#include "meshing/scene.h"
+#include "radiosity/form_factor.h"
+#include "radiosity/solution.h"
+
+namespace radmesh {
+
+struct SolveOptions {
+  // Gauss-Seidel stops when the largest change of a sweep is below
+  // tolerance * (largest radiosity); the final residual is reported.
+  double tolerance = 1e-6;
+  int max_iterations = 100000;
+  // Worker threads (0 = all cores). Results do not depend on it.
+  int threads = 0;
+  // Shadow rays per element pair; rounded up to a perfect square (stratified).
+  int rays = 16;
+  // Receiver quadrature of the point-to-polygon formula.
+  QuadratureOptions quadrature;
+  // Memory the form-factor matrix may take, GiB (0 = half the physical memory).
+  double max_memory_gb = 0.0;
+  // Vertex values are averaged only over triangles of one material whose
+  // normals differ by less than this angle (degrees).
+  double crease_angle = 20.0;
+};
+
+// Checks option ranges; throws InputError naming the option and the value.
+void check_solve_options(const SolveOptions& options);
+
+// Classic radiosity: every element-to-element form factor, then Gauss-Seidel
+// per colour channel. Refuses (NumericalError) a mesh whose matrix would not
+// fit in memory, before any work starts.
+Solution solve_matrix(const Scene& scene, const Mesh& mesh, const SolveOptions& options,
+                      const ProgressFn& progress = {});
+
+// The n x n form-factor matrix, row-major: F[i*n + j] = F(element i -> j),
+// occlusion included. Fills the form-factor and ray counters of `stats`.
+std::vector<double> form_factor_matrix(const Scene& scene, const Mesh& mesh, const SolveOptions& options,
+                                       SolveStats& stats, const ProgressFn& progress = {});
+
+// Element triangles (vertices, patch normal, area) of a mesh.
+std::vector<Triangle> element_triangles(const Scene& scene, const Mesh& mesh);
+
+// Bytes the full matrix of n elements needs.
+double matrix_bytes(long long n);
+
+// Per-vertex radiosity from per-element values, never averaged across a
+// material change or a crease (see SolveOptions::crease_angle).
+NodalField compute_nodal(const Scene& scene, const Mesh& mesh, const std::vector<Rgb>& element,
+                         double crease_angle_degrees);
+
+}  // namespace radmesh

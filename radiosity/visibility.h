@@ -1,0 +1,31 @@
+// Visibility between points of the scene, answered by Embree shadow rays.
+// Embree types stay inside visibility_embree.cpp.
+#pragma once
+
+#include "meshing/geometry.h"
+#include "meshing/mesh.h"
+
+#include <memory>
+
+namespace radmesh {
+
+class Visibility {
+public:
+  // Builds an Embree scene of the mesh triangles. Hits on the patches named
+  // in a query are ignored: a planar patch cannot block a segment that starts
+  // or ends on it.
+  explicit Visibility(const Mesh& mesh);
+  ~Visibility();
+  Visibility(const Visibility&) = delete;
+  Visibility& operator=(const Visibility&) = delete;
+
+  // True when the open segment (from, to) is unobstructed by every patch but
+  // `ignore_a` and `ignore_b` (-1: none). Thread-safe.
+  bool visible(const Vec3& from, const Vec3& to, int ignore_a, int ignore_b) const;
+
+private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace radmesh

@@ -1,0 +1,125 @@
+// The one file that talks to Embree.
+
+#include "radiosity/visibility.h"
+
+#include "meshing/errors.h"
+
+#include <embree3/rtcore.h>
+
+#include <limits>
+#include <string>
+
+namespace radmesh {
+
+namespace {
+
+// An intersect context carrying the patches whose hits are ignored.
+struct QueryContext {
+  RTCIntersectContext base;  // must come first: Embree passes &base back to us
+  const int* prim_patch;
+  int ignore_a, ignore_b;
+};
+
+void ignore_filter(const RTCFilterFunctionNArguments* args) {
+  const auto* ctx = reinterpret_cast<const QueryContext*>(args->context);
+  for (unsigned i = 0; i < args->N; ++i) {
+    if (args->valid[i] != -1) continue;
+    const unsigned prim = RTCHitN_primID(args->hit, args->N, i);
+    const int patch = ctx->prim_patch[prim];
+    if (patch == ctx->ignore_a || patch == ctx->ignore_b) args->valid[i] = 0;
+  }
+}
+
+void on_embree_error(void*, RTCError code, const char* message) {
+  // Embree's callback must not throw; failures surface through the checks in
+  // the constructor (rtcGetDeviceError) instead.
+  (void)code;
+  (void)message;
+}
+
+}  // namespace
+
+struct Visibility::Impl {
+  RTCDevice device = nullptr;
+  RTCScene scene = nullptr;
+  std::vector<int> prim_patch;
+  Vec3 origin{0.0};  // geometry is stored relative to this point (float precision)
+
+  ~Impl() {
+    if (scene) rtcReleaseScene(scene);
+    if (device) rtcReleaseDevice(device);
+  }
+};
+
+Visibility::Visibility(const Mesh& mesh) : impl_(std::make_unique<Impl>()) {
+  Impl& m = *impl_;
+  m.device = rtcNewDevice("threads=1");  // Embree builds one small BVH; TBB does our parallelism
+  if (!m.device) throw NumericalError("Embree: cannot create a device");
+  rtcSetDeviceErrorFunction(m.device, on_embree_error, nullptr);
+
+  Vec3 lo(std::numeric_limits<double>::infinity()), hi(-lo);
+  for (const Vec3& p : mesh.positions) {
+    lo = glm::min(lo, p);
+    hi = glm::max(hi, p);
+  }
+  m.origin = mesh.positions.empty() ? Vec3(0.0) : 0.5 * (lo + hi);
+
+  m.scene = rtcNewScene(m.device);
+  rtcSetSceneFlags(m.scene, RTC_SCENE_FLAG_ROBUST | RTC_SCENE_FLAG_CONTEXT_FILTER_FUNCTION);
+  rtcSetSceneBuildQuality(m.scene, RTC_BUILD_QUALITY_HIGH);
+  RTCGeometry geom = rtcNewGeometry(m.device, RTC_GEOMETRY_TYPE_TRIANGLE);
+  auto* verts = static_cast<float*>(rtcSetNewGeometryBuffer(
+      geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), mesh.positions.size()));
+  auto* idx = static_cast<unsigned*>(rtcSetNewGeometryBuffer(
+      geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), mesh.triangles.size()));
+  if (!verts || !idx) throw NumericalError("Embree: cannot allocate geometry buffers");
+  for (size_t i = 0; i < mesh.positions.size(); ++i) {
+    const Vec3 p = mesh.positions[i] - m.origin;
+    verts[3 * i] = static_cast<float>(p.x);
+    verts[3 * i + 1] = static_cast<float>(p.y);
+    verts[3 * i + 2] = static_cast<float>(p.z);
+  }
+  for (size_t t = 0; t < mesh.triangles.size(); ++t)
+    for (int k = 0; k < 3; ++k) idx[3 * t + static_cast<size_t>(k)] = static_cast<unsigned>(mesh.triangles[t][static_cast<size_t>(k)]);
+  m.prim_patch = mesh.patch;
+  rtcCommitGeometry(geom);
+  rtcAttachGeometry(m.scene, geom);
+  rtcReleaseGeometry(geom);
+  rtcCommitScene(m.scene);
+  const RTCError err = rtcGetDeviceError(m.device);
+  if (err != RTC_ERROR_NONE)
+    throw NumericalError("Embree: building the visibility scene failed (error " +
+                         std::to_string(static_cast<int>(err)) + ")");
+}
+
+Visibility::~Visibility() = default;
+
+bool Visibility::visible(const Vec3& from, const Vec3& to, int ignore_a, int ignore_b) const {
+  const Impl& m = *impl_;
+  QueryContext ctx;
+  rtcInitIntersectContext(&ctx.base);
+  ctx.base.filter = ignore_filter;
+  ctx.prim_patch = m.prim_patch.data();
+  ctx.ignore_a = ignore_a;
+  ctx.ignore_b = ignore_b;
+
+  const Vec3 o = from - m.origin;
+  const Vec3 d = to - from;
+  RTCRay ray;
+  ray.org_x = static_cast<float>(o.x);
+  ray.org_y = static_cast<float>(o.y);
+  ray.org_z = static_cast<float>(o.z);
+  ray.dir_x = static_cast<float>(d.x);
+  ray.dir_y = static_cast<float>(d.y);
+  ray.dir_z = static_cast<float>(d.z);
+  ray.tnear = 1e-6f;
+  ray.tfar = 1.0f - 1e-6f;
+  ray.time = 0.0f;
+  ray.mask = 0xFFFFFFFFu;
+  ray.id = 0;
+  ray.flags = 0;
+  rtcOccluded1(m.scene, &ctx.base, &ray);
+  return ray.tfar >= 0.0f;  // Embree sets tfar to -inf when occluded
+}
+
+}  // namespace radmesh

@@ -1,0 +1,99 @@
+// Form factors against closed forms (Howell's catalogue) and physical identities.
+
+#include "radiosity/form_factor.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+#include <vector>
+
+using namespace radmesh;
+
+namespace {
+
+// Howell's catalogue, differential area parallel to an a x b rectangle at
+// distance c, on the normal through one of its corners.
+double corner_closed_form(double a, double b, double c) {
+  const double A = a / c, B = b / c;
+  return (A / std::sqrt(1 + A * A) * std::atan(B / std::sqrt(1 + A * A)) +
+          B / std::sqrt(1 + B * B) * std::atan(A / std::sqrt(1 + B * B))) /
+         (2.0 * std::numbers::pi);
+}
+
+// A quad as two triangles.
+std::vector<Triangle> quad(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
+  const Vec3 n = glm::normalize(glm::cross(b - a, c - a));
+  return {make_triangle(a, b, c, n), make_triangle(a, c, d, n)};
+}
+
+// Area-weighted F between two triangle sets.
+double set_form_factor(const std::vector<Triangle>& recv, const std::vector<Triangle>& src) {
+  double num = 0.0, area = 0.0;
+  for (const Triangle& r : recv) {
+    area += r.area;
+    for (const Triangle& s : src) num += r.area * element_form_factor(r, s);
+  }
+  return num / area;
+}
+
+}  // namespace
+
+TEST(PointPolygon, UnderRectangleCornerMatchesClosedForm) {
+  for (double c : {0.1, 1.0, 7.5}) {
+    const double a = 2.0, b = 0.5;
+    // Rectangle in z = c facing down; the point at the origin facing up, under a corner.
+    const Vec3 pts[4] = {{0, 0, c}, {0, b, c}, {a, b, c}, {a, 0, c}};
+    const double f = point_polygon_form_factor(Vec3(0), Vec3(0, 0, 1), pts, 4, Vec3(0, 0, -1));
+    EXPECT_NEAR(f, corner_closed_form(a, b, c), 1e-14) << "c = " << c;
+  }
+}
+
+TEST(PointPolygon, BackOfSourceAndBehindReceiverGiveZero) {
+  const Vec3 pts[4] = {{0, 0, 1}, {0, 1, 1}, {1, 1, 1}, {1, 0, 1}};
+  // The source faces up, away from the point below it.
+  EXPECT_EQ(point_polygon_form_factor(Vec3(0), Vec3(0, 0, 1), pts, 4, Vec3(0, 0, 1)), 0.0);
+  // The point faces down, away from the source.
+  EXPECT_EQ(point_polygon_form_factor(Vec3(0), Vec3(0, 0, -1), pts, 4, Vec3(0, 0, -1)), 0.0);
+}
+
+TEST(PointPolygon, HalfSpaceClippingOfAStraddlingSource) {
+  // A huge square source in the plane x = 1 facing -x; a point at the origin
+  // facing +z sees only the half above z = 0: F = 1/2 of F to the full wall
+  // for a point facing the wall... here: a wall perpendicular to the
+  // receiver, infinite in extent, gives F = 1/2.
+  const double L = 1e7;
+  const Vec3 pts[4] = {{1, -L, -L}, {1, -L, L}, {1, L, L}, {1, L, -L}};
+  const double f = point_polygon_form_factor(Vec3(0), Vec3(0, 0, 1), pts, 4, Vec3(-1, 0, 0));
+  EXPECT_NEAR(f, 0.5, 1e-6);
+}
+
+TEST(ElementFormFactor, ParallelUnitSquaresHowellC11) {
+  const auto bottom = quad({0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0});  // faces +z
+  const auto top = quad({0, 0, 1}, {0, 1, 1}, {1, 1, 1}, {1, 0, 1});     // faces -z
+  const double f = set_form_factor(bottom, top);
+  EXPECT_NEAR(f / 0.199825 - 1.0, 0.0, 1e-4) << f;
+}
+
+TEST(ElementFormFactor, PerpendicularSquaresSharingAnEdgeHowellC14) {
+  const auto floor = quad({0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0});  // faces +z
+  const auto wall = quad({0, 0, 0}, {0, 0, 1}, {1, 0, 1}, {1, 0, 0});   // y = 0, faces +y
+  const double f = set_form_factor(floor, wall);
+  EXPECT_NEAR(f / 0.200044 - 1.0, 0.0, 1e-3) << f;
+  // Reciprocity between equal areas: F(wall -> floor) = F(floor -> wall).
+  EXPECT_NEAR(set_form_factor(wall, floor) / f - 1.0, 0.0, 1e-3);
+}
+
+TEST(ElementFormFactor, FacingAwayIsExactlyZero) {
+  const auto a = quad({0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0});   // faces +z
+  const auto b = quad({0, 0, -1}, {1, 0, -1}, {1, 1, -1}, {0, 1, -1});  // faces +z, below a
+  EXPECT_TRUE(facing_away(a[0], b[0]));
+  EXPECT_TRUE(facing_away(a[0], a[1]));  // coplanar
+}
+
+TEST(Distance, PolygonInsideAndOutside) {
+  const std::vector<Vec3> sq = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}};
+  EXPECT_DOUBLE_EQ(distance_to_polygon({0.5, 0.5, 2.0}, sq, {0, 0, 1}), 2.0);
+  EXPECT_DOUBLE_EQ(distance_to_polygon({2.0, 0.5, 0.0}, sq, {0, 0, 1}), 1.0);
+  EXPECT_NEAR(distance_to_polygon({2.0, 2.0, 1.0}, sq, {0, 0, 1}), std::sqrt(3.0), 1e-15);
+}

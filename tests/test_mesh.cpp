@@ -1,0 +1,139 @@
+// The initial CGAL mesh: exact areas, conformity between patches, quality.
+
+#include "io/obj_reader.h"
+#include "meshing/mesh.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <map>
+
+using namespace radmesh;
+
+namespace {
+const std::string kData = RADMESH_TEST_DATA;
+
+// Undirected edge -> number of triangles using it, over the triangles kept by `use`.
+template <class Use>
+std::map<std::pair<int, int>, int> edge_use(const Mesh& m, Use use) {
+  std::map<std::pair<int, int>, int> e;
+  for (int t = 0; t < m.triangle_count(); ++t) {
+    if (!use(t)) continue;
+    const auto& tri = m.triangles[static_cast<size_t>(t)];
+    for (int k = 0; k < 3; ++k) {
+      const int a = tri[static_cast<size_t>(k)], b = tri[static_cast<size_t>((k + 1) % 3)];
+      ++e[{std::min(a, b), std::max(a, b)}];
+    }
+  }
+  return e;
+}
+
+double longest_edge(const Mesh& m) {
+  double l = 0.0;
+  for (const auto& t : m.triangles)
+    for (int k = 0; k < 3; ++k)
+      l = std::max(l, glm::length(m.positions[static_cast<size_t>(t[static_cast<size_t>(k)])] -
+                                  m.positions[static_cast<size_t>(t[static_cast<size_t>((k + 1) % 3)])]));
+  return l;
+}
+
+Scene plate_with_hole() {
+  RawFace f;
+  f.name = "plate";
+  f.material = 0;
+  f.points = {{0, 0, 0}, {4, 0, 0}, {4, 4, 0}, {0, 4, 0}};
+  f.holes = {{{1, 1, 0}, {1, 3, 0}, {3, 3, 0}, {3, 1, 0}}};
+  RawFace l;  // concave L-shape in the plane z = 1, facing down
+  l.name = "ell";
+  l.material = 0;
+  l.points = {{0, 0, 1}, {0, 2, 1}, {1, 2, 1}, {1, 1, 1}, {2, 1, 1}, {2, 0, 1}};
+  Material m;
+  m.name = "m";
+  m.reflectance = Rgb(0.5);
+  return build_scene({f, l}, {m}, "test");
+}
+}  // namespace
+
+TEST(Mesh, ClosedCubeIsClosedAndConsistentlyOriented) {
+  const Scene s = read_obj_scene(kData + "/furnace_cube/furnace_cube.obj");
+  MeshingOptions o;
+  o.max_edge = 0.3;
+  const Mesh m = mesh_scene(s, o);
+  const auto edges = edge_use(m, [](int) { return true; });
+  for (const auto& [e, n] : edges) EXPECT_EQ(n, 2) << e.first << "-" << e.second;
+  // Orientation: each directed edge appears once.
+  std::map<std::pair<int, int>, int> directed;
+  for (const auto& t : m.triangles)
+    for (int k = 0; k < 3; ++k) ++directed[{t[static_cast<size_t>(k)], t[static_cast<size_t>((k + 1) % 3)]}];
+  for (const auto& [e, n] : directed) EXPECT_EQ(n, 1);
+  double area = 0.0;
+  for (int t = 0; t < m.triangle_count(); ++t) area += m.area(t);
+  EXPECT_NEAR(area, 6.0, 1e-12);
+  EXPECT_LE(longest_edge(m), 0.3 * (1 + 1e-12));
+  // Every triangle is counter-clockwise around its patch normal.
+  for (int t = 0; t < m.triangle_count(); ++t) {
+    const auto& tri = m.triangles[static_cast<size_t>(t)];
+    const Vec3 n = glm::cross(m.positions[static_cast<size_t>(tri[1])] - m.positions[static_cast<size_t>(tri[0])],
+                              m.positions[static_cast<size_t>(tri[2])] - m.positions[static_cast<size_t>(tri[0])]);
+    EXPECT_GT(glm::dot(n, s.patches[static_cast<size_t>(m.patch[static_cast<size_t>(t)])].normal), 0.0);
+  }
+}
+
+TEST(Mesh, CornellBoxPatchesShareEdgeVerticesAndKeepTheirArea) {
+  const Scene s = read_obj_scene(kData + "/cornell_box/cornell_box.obj");
+  MeshingOptions o;
+  o.max_edge = 60.0;
+  MeshReport rep;
+  const Mesh m = mesh_scene(s, o, &rep);
+  std::vector<double> area(s.patches.size(), 0.0);
+  for (int t = 0; t < m.triangle_count(); ++t) area[static_cast<size_t>(m.patch[static_cast<size_t>(t)])] += m.area(t);
+  for (size_t p = 0; p < s.patches.size(); ++p)
+    EXPECT_NEAR(area[p] / s.patch_area(static_cast<int>(p)), 1.0, 1e-12) << s.patches[p].name;
+  // The room (everything but the blocks) is a closed surface: every edge has
+  // exactly two triangles, T-junctions at the ceiling hole included.
+  auto room = [&](int t) {
+    return s.patches[static_cast<size_t>(m.patch[static_cast<size_t>(t)])].name.find("block") == std::string::npos;
+  };
+  for (const auto& [e, n] : edge_use(m, room)) EXPECT_EQ(n, 2) << e.first << "-" << e.second;
+  EXPECT_LE(longest_edge(m), 60.0 * (1 + 1e-12));
+  const TriangleQuality q = compute_quality(m);
+  EXPECT_GE(*std::min_element(q.min_angle.begin(), q.min_angle.end()), 20.0 - 1e-6);
+}
+
+TEST(Mesh, HolesAndConcaveOutlines) {
+  const Scene s = plate_with_hole();
+  MeshingOptions o;
+  o.max_edge = 0.5;
+  const Mesh m = mesh_scene(s, o);
+  double plate = 0.0, ell = 0.0;
+  for (int t = 0; t < m.triangle_count(); ++t) {
+    const Vec3 c = m.centroid(t);
+    if (m.patch[static_cast<size_t>(t)] == 0) {
+      plate += m.area(t);
+      EXPECT_FALSE(c.x > 1 && c.x < 3 && c.y > 1 && c.y < 3) << "triangle inside the hole";
+    } else {
+      ell += m.area(t);
+      EXPECT_FALSE(c.x > 1 && c.y > 1) << "triangle in the L's notch";
+    }
+  }
+  EXPECT_NEAR(plate, 12.0, 1e-12);
+  EXPECT_NEAR(ell, 3.0, 1e-12);
+}
+
+TEST(Mesh, SameInputSameMesh) {
+  const Scene s = read_obj_scene(kData + "/cornell_box/cornell_box.obj");
+  const Mesh a = mesh_scene(s, {});
+  const Mesh b = mesh_scene(s, {});
+  EXPECT_EQ(a.triangles, b.triangles);
+  EXPECT_EQ(a.positions, b.positions);
+}
+
+TEST(Quality, EquilateralTriangle) {
+  Mesh m;
+  m.positions = {{0, 0, 0}, {1, 0, 0}, {0.5, std::sqrt(3.0) / 2, 0}};
+  m.triangles = {{0, 1, 2}};
+  m.patch = {0};
+  const TriangleQuality q = compute_quality(m);
+  EXPECT_NEAR(q.min_angle[0], 60.0, 1e-12);
+  EXPECT_NEAR(q.aspect_ratio[0], 1.0, 1e-12);
+}

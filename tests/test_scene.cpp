@@ -1,0 +1,130 @@
+// Scene reading and validation: the bundled scenes and every bad input.
+
+#include "io/obj_reader.h"
+#include "meshing/errors.h"
+
+#include <gtest/gtest.h>
+
+#include <string>
+
+using namespace radmesh;
+
+namespace {
+const std::string kData = RADMESH_TEST_DATA;
+
+// Runs f, expects it to throw E, returns the message.
+template <class E, class F>
+std::string message_of(F f) {
+  try {
+    f();
+  } catch (const E& e) {
+    return e.what();
+  } catch (const std::exception& e) {
+    ADD_FAILURE() << "wrong exception type: " << e.what();
+    return {};
+  }
+  ADD_FAILURE() << "no exception";
+  return {};
+}
+
+bool contains(const std::string& s, const std::string& part) { return s.find(part) != std::string::npos; }
+}  // namespace
+
+TEST(Scene, CornellBoxReadsWithItsPatchesAndOneSplitWall) {
+  const Scene s = read_obj_scene(kData + "/cornell_box/cornell_box.obj");
+  // floor, back, green, front, light, 4 ceiling pieces, 10 block faces = 19
+  // faces planar, plus the red wall split into 2 triangles.
+  EXPECT_EQ(s.report.faces_read, 20);
+  EXPECT_EQ(s.patches.size(), 21u);
+  EXPECT_EQ(s.report.nonplanar_faces_split, 1);
+  ASSERT_FALSE(s.report.warnings.empty());
+  EXPECT_TRUE(contains(s.report.warnings[0], "left_wall_red")) << s.report.warnings[0];
+  EXPECT_TRUE(contains(s.report.warnings[0], "cornell_box.obj:")) << s.report.warnings[0];
+  EXPECT_TRUE(s.has_emitter());
+  // The ceiling pieces and the light tile the published ceiling exactly.
+  double ceiling = 0.0;
+  for (size_t p = 0; p < s.patches.size(); ++p)
+    if (s.patches[p].name == "ceiling" || s.patches[p].name == "light") ceiling += s.patch_area(static_cast<int>(p));
+  EXPECT_NEAR(ceiling, 556.0 * 559.2, 1e-6);
+  // Every normal is unit length and the light faces down.
+  for (const Patch& p : s.patches) {
+    EXPECT_NEAR(glm::length(p.normal), 1.0, 1e-12);
+    if (p.name == "light") {
+      EXPECT_NEAR(p.normal.y, -1.0, 1e-12);
+    }
+  }
+}
+
+TEST(Scene, RepeatedVerticesAreWelded) {
+  const Scene s = read_obj_scene(kData + "/furnace_cube/furnace_cube.obj");
+  EXPECT_EQ(s.vertices.size(), 8u);
+  EXPECT_EQ(s.patches.size(), 6u);
+}
+
+struct BadCase {
+  const char* file;
+  const char* where;
+  const char* value;
+};
+
+class BadInput : public ::testing::TestWithParam<BadCase> {};
+
+TEST_P(BadInput, ErrorNamesFileLineAndValue) {
+  const BadCase c = GetParam();
+  const std::string msg = message_of<Error>([&] { read_obj_scene(kData + "/bad/" + c.file); });
+  EXPECT_TRUE(contains(msg, c.where)) << msg;
+  EXPECT_TRUE(contains(msg, c.value)) << msg;
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    AllCases, BadInput,
+    ::testing::Values(BadCase{"nan_coordinate.obj", "nan_coordinate.obj:6", "nan"},
+                      BadCase{"inf_coordinate.obj", "inf_coordinate.obj:6", "inf"},
+                      BadCase{"reflectance_one.obj", "reflectance_one.mtl:3", "1 1 1"},
+                      BadCase{"reflectance_negative.obj", "reflectance_negative.mtl:3", "-0.25"},
+                      BadCase{"negative_emission.obj", "negative_emission.mtl:4", "-1"},
+                      BadCase{"degenerate_face.obj", "degenerate_face.obj:9", "2 distinct"},
+                      BadCase{"missing_material.obj", "missing_material.obj:9", "no_such_material"},
+                      BadCase{"missing_mtl_file.obj", "missing_mtl_file.obj:2", "does_not_exist.mtl"},
+                      BadCase{"parse_error.obj", "parse_error.obj:7", "'x'"},
+                      BadCase{"bad_index.obj", "bad_index.obj:8", "9"}),
+    [](const auto& info) {
+      std::string n = info.param.file;
+      return n.substr(0, n.find('.'));
+    });
+
+TEST(Scene, UnreadableFileIsAnIoError) {
+  const std::string msg = message_of<IoError>([&] { read_obj_scene(kData + "/no/such/file.obj"); });
+  EXPECT_TRUE(contains(msg, "file.obj")) << msg;
+}
+
+TEST(Scene, NoEmitterWarns) {
+  const Scene s = read_obj_scene(kData + "/bad/no_emitter.obj");
+  EXPECT_FALSE(s.has_emitter());
+  bool warned = false;
+  for (const auto& w : s.report.warnings) warned = warned || contains(w, "emit");
+  EXPECT_TRUE(warned);
+}
+
+TEST(Scene, ZeroAreaFaceIsDroppedAndCounted) {
+  const Scene s = read_obj_scene(kData + "/bad/zero_area.obj");
+  EXPECT_EQ(s.report.zero_area_faces_dropped, 1);
+  EXPECT_EQ(s.patches.size(), 1u);
+  ASSERT_FALSE(s.report.warnings.empty());
+  EXPECT_TRUE(contains(s.report.warnings[0], "zero_area.obj:9")) << s.report.warnings[0];
+}
+
+TEST(Scene, HolesAreOrientedAgainstTheOuterLoop) {
+  RawFace f;
+  f.name = "plate";
+  f.material = 0;
+  f.points = {{0, 0, 0}, {4, 0, 0}, {4, 4, 0}, {0, 4, 0}};
+  f.holes = {{{1, 1, 0}, {3, 1, 0}, {3, 3, 0}, {1, 3, 0}}};  // same orientation as outer: gets reversed
+  Material m;
+  m.name = "m";
+  m.reflectance = Rgb(0.5);
+  const Scene s = build_scene({f}, {m}, "test");
+  ASSERT_EQ(s.patches.size(), 1u);
+  EXPECT_DOUBLE_EQ(s.patch_area(0), 12.0);
+  EXPECT_LT(glm::dot(newell_normal(s.loop_points(s.patches[0].holes[0])), s.patches[0].normal), 0.0);
+}
