@@ -93,6 +93,7 @@ nlohmann::json make_summary(const RunInfo& info, const Scene& scene, const Mesh&
     const SolveStats& st = solution->stats;
     doc["counts"]["form_factors"] = st.form_factors;
     doc["counts"]["form_factors_skipped"] = st.form_factors_skipped;
+    doc["counts"]["receiver_points"] = st.receiver_points;
     doc["counts"]["rays_cast"] = st.rays_cast;
     doc["counts"]["rays_skipped"] = st.rays_skipped;
     doc["counts"]["pairs_unoccludable"] = st.pairs_unoccludable;

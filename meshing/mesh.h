@@ -22,7 +22,7 @@ struct Mesh {
 
 struct MeshingOptions {
   // Longest edge allowed in the mesh, in scene units. 0 picks
-  // scene diagonal / 24, so that the default mesh does not depend on the unit.
+  // scene diagonal / 12, so that the default mesh does not depend on the unit.
   double max_edge = 0.0;
   // Smallest angle wanted in every triangle, degrees. CGAL's Delaunay mesher is
   // guaranteed to terminate up to about 20.7 degrees; we accept up to 30.
@@ -40,6 +40,11 @@ struct MeshReport {
 // supported; vertices on a patch's boundary edges are shared with every
 // patch that touches that edge, so meshing creates no T-vertex.
 Mesh mesh_scene(const Scene& scene, const MeshingOptions& options, MeshReport* report = nullptr);
+
+// The coarsest triangulation of every patch: its constrained Delaunay
+// triangulation with no point added (holes and concave outlines respected).
+// Shared edges are not made conforming. Used for visibility.
+Mesh triangulate_patches(const Scene& scene);
 
 // Resolves MeshingOptions::max_edge = 0 to its scene-relative default and
 // checks the options; throws InputError when out of range.

@@ -110,12 +110,16 @@ void mark_domain(CDT& cdt) {
 // Shared state of one mesh_scene call.
 class SceneMesher {
 public:
-  SceneMesher(const Scene& scene, const MeshingOptions& opt) : scene_(scene), opt_(opt) {
+  // refine = false: each patch's constrained triangulation as it is.
+  SceneMesher(const Scene& scene, const MeshingOptions& opt, bool refine)
+      : scene_(scene), opt_(opt), refine_(refine) {
     positions_ = scene.vertices;
     eps_ = 1e-9 * std::max(scene.diagonal(), std::numeric_limits<double>::min());
     collect_segments();
-    find_overlaps();
-    seed_points();
+    if (refine_) {
+      find_overlaps();
+      seed_points();
+    }
   }
 
   Mesh run(MeshReport* report) {
@@ -125,7 +129,7 @@ public:
     int rounds = 0;
     for (bool any = true; any; ++rounds) {
       any = false;
-      const bool refine = rounds + 1 < kMaxRounds;
+      const bool refine = refine_ && rounds + 1 < kMaxRounds;
       for (int p = 0; p < np; ++p) {
         if (!dirty[static_cast<size_t>(p)]) continue;
         dirty[static_cast<size_t>(p)] = 0;
@@ -394,6 +398,7 @@ private:
 
   const Scene& scene_;
   MeshingOptions opt_;
+  bool refine_ = true;
   double eps_ = 0.0;
   std::vector<Vec3> positions_;
   std::vector<Segment> segments_;
@@ -409,14 +414,19 @@ MeshingOptions resolve_meshing_options(const Scene& scene, MeshingOptions option
   if (!std::isfinite(options.min_angle) || options.min_angle < 0.0 || options.min_angle > 30.0)
     throw InputError("--min-angle " + std::to_string(options.min_angle) +
                      " must be in [0, 30] degrees (CGAL's mesher may not terminate above ~30)");
-  if (options.max_edge == 0.0) options.max_edge = scene.diagonal() / 24.0;
+  if (options.max_edge == 0.0) options.max_edge = scene.diagonal() / 12.0;
   return options;
 }
 
 Mesh mesh_scene(const Scene& scene, const MeshingOptions& options, MeshReport* report) {
   const MeshingOptions opt = resolve_meshing_options(scene, options);
-  SceneMesher mesher(scene, opt);
+  SceneMesher mesher(scene, opt, true);
   return mesher.run(report);
+}
+
+Mesh triangulate_patches(const Scene& scene) {
+  SceneMesher mesher(scene, MeshingOptions{}, false);
+  return mesher.run(nullptr);
 }
 
 }  // namespace radmesh

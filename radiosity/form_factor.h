@@ -41,7 +41,7 @@ Triangle make_triangle(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& 
 // enclosure add up to 1).
 struct QuadratureOptions {
   double closeness = 1.0;
-  int max_level = 6;
+  int max_level = 2;
 };
 
 struct ReceiverPoints {

@@ -84,7 +84,7 @@ std::vector<double> form_factor_matrix(const Scene& scene, const Mesh& mesh, con
   const Occlusion occlusion(scene);
   st.convex_enclosure = occlusion.convex_enclosure();
   std::optional<Visibility> vis;
-  if (!st.convex_enclosure) vis.emplace(mesh);
+  if (!st.convex_enclosure) vis.emplace(scene);
   const int side = strata_side(options.rays);
   const int rays = side * side;
 

@@ -59,7 +59,7 @@ std::vector<ProbeResult> evaluate_probes(const Scene& scene, const Mesh& mesh,
   }
 
   const Occlusion occlusion(scene);
-  Visibility vis(mesh);
+  Visibility vis(scene);
   const int side = strata_side(options.rays);
   const int rays = side * side;
   tbb::parallel_for(size_t(0), probes.size(), [&](size_t k) {

@@ -3,7 +3,7 @@
 #pragma once
 
 #include "meshing/geometry.h"
-#include "meshing/mesh.h"
+#include "meshing/scene.h"
 
 #include <memory>
 
@@ -11,10 +11,11 @@ namespace radmesh {
 
 class Visibility {
 public:
-  // Builds an Embree scene of the mesh triangles. Hits on the patches named
+  // Builds an Embree scene of the patches (their coarsest triangulation:
+  // fewer triangles than the mesh, same surfaces). Hits on the patches named
   // in a query are ignored: a planar patch cannot block a segment that starts
   // or ends on it.
-  explicit Visibility(const Mesh& mesh);
+  explicit Visibility(const Scene& scene);
   ~Visibility();
   Visibility(const Visibility&) = delete;
   Visibility& operator=(const Visibility&) = delete;

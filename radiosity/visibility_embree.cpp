@@ -3,6 +3,7 @@
 #include "radiosity/visibility.h"
 
 #include "meshing/errors.h"
+#include "meshing/mesh.h"
 
 #include <embree3/rtcore.h>
 
@@ -51,9 +52,10 @@ struct Visibility::Impl {
   }
 };
 
-Visibility::Visibility(const Mesh& mesh) : impl_(std::make_unique<Impl>()) {
+Visibility::Visibility(const Scene& scene) : impl_(std::make_unique<Impl>()) {
+  const Mesh mesh = triangulate_patches(scene);
   Impl& m = *impl_;
-  m.device = rtcNewDevice("threads=1");  // Embree builds one small BVH; TBB does our parallelism
+  m.device = rtcNewDevice(nullptr);  // note: "threads=N" would cap TBB for the whole process
   if (!m.device) throw NumericalError("Embree: cannot create a device");
   rtcSetDeviceErrorFunction(m.device, on_embree_error, nullptr);
 
