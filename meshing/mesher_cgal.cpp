@@ -69,9 +69,11 @@ struct Frame {
 Frame make_frame(const Scene& scene, const Patch& patch) {
   Frame f;
   f.origin = scene.vertices[static_cast<size_t>(patch.outer[0])];
+  // u along the first edge: the frame moves with the patch, so the mesh does
+  // not change when the scene is translated, rotated or scaled.
   const Vec3 n = patch.normal;
-  const Vec3 axis = std::abs(n.x) < 0.6 ? Vec3(1, 0, 0) : Vec3(0, 1, 0);
-  f.u = glm::normalize(glm::cross(axis, n));
+  const Vec3 e = scene.vertices[static_cast<size_t>(patch.outer[1])] - f.origin;
+  f.u = glm::normalize(e - glm::dot(e, n) * n);
   f.v = glm::cross(n, f.u);
   return f;
 }
@@ -130,13 +132,25 @@ public:
     for (bool any = true; any; ++rounds) {
       any = false;
       const bool refine = refine_ && rounds + 1 < kMaxRounds;
-      for (int p = 0; p < np; ++p) {
-        if (!dirty[static_cast<size_t>(p)]) continue;
-        dirty[static_cast<size_t>(p)] = 0;
+      // Jacobi rounds: every dirty patch is meshed against the boundary
+      // points known at the start of the round; the points they add are
+      // shared afterwards. The result does not depend on the patch order.
+      std::vector<int> todo;
+      for (int p = 0; p < np; ++p)
+        if (dirty[static_cast<size_t>(p)]) todo.push_back(p);
+      std::fill(dirty.begin(), dirty.end(), 0);
+      pending_.clear();
+      for (int p : todo) tris[static_cast<size_t>(p)] = mesh_patch(p, refine);
+      for (const Pending& pd : pending_) {
+        const int same = find_point(pd.segment, positions_[static_cast<size_t>(pd.vertex)]);
+        if (same >= 0) {
+          alias_[pd.vertex] = same;
+          continue;
+        }
         std::vector<int> touched;
-        tris[static_cast<size_t>(p)] = mesh_patch(p, refine, &touched);
+        add_point(pd.segment, pd.vertex, &touched);
         for (int q : touched)
-          if (q != p && !dirty[static_cast<size_t>(q)]) dirty[static_cast<size_t>(q)] = 1;
+          if (q != pd.patch) dirty[static_cast<size_t>(q)] = 1;
       }
       for (char d : dirty) any = any || d;
       if (any && rounds >= kMaxRounds)
@@ -146,7 +160,9 @@ public:
     Mesh mesh;
     mesh.positions = std::move(positions_);
     for (int p = 0; p < np; ++p)
-      for (const auto& t : tris[static_cast<size_t>(p)]) {
+      for (auto t : tris[static_cast<size_t>(p)]) {
+        for (int& v : t)
+          if (auto it = alias_.find(v); it != alias_.end()) v = it->second;
         mesh.triangles.push_back(t);
         mesh.patch.push_back(p);
       }
@@ -220,6 +236,16 @@ private:
       }
   }
 
+  // A point of segment s (endpoints included) within eps of p, or -1.
+  int find_point(size_t s, const Vec3& p) const {
+    auto near = [&](int g) { return glm::length(positions_[static_cast<size_t>(g)] - p) <= eps_; };
+    if (near(segments_[s].a)) return segments_[s].a;
+    if (near(segments_[s].b)) return segments_[s].b;
+    for (int g : seg_points_[s])
+      if (near(g)) return g;
+    return -1;
+  }
+
   // Adds global point id g to segment s (and to every segment overlapping s
   // that contains it). Records the patches whose boundary gained the point.
   void add_point(size_t s, int g, std::vector<int>* touched) {
@@ -287,8 +313,8 @@ private:
   }
 
   // Triangulates and refines one patch. New points on its boundary are made
-  // global and shared; `touched` receives the patches that gained points.
-  std::vector<std::array<int, 3>> mesh_patch(int p, bool refine, std::vector<int>* touched) {
+  // global; they are recorded in pending_ and shared after the round.
+  std::vector<std::array<int, 3>> mesh_patch(int p, bool refine) {
     const Patch& patch = scene_.patches[static_cast<size_t>(p)];
     const Frame frame = make_frame(scene_, patch);
     CDT cdt;
@@ -350,7 +376,7 @@ private:
         const Vec3 A = positions_[static_cast<size_t>(segments_[static_cast<size_t>(best)].a)];
         const Vec3 B = positions_[static_cast<size_t>(segments_[static_cast<size_t>(best)].b)];
         positions_.push_back(A + best_t * (B - A));
-        add_point(static_cast<size_t>(best), g, touched);
+        pending_.push_back({static_cast<size_t>(best), g, p});
       } else {
         positions_.push_back(p3);
       }
@@ -404,6 +430,13 @@ private:
   std::vector<Segment> segments_;
   std::vector<std::vector<int>> seg_points_;
   std::vector<std::vector<int>> overlaps_;
+  struct Pending {
+    size_t segment;
+    int vertex;
+    int patch;  // the patch whose mesher created it
+  };
+  std::vector<Pending> pending_;
+  std::map<int, int> alias_;  // duplicate boundary point -> the one kept
 };
 
 }  // namespace
