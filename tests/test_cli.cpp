@@ -1,0 +1,128 @@
+// The radmesh program end to end: outputs on success, one-line errors and no
+// output on bad input.
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <cctype>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+namespace fs = std::filesystem;
+
+namespace {
+const std::string kData = RADMESH_TEST_DATA;
+const std::string kExe = RADMESH_EXE;
+
+struct Result {
+  int status;
+  std::string err;
+};
+
+// Runs radmesh with `args`; captures stderr.
+Result radmesh(const std::string& args) {
+  const fs::path err = fs::temp_directory_path() / ("radmesh_cli_err_" + std::to_string(::getpid()));
+  const std::string cmd = "DISPLAY= " + kExe + " " + args + " >/dev/null 2>" + err.string();
+  const int rc = std::system(cmd.c_str());
+  std::ifstream in(err);
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  fs::remove(err);
+  return {WEXITSTATUS(rc), text};
+}
+
+fs::path fresh_dir(const std::string& name) {
+  const fs::path d = fs::temp_directory_path() / ("radmesh_cli_" + name + "_" + std::to_string(::getpid()));
+  fs::remove_all(d);
+  return d;
+}
+}  // namespace
+
+TEST(Cli, RunWritesVtuSummaryAndProbes) {
+  const fs::path out = fresh_dir("plates");
+  const fs::path probes = out.string() + "_probes.txt";
+  {
+    std::ofstream p(probes);
+    p << "# label x y z nx ny nz\ncentre 0.5 0.5 1 0 0 -1\n";
+  }
+  const Result r = radmesh("run " + kData + "/parallel_plates/parallel_plates.obj -o " + out.string() +
+                           " --max-edge 0.25 --probe " + probes.string());
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_TRUE(fs::exists(out / "radiosity.vtu"));
+  EXPECT_TRUE(fs::exists(out / "probes.csv"));
+  std::ifstream in(out / "summary.json");
+  const nlohmann::json s = nlohmann::json::parse(in);
+  EXPECT_EQ(s["counts"]["patches"], 2);
+  EXPECT_EQ(s["solver"]["convex_enclosure"], true);
+  EXPECT_EQ(s["counts"]["rays_cast"], 0);
+  // The receiver's mean radiosity is rho * F = 0.5 * 0.199825 (Howell C-11).
+  for (const auto& p : s["patches"]) {
+    if (p["name"] == "receiver") EXPECT_NEAR(p["mean_radiosity"][0].get<double>(), 0.0999125, 1e-5);
+  }
+  // At the centre the point form factor between parallel unit squares 1 apart
+  // is 4 * (corner form factor of a 0.5 x 0.5 rectangle at distance 1).
+  std::ifstream csv(out / "probes.csv");
+  std::string header, row;
+  std::getline(csv, header);
+  std::getline(csv, row);
+  EXPECT_EQ(header, "label,x,y,z,nx,ny,nz,patch,r,g,b");
+  const double r_value = std::stod(row.substr(row.rfind(',', row.rfind(',', row.rfind(',') - 1) - 1) + 1));
+  const double A = 0.5, c = 1.0, a = A / c;
+  const double corner = 2 * (a / std::sqrt(1 + a * a) * std::atan(a / std::sqrt(1 + a * a))) / (2 * M_PI);
+  EXPECT_NEAR(r_value, 0.5 * 4 * corner, 1e-9) << row;
+  EXPECT_NE(r.err.find("PNG skipped"), std::string::npos) << r.err;  // no display here
+  fs::remove_all(out);
+  fs::remove(probes);
+}
+
+TEST(Cli, MeshWritesMeshAndSummary) {
+  const fs::path out = fresh_dir("mesh");
+  const Result r = radmesh("mesh " + kData + "/cornell_box/cornell_box.obj -o " + out.string() + " -q");
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_TRUE(fs::exists(out / "mesh.vtu"));
+  std::ifstream in(out / "summary.json");
+  const nlohmann::json s = nlohmann::json::parse(in);
+  EXPECT_GE(s["mesh_quality"]["min_angle_min"].get<double>(), 20.0 - 1e-6);
+  EXPECT_EQ(r.err, "");  // --quiet
+  fs::remove_all(out);
+}
+
+struct BadRun {
+  const char* args;
+  const char* must_contain;
+};
+
+class CliErrors : public ::testing::TestWithParam<BadRun> {};
+
+TEST_P(CliErrors, OneLineErrorNonZeroExitNoOutput) {
+  const fs::path out = fresh_dir("bad");
+  std::string args = GetParam().args;
+  for (size_t k; (k = args.find("DATA")) != std::string::npos;) args.replace(k, 4, kData);
+  const Result r = radmesh(args + " -o " + out.string());
+  EXPECT_NE(r.status, 0);
+  EXPECT_NE(r.err.find(GetParam().must_contain), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(out)) << "output written for bad input";
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    BadInputs, CliErrors,
+    ::testing::Values(BadRun{"run DATA/bad/nan_coordinate.obj", "nan_coordinate.obj:6"},
+                      BadRun{"run DATA/bad/reflectance_one.obj", "reflectance_one.mtl:3"},
+                      BadRun{"run DATA/bad/negative_emission.obj", "negative_emission.mtl:4"},
+                      BadRun{"run DATA/bad/degenerate_face.obj", "degenerate_face.obj:9"},
+                      BadRun{"run DATA/bad/missing_material.obj", "no_such_material"},
+                      BadRun{"run DATA/bad/missing_mtl_file.obj", "does_not_exist.mtl"},
+                      BadRun{"run DATA/bad/parse_error.obj", "parse_error.obj:7"},
+                      BadRun{"run DATA/bad/bad_index.obj", "bad_index.obj:8"},
+                      BadRun{"run DATA/no_such_scene.obj", "no_such_scene.obj"},
+                      BadRun{"run DATA/cornell_box/cornell_box.obj --bogus-flag", "bogus"},
+                      BadRun{"run DATA/cornell_box/cornell_box.obj --min-angle 45", "min-angle"},
+                      BadRun{"run DATA/cornell_box/cornell_box.obj --tolerance 0", "tolerance"},
+                      BadRun{"run DATA/cornell_box/cornell_box.obj --max-memory 0.000001", "GiB"}),
+    [](const auto& info) {
+      std::string name = std::to_string(info.index) + "_";
+      for (char ch : std::string(info.param.must_contain))
+        name += std::isalnum(static_cast<unsigned char>(ch)) ? ch : '_';
+      return name;
+    });
