@@ -167,7 +167,7 @@ void add_common(CLI::App* cmd, Params& p) {
   cmd->add_option("SCENE", p.scene, "scene file (OBJ + MTL)")->required()->check(CLI::ExistingFile);
   cmd->add_option("-o,--output", p.out_dir, "output directory (created; default radmesh-out)");
   cmd->add_option("--max-edge", p.meshing.max_edge,
-                  "longest mesh edge, in scene units (default 0 = scene diagonal / 24)")
+                  "longest mesh edge, in scene units (default 0 = scene diagonal / 12)")
       ->check(CLI::Range(0.0, 1e300));
   cmd->add_option("--min-angle", p.meshing.min_angle, "smallest triangle angle wanted, degrees (default 20)")
       ->check(CLI::Range(0.0, 30.0));

@@ -48,7 +48,7 @@ using Criteria = CGAL::Delaunay_mesh_size_criteria_2<CDT>;
 using Mesher = CGAL::Delaunay_mesher_2<CDT, Criteria>;
 using Point2 = K::Point_2;
 
-constexpr int kMaxRounds = 8;
+constexpr int kMaxRounds = 12;
 
 // One directed boundary segment of a patch loop, between global vertex ids.
 struct Segment {
