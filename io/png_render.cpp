@@ -3,6 +3,7 @@
 
 #include "io/atomic_file.h"
 #include "io/vtk_file.h"
+#include "io/x_display.h"
 #include "meshing/errors.h"
 
 #include <vtkActor.h>
@@ -28,33 +29,11 @@
 #include <string>
 #include <vector>
 
-// Last: Xlib defines macros (None, Bool, Status, ...) that clash with C++ headers.
-#include <X11/Xlib.h>
-
 namespace radmesh {
 namespace {
 
 constexpr double kViewAngleDegrees = 39.3;  // vertical field of view of the Cornell box camera
 constexpr double kGamma = 2.2;             // display gamma of the tone map
-
-// An X display connection, closed at scope exit. VTK aborts the process when its
-// render window cannot open a display, so render_png opens one first, before any
-// VTK rendering object exists, and hands this same connection to the window: the
-// display that was checked is the one used.
-class XConnection {
-public:
-  XConnection() : display_(XOpenDisplay(nullptr)) {}
-  ~XConnection() {
-    if (display_ != nullptr) XCloseDisplay(display_);
-  }
-  XConnection(const XConnection&) = delete;
-  XConnection& operator=(const XConnection&) = delete;
-
-  Display* get() const { return display_; }
-
-private:
-  Display* display_;
-};
 
 void check_options(const RenderOptions& options) {
   if (options.width <= 0 || options.height <= 0) {
@@ -192,11 +171,11 @@ bool render_png(const std::string& path, const Scene& scene, const Mesh& mesh,
   check_options(options);
   const NodalField& nodal = solution.nodal;
   check_inputs(path, scene, mesh, nodal);
-  const XConnection x;  // outlives the render window below, which borrows it
+  // Opened before any VTK rendering object (VTK aborts without a display) and
+  // outlives the render window below, which borrows it.
+  const io_detail::XConnection x;
   if (x.get() == nullptr) {
-    if (why != nullptr) {
-      *why = "no X display (DISPLAY unset or unreachable); run under xvfb-run to get the PNG";
-    }
+    if (why != nullptr) *why = io_detail::kNoDisplayReason;
     return false;
   }
 

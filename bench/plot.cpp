@@ -1,0 +1,160 @@
+// Log-log error-versus-time plot through VTK's charts, rendered off screen.
+#include "bench/plot.h"
+
+#include "io/atomic_file.h"
+#include "io/vtk_file.h"
+#include "io/x_display.h"
+#include "meshing/errors.h"
+
+#include <vtkAxis.h>
+#include <vtkChart.h>
+#include <vtkChartLegend.h>
+#include <vtkChartXY.h>
+#include <vtkContextScene.h>
+#include <vtkContextView.h>
+#include <vtkDoubleArray.h>
+#include <vtkNew.h>
+#include <vtkPNGWriter.h>
+#include <vtkPen.h>
+#include <vtkPlot.h>
+#include <vtkPlotPoints.h>
+#include <vtkRenderWindow.h>
+#include <vtkRenderer.h>
+#include <vtkSmartPointer.h>
+#include <vtkTable.h>
+#include <vtkTextProperty.h>
+#include <vtkUnsignedCharArray.h>
+#include <vtkWindowToImageFilter.h>
+
+#include <array>
+#include <cmath>
+#include <cstddef>
+#include <ostream>
+#include <string>
+#include <vector>
+
+namespace radmesh::bench {
+namespace {
+
+constexpr int kWidth = 900;
+constexpr int kHeight = 650;
+
+// Line colours (the "tab10" palette), cycled; markers cycle too, so that two
+// series that share a colour still differ.
+constexpr std::array<std::array<unsigned char, 3>, 10> kColours{{{31, 119, 180},
+                                                                  {255, 127, 14},
+                                                                  {44, 160, 44},
+                                                                  {214, 39, 40},
+                                                                  {148, 103, 189},
+                                                                  {140, 86, 75},
+                                                                  {227, 119, 194},
+                                                                  {127, 127, 127},
+                                                                  {188, 189, 34},
+                                                                  {23, 190, 207}}};
+constexpr std::array<int, 5> kMarkers{vtkPlotPoints::CIRCLE, vtkPlotPoints::SQUARE,
+                                      vtkPlotPoints::DIAMOND, vtkPlotPoints::CROSS,
+                                      vtkPlotPoints::PLUS};
+
+bool plottable(double v) { return std::isfinite(v) && v > 0.0; }
+
+// Two columns (time, error) with the series' plottable points; null when none.
+vtkSmartPointer<vtkTable> series_table(const Series& s) {
+  vtkNew<vtkDoubleArray> x;
+  x->SetName("wall time [s]");
+  vtkNew<vtkDoubleArray> y;
+  y->SetName(s.name.c_str());
+  for (std::size_t i = 0; i < s.x.size(); ++i) {
+    if (!plottable(s.x[i]) || !plottable(s.y[i])) continue;
+    x->InsertNextValue(s.x[i]);
+    y->InsertNextValue(s.y[i]);
+  }
+  if (x->GetNumberOfTuples() == 0) return nullptr;
+  auto table = vtkSmartPointer<vtkTable>::New();
+  table->AddColumn(x);
+  table->AddColumn(y);
+  return table;
+}
+
+void style_axis(vtkAxis* axis, const std::string& title) {
+  axis->SetTitle(title);
+  axis->SetLogScale(true);  // active only when the whole range is positive, which it is
+  axis->GetTitleProperties()->SetFontSize(15);
+  axis->GetTitleProperties()->BoldOn();
+  axis->GetLabelProperties()->SetFontSize(13);
+  axis->SetGridVisible(true);
+}
+
+}  // namespace
+
+bool plot_error_vs_time(const std::string& path, const std::string& title, const std::string& y_label,
+                        const std::vector<Series>& series, std::string* why) {
+  for (const Series& s : series) {
+    if (s.x.size() != s.y.size()) {
+      throw InputError("plot " + path + ": series \"" + s.name + "\" has " +
+                       std::to_string(s.x.size()) + " times and " + std::to_string(s.y.size()) +
+                       " errors");
+    }
+  }
+  // Opened before any VTK rendering object (VTK aborts without a display) and
+  // outlives the render window below, which borrows it.
+  const io_detail::XConnection x;
+  if (x.get() == nullptr) {
+    if (why != nullptr) *why = io_detail::kNoDisplayReason;
+    return false;
+  }
+
+  // The tables must outlive the render: the plots only reference them.
+  std::vector<vtkSmartPointer<vtkTable>> tables;
+  vtkNew<vtkChartXY> chart;
+  chart->SetTitle(title);
+  chart->GetTitleProperties()->SetFontSize(17);
+  chart->GetTitleProperties()->BoldOn();
+  std::size_t drawn = 0;
+  for (const Series& s : series) {
+    vtkSmartPointer<vtkTable> table = series_table(s);
+    if (table == nullptr) continue;
+    tables.push_back(table);
+    vtkPlot* line = chart->AddPlot(vtkChart::LINE);
+    line->SetInputData(table, 0, 1);
+    line->SetLabel(s.name);
+    const auto& rgb = kColours[drawn % kColours.size()];
+    line->SetColor(rgb[0], rgb[1], rgb[2], 255);
+    line->SetWidth(2.0f);
+    if (auto* points = vtkPlotPoints::SafeDownCast(line)) {
+      points->SetMarkerStyle(kMarkers[drawn % kMarkers.size()]);
+      points->SetMarkerSize(9.0f);
+    }
+    ++drawn;
+  }
+  style_axis(chart->GetAxis(vtkAxis::BOTTOM), "wall time [s]");
+  style_axis(chart->GetAxis(vtkAxis::LEFT), y_label);
+  chart->SetShowLegend(drawn > 0);
+  chart->GetLegend()->GetLabelProperties()->SetFontSize(14);
+
+  vtkNew<vtkRenderWindow> window;
+  window->SetDisplayId(x.get());
+  window->SetOffScreenRendering(1);
+  window->SetSize(kWidth, kHeight);
+  vtkNew<vtkContextView> view;
+  view->SetRenderWindow(window);
+  view->GetRenderer()->SetBackground(1.0, 1.0, 1.0);
+  view->GetScene()->AddItem(chart);
+  window->Render();
+
+  vtkNew<vtkWindowToImageFilter> grab;
+  grab->SetInput(window);
+  grab->SetInputBufferTypeToRGB();
+  grab->ReadFrontBufferOff();
+  vtkNew<vtkPNGWriter> writer;
+  writer->SetInputConnection(grab->GetOutputPort());
+  writer->WriteToMemoryOn();
+  io_detail::run_vtk_writer(writer.Get(), path);
+  vtkUnsignedCharArray* bytes = writer->GetResult();
+  write_file_atomically(path, [bytes](std::ostream& out) {
+    out.write(reinterpret_cast<const char*>(bytes->GetPointer(0)),
+              static_cast<std::streamsize>(bytes->GetNumberOfValues()));
+  });
+  return true;
+}
+
+}  // namespace radmesh::bench

@@ -1,0 +1,256 @@
+// The time-versus-error benchmark: for every bundled scene with a reference,
+// sweep the accuracy settings, and write one CSV row per run plus a log-log
+// plot of error against wall time. Adding a method or a scene is adding an
+// entry to `methods()` or `scenes()`.
+//
+//   radmesh_bench [--out DIR] [--scenes a,b] [--quick]
+//   radmesh_bench --make-reference [--max-edge L] [--rays N]   (Cornell box reference)
+
+#include "bench/plot.h"
+#include "io/atomic_file.h"
+#include "io/obj_reader.h"
+#include "meshing/errors.h"
+#include "radiosity/error_metric.h"
+#include "radiosity/probe.h"
+#include "radiosity/solve.h"
+
+#include <CLI/CLI.hpp>
+
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <iomanip>
+#include <sstream>
+
+namespace {
+
+using namespace radmesh;
+namespace fs = std::filesystem;
+
+constexpr int kSamples = 2000;  // error-metric points per scene
+
+struct Settings {
+  double max_edge;  // scene units
+  int rays;
+  int quad_level;
+};
+
+struct Scenario {
+  std::string name;
+  std::string obj;  // relative to the data directory
+  // Reference radiosity at the samples.
+  std::function<std::vector<Rgb>(const Scene&, const std::vector<SurfaceSample>&)> reference;
+  std::vector<Settings> sweep, quick;
+};
+
+// Per-sample constant E / (1 - rho): the furnace's closed form.
+std::vector<Rgb> furnace_reference(const Scene& s, const std::vector<SurfaceSample>& samples) {
+  std::vector<Rgb> r;
+  for (const auto& p : samples) {
+    const Material& m = s.materials[static_cast<size_t>(s.patches[static_cast<size_t>(p.patch)].material)];
+    r.push_back(m.emission / (Rgb(1.0) - m.reflectance));
+  }
+  return r;
+}
+
+// Parallel plates: the emitter is black, so the receiver gets exactly
+// B(x) = rho * E * F(x -> emitter), with Lambert's exact formula.
+std::vector<Rgb> plates_reference(const Scene& s, const std::vector<SurfaceSample>& samples) {
+  int emitter = -1;
+  for (size_t p = 0; p < s.patches.size(); ++p)
+    if (s.materials[static_cast<size_t>(s.patches[p].material)].emission != Rgb(0.0)) emitter = static_cast<int>(p);
+  const Patch& e = s.patches[static_cast<size_t>(emitter)];
+  const std::vector<Vec3> poly = s.loop_points(e.outer);
+  const Rgb E = s.materials[static_cast<size_t>(e.material)].emission;
+  std::vector<Rgb> r;
+  for (const auto& sp : samples) {
+    const Patch& p = s.patches[static_cast<size_t>(sp.patch)];
+    const Material& m = s.materials[static_cast<size_t>(p.material)];
+    if (sp.patch == emitter) {
+      r.push_back(m.emission);
+      continue;
+    }
+    const double f = point_polygon_form_factor(sp.x, p.normal, poly.data(), static_cast<int>(poly.size()), e.normal);
+    r.push_back(m.emission + m.reflectance * E * f);
+  }
+  return r;
+}
+
+// A stored converged solution (see data/README.md), at the same samples.
+std::vector<Rgb> stored_reference(const std::string& csv, const Scene& s, const std::vector<SurfaceSample>& samples) {
+  std::ifstream in(csv);
+  if (!in) throw IoError(csv + ": no reference; make it with radmesh_bench --make-reference");
+  std::vector<Rgb> r;
+  std::string line;
+  int ln = 0;
+  while (std::getline(in, line)) {
+    ++ln;
+    if (line.empty() || line[0] == '#' || line.rfind("patch", 0) == 0) continue;
+    std::istringstream ss(line);
+    std::string tok;
+    std::vector<double> v;
+    while (std::getline(ss, tok, ',')) v.push_back(std::stod(tok));
+    if (v.size() != 7) throw InputError(where(csv, ln) + "expected 7 values");
+    const size_t k = r.size();
+    if (k >= samples.size() || static_cast<int>(v[0]) != samples[k].patch ||
+        glm::length(Vec3(v[1], v[2], v[3]) - samples[k].x) > 1e-6 * s.diagonal())
+      throw InputError(where(csv, ln) + "sample does not match this scene's sample points; remake the reference");
+    r.emplace_back(v[4], v[5], v[6]);
+  }
+  if (r.size() != samples.size())
+    throw InputError(csv + ": has " + std::to_string(r.size()) + " samples, expected " + std::to_string(samples.size()));
+  return r;
+}
+
+std::vector<Scenario> scenes(const std::string& data) {
+  std::vector<Scenario> out;
+  out.push_back({"furnace_cube", "furnace_cube/furnace_cube.obj", furnace_reference,
+                 {{0.5, 16, 2}, {0.3, 16, 2}, {0.2, 16, 2}, {0.12, 16, 2}},
+                 {{0.5, 16, 2}, {0.3, 16, 2}}});
+  out.push_back({"parallel_plates", "parallel_plates/parallel_plates.obj", plates_reference,
+                 {{0.5, 16, 2}, {0.25, 16, 2}, {0.12, 16, 2}, {0.06, 16, 2}, {0.04, 16, 2}},
+                 {{0.5, 16, 2}, {0.25, 16, 2}}});
+  const std::string ref = data + "/cornell_box/reference.csv";
+  out.push_back({"cornell_box", "cornell_box/cornell_box.obj",
+                 [ref](const Scene& s, const std::vector<SurfaceSample>& sm) { return stored_reference(ref, s, sm); },
+                 {{160, 16, 2},
+                  {120, 16, 2},
+                  {90, 16, 2},
+                  {70, 16, 2},
+                  {55, 16, 2},
+                  {45, 16, 2},
+                  {70, 4, 2},
+                  {70, 64, 2},
+                  {70, 16, 0},
+                  {70, 16, 3}},
+                 {{160, 16, 2}, {120, 16, 2}}});
+  return out;
+}
+
+struct Row {
+  std::string scene, method;
+  Settings set;
+  long long elements, form_factors, rays;
+  double seconds;
+  FieldError err;
+};
+
+Row run_one(const Scenario& sc, const Scene& scene, const std::vector<SurfaceSample>& samples,
+            const std::vector<Rgb>& reference, const Settings& set) {
+  const auto t0 = std::chrono::steady_clock::now();
+  MeshingOptions mo;
+  mo.max_edge = set.max_edge;
+  const Mesh mesh = mesh_scene(scene, mo);
+  SolveOptions so;
+  so.rays = set.rays;
+  so.quadrature.max_level = set.quad_level;
+  const Solution sol = solve_matrix(scene, mesh, so);
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const std::vector<Rgb> values = interpolate_nodal(scene, mesh, sol.nodal, samples);
+  return {sc.name, "matrix", set, mesh.triangle_count(), sol.stats.form_factors, sol.stats.rays_cast, seconds,
+          field_error(samples, values, reference)};
+}
+
+int make_reference(const std::string& data, double max_edge, int rays) {
+  const Scene scene = read_obj_scene(data + "/cornell_box/cornell_box.obj");
+  const auto samples = surface_samples(scene, kSamples);
+  MeshingOptions mo;
+  mo.max_edge = max_edge;
+  const Mesh mesh = mesh_scene(scene, mo);
+  SolveOptions so;
+  so.rays = rays;
+  so.quadrature.max_level = 3;
+  std::fprintf(stderr, "reference: %d elements\n", mesh.triangle_count());
+  const Solution sol = solve_matrix(scene, mesh, so);
+  std::vector<Probe> probes;
+  for (const auto& s : samples) {
+    Probe p;
+    p.label = "s";
+    p.point = s.x;
+    p.normal = scene.patches[static_cast<size_t>(s.patch)].normal;
+    probes.push_back(p);
+  }
+  const auto res = evaluate_probes(scene, mesh, sol.element, probes, so);
+  const std::string path = data + "/cornell_box/reference.csv";
+  write_file_atomically(path, [&](std::ostream& out) {
+    out << "# Cornell box reference radiosity at the benchmark's " << samples.size()
+        << " sample points (radiosity/error_metric.h surface_samples(scene, " << kSamples << ")).\n"
+        << "# Made by: radmesh_bench --make-reference --max-edge " << max_edge << " --rays " << rays
+        << " (matrix solve, " << mesh.triangle_count()
+        << " elements, receiver quadrature level 3, then a final gather at each point).\n"
+        << "patch,x,y,z,r,g,b\n"
+        << std::setprecision(12);
+    for (size_t k = 0; k < samples.size(); ++k)
+      out << samples[k].patch << ',' << samples[k].x.x << ',' << samples[k].x.y << ',' << samples[k].x.z << ','
+          << res[k].radiosity.x << ',' << res[k].radiosity.y << ',' << res[k].radiosity.z << '\n';
+  });
+  std::printf("%s\n", path.c_str());
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"radmesh time-versus-error benchmark"};
+  std::string out_dir = "bench-out", data = RADMESH_DATA_DIR, only;
+  bool quick = false, reference = false;
+  double ref_edge = 30.0;
+  int ref_rays = 64;
+  app.add_option("--out", out_dir, "output directory for bench.csv and bench.png");
+  app.add_option("--data", data, "the data directory");
+  app.add_option("--scenes", only, "comma-separated scene names (default: all)");
+  app.add_flag("--quick", quick, "two settings per scene");
+  app.add_flag("--make-reference", reference, "compute data/cornell_box/reference.csv and exit");
+  app.add_option("--max-edge", ref_edge, "reference mesh size (mm)");
+  app.add_option("--rays", ref_rays, "reference shadow rays per pair");
+  CLI11_PARSE(app, argc, argv);
+  try {
+    if (reference) return make_reference(data, ref_edge, ref_rays);
+    fs::create_directories(out_dir);
+    std::vector<Row> rows;
+    std::vector<bench::Series> series;
+    for (const Scenario& sc : scenes(data)) {
+      if (!only.empty() && ("," + only + ",").find("," + sc.name + ",") == std::string::npos) continue;
+      const Scene scene = read_obj_scene(data + "/" + sc.obj);
+      const auto samples = surface_samples(scene, kSamples);
+      const auto ref = sc.reference(scene, samples);
+      bench::Series l2{sc.name + " L2", {}, {}}, pm{sc.name + " patch mean", {}, {}};
+      for (const Settings& set : quick ? sc.quick : sc.sweep) {
+        const Row r = run_one(sc, scene, samples, ref, set);
+        std::fprintf(stderr, "%-16s edge %-6g rays %-3d q%d: %6lld elements %8.3f s  L2 %.3e  max %.3e  patch %.3e\n",
+                     r.scene.c_str(), set.max_edge, set.rays, set.quad_level, r.elements, r.seconds, r.err.l2,
+                     r.err.linf, r.err.patch_mean);
+        rows.push_back(r);
+        if (set.rays == 16 && set.quad_level == 2) {
+          l2.x.push_back(r.seconds);
+          l2.y.push_back(r.err.l2);
+          pm.x.push_back(r.seconds);
+          pm.y.push_back(r.err.patch_mean);
+        }
+      }
+      series.push_back(l2);
+      series.push_back(pm);
+    }
+    const std::string csv = (fs::path(out_dir) / "bench.csv").string();
+    write_file_atomically(csv, [&](std::ostream& out) {
+      out << "scene,method,max_edge,rays,quad_level,elements,form_factors,rays_cast,wall_s,l2,linf,patch_mean\n";
+      for (const Row& r : rows)
+        out << r.scene << ',' << r.method << ',' << r.set.max_edge << ',' << r.set.rays << ',' << r.set.quad_level
+            << ',' << r.elements << ',' << r.form_factors << ',' << r.rays << ',' << r.seconds << ',' << r.err.l2
+            << ',' << r.err.linf << ',' << r.err.patch_mean << '\n';
+    });
+    std::printf("%s\n", csv.c_str());
+    std::string why;
+    const std::string png = (fs::path(out_dir) / "bench.png").string();
+    if (bench::plot_error_vs_time(png, "radmesh: error vs time (matrix method)", "relative error", series, &why))
+      std::printf("%s\n", png.c_str());
+    else
+      std::fprintf(stderr, "plot skipped: %s\n", why.c_str());
+  } catch (const radmesh::Error& e) {
+    std::fprintf(stderr, "radmesh_bench: error: %s\n", e.what());
+    return 1;
+  }
+  return 0;
+}
