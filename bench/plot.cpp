@@ -26,9 +26,11 @@
 #include <vtkUnsignedCharArray.h>
 #include <vtkWindowToImageFilter.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstddef>
+#include <limits>
 #include <ostream>
 #include <string>
 #include <vector>
@@ -57,8 +59,20 @@ constexpr std::array<int, 5> kMarkers{vtkPlotPoints::CIRCLE, vtkPlotPoints::SQUA
 
 bool plottable(double v) { return std::isfinite(v) && v > 0.0; }
 
-// Two columns (time, error) with the series' plottable points; null when none.
-vtkSmartPointer<vtkTable> series_table(const Series& s) {
+// The range [lo, hi] of the plotted values along one axis.
+struct Extent {
+  double lo = std::numeric_limits<double>::infinity();
+  double hi = -std::numeric_limits<double>::infinity();
+  void add(double v) {
+    lo = std::min(lo, v);
+    hi = std::max(hi, v);
+  }
+  bool empty() const { return lo > hi; }
+};
+
+// Two columns (time, error) with the series' plottable points, which also widen
+// the extents; null when none.
+vtkSmartPointer<vtkTable> series_table(const Series& s, Extent& x_extent, Extent& y_extent) {
   vtkNew<vtkDoubleArray> x;
   x->SetName("wall time [s]");
   vtkNew<vtkDoubleArray> y;
@@ -67,6 +81,8 @@ vtkSmartPointer<vtkTable> series_table(const Series& s) {
     if (!plottable(s.x[i]) || !plottable(s.y[i])) continue;
     x->InsertNextValue(s.x[i]);
     y->InsertNextValue(s.y[i]);
+    x_extent.add(s.x[i]);
+    y_extent.add(s.y[i]);
   }
   if (x->GetNumberOfTuples() == 0) return nullptr;
   auto table = vtkSmartPointer<vtkTable>::New();
@@ -75,9 +91,22 @@ vtkSmartPointer<vtkTable> series_table(const Series& s) {
   return table;
 }
 
-void style_axis(vtkAxis* axis, const std::string& title) {
+// A log axis over `extent`, widened on both sides so that the markers at the
+// ends are not cut by the frame: by 4% of its span in decades, at least 0.1
+// decade (which also gives a single value a range). VTK's own range would end
+// exactly at the extreme points. An empty extent (nothing to plot) gets
+// [0.1, 10], a valid log range.
+void style_axis(vtkAxis* axis, const std::string& title, const Extent& extent) {
   axis->SetTitle(title);
   axis->SetLogScale(true);  // active only when the whole range is positive, which it is
+  axis->SetBehavior(vtkAxis::FIXED);
+  if (extent.empty()) {
+    axis->SetUnscaledRange(0.1, 10.0);
+  } else {
+    const double pad = std::max(0.04 * std::log10(extent.hi / extent.lo), 0.1);
+    const double factor = std::pow(10.0, pad);
+    axis->SetUnscaledRange(extent.lo / factor, extent.hi * factor);
+  }
   axis->GetTitleProperties()->SetFontSize(15);
   axis->GetTitleProperties()->BoldOn();
   axis->GetLabelProperties()->SetFontSize(13);
@@ -110,11 +139,14 @@ bool plot_error_vs_time(const std::string& path, const std::string& title, const
   chart->GetTitleProperties()->SetFontSize(17);
   chart->GetTitleProperties()->BoldOn();
   std::size_t drawn = 0;
+  Extent x_extent, y_extent;
   for (const Series& s : series) {
-    vtkSmartPointer<vtkTable> table = series_table(s);
+    vtkSmartPointer<vtkTable> table = series_table(s, x_extent, y_extent);
     if (table == nullptr) continue;
     tables.push_back(table);
-    vtkPlot* line = chart->AddPlot(vtkChart::LINE);
+    // A line through a single point would make VTK report an error: markers only.
+    vtkPlot* line =
+        chart->AddPlot(table->GetNumberOfRows() > 1 ? vtkChart::LINE : vtkChart::POINTS);
     line->SetInputData(table, 0, 1);
     line->SetLabel(s.name);
     const auto& rgb = kColours[drawn % kColours.size()];
@@ -126,9 +158,13 @@ bool plot_error_vs_time(const std::string& path, const std::string& title, const
     }
     ++drawn;
   }
-  style_axis(chart->GetAxis(vtkAxis::BOTTOM), "wall time [s]");
-  style_axis(chart->GetAxis(vtkAxis::LEFT), y_label);
+  style_axis(chart->GetAxis(vtkAxis::BOTTOM), "wall time [s]", x_extent);
+  style_axis(chart->GetAxis(vtkAxis::LEFT), y_label, y_extent);
   chart->SetShowLegend(drawn > 0);
+  if (drawn == 0) {  // VTK draws neither axes nor plots then: say why the picture is empty
+    chart->SetRenderEmpty(true);
+    chart->SetTitle(title + "\n(nothing to plot: no point with positive time and error)");
+  }
   chart->GetLegend()->GetLabelProperties()->SetFontSize(14);
 
   vtkNew<vtkRenderWindow> window;

@@ -40,7 +40,8 @@ struct Settings {
 struct Scenario {
   std::string name;
   std::string obj;  // relative to the data directory
-  // Reference radiosity at the samples.
+  // Reference radiosity at the samples. Errors are measured on the reflected
+  // part B - E (see reflected_part).
   std::function<std::vector<Rgb>(const Scene&, const std::vector<SurfaceSample>&)> reference;
   std::vector<Settings> sweep, quick;
 };
@@ -150,7 +151,7 @@ Row run_one(const Scenario& sc, const Scene& scene, const std::vector<SurfaceSam
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   const std::vector<Rgb> values = interpolate_nodal(scene, mesh, sol.nodal, samples);
   return {sc.name, "matrix", set, mesh.triangle_count(), sol.stats.form_factors, sol.stats.rays_cast, seconds,
-          field_error(samples, values, reference)};
+          field_error(samples, reflected_part(scene, samples, values), reflected_part(scene, samples, reference))};
 }
 
 int make_reference(const std::string& data, double max_edge, int rays) {
@@ -219,9 +220,10 @@ int main(int argc, char** argv) {
       bench::Series l2{sc.name + " L2", {}, {}}, pm{sc.name + " patch mean", {}, {}};
       for (const Settings& set : quick ? sc.quick : sc.sweep) {
         const Row r = run_one(sc, scene, samples, ref, set);
-        std::fprintf(stderr, "%-16s edge %-6g rays %-3d q%d: %6lld elements %8.3f s  L2 %.3e  max %.3e  patch %.3e\n",
+        std::fprintf(stderr, "%-16s edge %-6g rays %-3d q%d: %6lld elements %8.3f s  L2 %.3e  max %.3e  patch %.3e (%s)\n",
                      r.scene.c_str(), set.max_edge, set.rays, set.quad_level, r.elements, r.seconds, r.err.l2,
-                     r.err.linf, r.err.patch_mean);
+                     r.err.linf, r.err.patch_mean,
+                     r.err.worst_patch >= 0 ? scene.patches[static_cast<size_t>(r.err.worst_patch)].name.c_str() : "-");
         rows.push_back(r);
         if (set.rays == 16 && set.quad_level == 2) {
           l2.x.push_back(r.seconds);

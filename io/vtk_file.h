@@ -1,6 +1,6 @@
 // Private to io/: running a VTK writer into memory so that its failures surface
 // as an IoError instead of text on stderr; the bytes then go to disk through
-// write_file_atomically. Includes VTK headers: include it from io/*.cpp only,
+// write_file_atomically. Includes VTK headers: include it from io/*.cpp and bench/*.cpp only,
 // never from a public header.
 #pragma once
 

@@ -99,9 +99,26 @@ FieldError field_error(const std::vector<SurfaceSample>& samples, const std::vec
   e.linf = max_ref > 0.0 ? max_diff / max_ref : max_diff;
   for (const auto& [p, m] : means)
     for (int c = 0; c < 3; ++c)
-      if (std::abs(m.r[c]) > 1e-9 * max_ref * m.w)  // skip black patches
-        e.patch_mean = std::max(e.patch_mean, std::abs(m.v[c] / m.r[c] - 1.0));
+      if (std::abs(m.r[c]) > 1e-9 * max_ref * m.w) {  // skip black patches
+        const double rel = std::abs(m.v[c] / m.r[c] - 1.0);
+        if (rel > e.patch_mean) {
+          e.patch_mean = rel;
+          e.worst_patch = p;
+        }
+      }
   return e;
+}
+
+}  // namespace radmesh
+
+namespace radmesh {
+
+std::vector<Rgb> reflected_part(const Scene& scene, const std::vector<SurfaceSample>& samples,
+                                std::vector<Rgb> radiosity) {
+  for (size_t k = 0; k < samples.size(); ++k)
+    radiosity[k] -= scene.materials[static_cast<size_t>(scene.patches[static_cast<size_t>(samples[k].patch)].material)]
+                        .emission;
+  return radiosity;
 }
 
 }  // namespace radmesh

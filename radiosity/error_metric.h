@@ -32,7 +32,14 @@ struct FieldError {
   double l2 = 0.0;          // sqrt(sum w |v - r|^2) / sqrt(sum w |r|^2), all channels
   double linf = 0.0;        // max |v - r| / max |r|
   double patch_mean = 0.0;  // worst relative error of a patch's mean (patches with a non-zero mean)
+  int worst_patch = -1;     // the patch with that error
 };
+
+// B - E at every sample: the reflected part, which is what a solver computes
+// (E is input, exact). Benchmarks measure errors on it, so that a bright
+// emitter does not dominate the norms.
+std::vector<Rgb> reflected_part(const Scene& scene, const std::vector<SurfaceSample>& samples,
+                                std::vector<Rgb> radiosity);
 
 FieldError field_error(const std::vector<SurfaceSample>& samples, const std::vector<Rgb>& values,
                        const std::vector<Rgb>& reference);

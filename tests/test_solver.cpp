@@ -3,6 +3,7 @@
 #include "io/obj_reader.h"
 #include "io/summary.h"
 #include "meshing/errors.h"
+#include "radiosity/error_metric.h"
 #include "radiosity/probe.h"
 #include "radiosity/solve.h"
 
@@ -11,6 +12,8 @@
 #include <algorithm>
 #include <functional>
 #include <cmath>
+#include <cstdio>
+#include <fstream>
 #include <numeric>
 #include <random>
 
@@ -221,4 +224,43 @@ TEST(Probe, FinalGatherMatchesTheFurnaceAndRejectsPointsOffSurfaces) {
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("probes.txt:4"), std::string::npos) << e.what();
   }
+}
+
+TEST(ErrorMetric, FurnaceFieldIsExactAndSamplesCoverTheArea) {
+  SolveOptions so;
+  so.tolerance = 1e-10;
+  const Solved s = solve_file("/furnace_cube/furnace_cube.obj", 0.3, so);
+  const auto samples = surface_samples(s.scene, 500);
+  double area = 0.0;
+  for (const auto& p : samples) area += p.weight;
+  EXPECT_NEAR(area, 6.0, 1e-12);
+  const auto values = interpolate_nodal(s.scene, s.mesh, s.sol.nodal, samples);
+  const FieldError e = field_error(samples, values, std::vector<Rgb>(samples.size(), Rgb(2.0)));
+  EXPECT_LT(e.l2, 1e-6);
+  EXPECT_LT(e.linf, 1e-6);
+  EXPECT_LT(e.patch_mean, 1e-6);
+  // A field 10% too high everywhere has exactly 10% error in every norm.
+  const FieldError f = field_error(samples, std::vector<Rgb>(samples.size(), Rgb(2.2)),
+                                   std::vector<Rgb>(samples.size(), Rgb(2.0)));
+  EXPECT_NEAR(f.l2, 0.1, 1e-12);
+  EXPECT_NEAR(f.linf, 0.1, 1e-12);
+  EXPECT_NEAR(f.patch_mean, 0.1, 1e-12);
+}
+
+TEST(ErrorMetric, CornellReferenceWasMadeAtTodaysSamplePoints) {
+  const Scene scene = read_obj_scene(kData + "/cornell_box/cornell_box.obj");
+  const auto samples = surface_samples(scene, 2000);
+  std::ifstream in(kData + "/cornell_box/reference.csv");
+  ASSERT_TRUE(in.good());
+  size_t k = 0;
+  for (std::string line; std::getline(in, line);) {
+    if (line.empty() || line[0] == '#' || line.rfind("patch", 0) == 0) continue;
+    ASSERT_LT(k, samples.size());
+    double p, x, y, z;
+    ASSERT_EQ(std::sscanf(line.c_str(), "%lf,%lf,%lf,%lf", &p, &x, &y, &z), 4);
+    EXPECT_EQ(static_cast<int>(p), samples[k].patch);
+    EXPECT_LT(glm::length(Vec3(x, y, z) - samples[k].x), 1e-6) << "sample " << k;
+    ++k;
+  }
+  EXPECT_EQ(k, samples.size());
 }
