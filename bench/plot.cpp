@@ -166,6 +166,9 @@ bool plot_error_vs_time(const std::string& path, const std::string& title, const
     chart->SetTitle(title + "\n(nothing to plot: no point with positive time and error)");
   }
   chart->GetLegend()->GetLabelProperties()->SetFontSize(14);
+  // Bottom left: error curves fall to the right, so that corner stays clearest.
+  chart->GetLegend()->SetHorizontalAlignment(vtkChartLegend::LEFT);
+  chart->GetLegend()->SetVerticalAlignment(vtkChartLegend::BOTTOM);
 
   vtkNew<vtkRenderWindow> window;
   window->SetDisplayId(x.get());
