@@ -58,7 +58,9 @@ TEST(Cli, RunWritesVtuSummaryAndProbes) {
   EXPECT_EQ(s["counts"]["rays_cast"], 0);
   // The receiver's mean radiosity is rho * F = 0.5 * 0.199825 (Howell C-11).
   for (const auto& p : s["patches"]) {
-    if (p["name"] == "receiver") EXPECT_NEAR(p["mean_radiosity"][0].get<double>(), 0.0999125, 1e-5);
+    if (p["name"] == "receiver") {
+      EXPECT_NEAR(p["mean_radiosity"][0].get<double>(), 0.0999125, 1e-5);
+    }
   }
   // At the centre the point form factor between parallel unit squares 1 apart
   // is 4 * (corner form factor of a 0.5 x 0.5 rectangle at distance 1).
