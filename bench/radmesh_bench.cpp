@@ -135,7 +135,8 @@ struct Row {
   Settings set;
   long long elements, form_factors, rays;
   double seconds;
-  FieldError err;
+  FieldError err;       // the per-vertex linear field (what users see)
+  FieldError element;   // the per-element constant field
 };
 
 Row run_one(const Scenario& sc, const Scene& scene, const std::vector<SurfaceSample>& samples,
@@ -150,8 +151,11 @@ Row run_one(const Scenario& sc, const Scene& scene, const std::vector<SurfaceSam
   const Solution sol = solve_matrix(scene, mesh, so);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   const std::vector<Rgb> values = interpolate_nodal(scene, mesh, sol.nodal, samples);
+  const std::vector<Rgb> flat = element_values(scene, mesh, sol.element, samples);
+  const auto ref = reflected_part(scene, samples, reference);
   return {sc.name, "matrix", set, mesh.triangle_count(), sol.stats.form_factors, sol.stats.rays_cast, seconds,
-          field_error(samples, reflected_part(scene, samples, values), reflected_part(scene, samples, reference))};
+          field_error(samples, reflected_part(scene, samples, values), ref),
+          field_error(samples, reflected_part(scene, samples, flat), ref)};
 }
 
 int make_reference(const std::string& data, double max_edge, int rays) {
@@ -220,10 +224,10 @@ int main(int argc, char** argv) {
       bench::Series l2{sc.name + " L2", {}, {}}, pm{sc.name + " patch mean", {}, {}};
       for (const Settings& set : quick ? sc.quick : sc.sweep) {
         const Row r = run_one(sc, scene, samples, ref, set);
-        std::fprintf(stderr, "%-16s edge %-6g rays %-3d q%d: %6lld elements %8.3f s  L2 %.3e  max %.3e  patch %.3e (%s)\n",
+        std::fprintf(stderr, "%-16s edge %-6g rays %-3d q%d: %6lld elements %8.3f s  L2 %.3e  max %.3e  patch %.3e (elements %.3e) (%s)\n",
                      r.scene.c_str(), set.max_edge, set.rays, set.quad_level, r.elements, r.seconds, r.err.l2,
                      r.err.linf, r.err.patch_mean,
-                     r.err.worst_patch >= 0 ? scene.patches[static_cast<size_t>(r.err.worst_patch)].name.c_str() : "-");
+                     r.element.patch_mean, (r.err.worst_patch >= 0 ? scene.patches[static_cast<size_t>(r.err.worst_patch)].name + " #" + std::to_string(r.err.worst_patch) : std::string("-")).c_str());
         rows.push_back(r);
         if (set.rays == 16 && set.quad_level == 2) {
           l2.x.push_back(r.seconds);
@@ -237,11 +241,13 @@ int main(int argc, char** argv) {
     }
     const std::string csv = (fs::path(out_dir) / "bench.csv").string();
     write_file_atomically(csv, [&](std::ostream& out) {
-      out << "scene,method,max_edge,rays,quad_level,elements,form_factors,rays_cast,wall_s,l2,linf,patch_mean\n";
+      out << "scene,method,max_edge,rays,quad_level,elements,form_factors,rays_cast,wall_s,l2,linf,patch_mean,"
+             "element_l2,element_patch_mean\n";
       for (const Row& r : rows)
         out << r.scene << ',' << r.method << ',' << r.set.max_edge << ',' << r.set.rays << ',' << r.set.quad_level
             << ',' << r.elements << ',' << r.form_factors << ',' << r.rays << ',' << r.seconds << ',' << r.err.l2
-            << ',' << r.err.linf << ',' << r.err.patch_mean << '\n';
+            << ',' << r.err.linf << ',' << r.err.patch_mean << ',' << r.element.l2 << ',' << r.element.patch_mean
+            << '\n';
     });
     std::printf("%s\n", csv.c_str());
     std::string why;

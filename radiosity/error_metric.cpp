@@ -35,15 +35,22 @@ std::vector<SurfaceSample> surface_samples(const Scene& scene, int count) {
   return out;
 }
 
-std::vector<Rgb> interpolate_nodal(const Scene& scene, const Mesh& mesh, const NodalField& nodal,
-                                   const std::vector<SurfaceSample>& samples) {
+namespace {
+
+struct Location {
+  int triangle;
+  double u, v;  // barycentric weights of the triangle's first two corners
+};
+
+// The mesh triangle of each sample's patch that contains it.
+std::vector<Location> locate(const Scene& scene, const Mesh& mesh, const std::vector<SurfaceSample>& samples) {
   std::vector<std::vector<int>> by_patch(scene.patches.size());
   for (int t = 0; t < mesh.triangle_count(); ++t) by_patch[static_cast<size_t>(mesh.patch[static_cast<size_t>(t)])].push_back(t);
-  std::vector<Rgb> out(samples.size());
+  std::vector<Location> out(samples.size());
   for (size_t k = 0; k < samples.size(); ++k) {
     const SurfaceSample& s = samples[k];
-    int best = -1;
-    double best_out = 1e300, bu = 0, bv = 0;
+    Location best{-1, 0.0, 0.0};
+    double best_out = 1e300;
     for (int t : by_patch[static_cast<size_t>(s.patch)]) {
       const auto& tri = mesh.triangles[static_cast<size_t>(t)];
       const Vec3& a = mesh.positions[static_cast<size_t>(tri[0])];
@@ -54,22 +61,37 @@ std::vector<Rgb> interpolate_nodal(const Scene& scene, const Mesh& mesh, const N
       if (nn <= 0.0) continue;
       const double u = glm::dot(glm::cross(c - b, s.x - b), n) / nn;  // weight of a
       const double v = glm::dot(glm::cross(a - c, s.x - c), n) / nn;  // weight of b
-      const double w = 1.0 - u - v;
-      const double outside = std::max({0.0, -u, -v, -w});
+      const double outside = std::max({0.0, -u, -v, -(1.0 - u - v)});
       if (outside < best_out) {
         best_out = outside;
-        best = t;
-        bu = u;
-        bv = v;
+        best = {t, u, v};
       }
       if (outside == 0.0) break;
     }
-    if (best < 0 || best_out > 1e-6)
+    if (best.triangle < 0 || best_out > 1e-6)
       throw GeometryError("error metric: sample point lies on no triangle of patch " + std::to_string(s.patch));
-    const auto& c = nodal.corners[static_cast<size_t>(best)];
-    out[k] = bu * nodal.radiosity[static_cast<size_t>(c[0])] + bv * nodal.radiosity[static_cast<size_t>(c[1])] +
-             (1.0 - bu - bv) * nodal.radiosity[static_cast<size_t>(c[2])];
+    out[k] = best;
   }
+  return out;
+}
+
+}  // namespace
+
+std::vector<Rgb> interpolate_nodal(const Scene& scene, const Mesh& mesh, const NodalField& nodal,
+                                   const std::vector<SurfaceSample>& samples) {
+  std::vector<Rgb> out;
+  for (const Location& l : locate(scene, mesh, samples)) {
+    const auto& c = nodal.corners[static_cast<size_t>(l.triangle)];
+    out.push_back(l.u * nodal.radiosity[static_cast<size_t>(c[0])] + l.v * nodal.radiosity[static_cast<size_t>(c[1])] +
+                  (1.0 - l.u - l.v) * nodal.radiosity[static_cast<size_t>(c[2])]);
+  }
+  return out;
+}
+
+std::vector<Rgb> element_values(const Scene& scene, const Mesh& mesh, const std::vector<Rgb>& element,
+                                const std::vector<SurfaceSample>& samples) {
+  std::vector<Rgb> out;
+  for (const Location& l : locate(scene, mesh, samples)) out.push_back(element[static_cast<size_t>(l.triangle)]);
   return out;
 }
 

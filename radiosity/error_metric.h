@@ -28,6 +28,10 @@ std::vector<SurfaceSample> surface_samples(const Scene& scene, int count);
 std::vector<Rgb> interpolate_nodal(const Scene& scene, const Mesh& mesh, const NodalField& nodal,
                                    const std::vector<SurfaceSample>& samples);
 
+// The piecewise-constant element field at every sample (the element containing it).
+std::vector<Rgb> element_values(const Scene& scene, const Mesh& mesh, const std::vector<Rgb>& element,
+                                const std::vector<SurfaceSample>& samples);
+
 struct FieldError {
   double l2 = 0.0;          // sqrt(sum w |v - r|^2) / sqrt(sum w |r|^2), all channels
   double linf = 0.0;        // max |v - r| / max |r|
