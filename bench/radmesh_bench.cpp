@@ -122,6 +122,8 @@ std::vector<Scenario> scenes(const std::string& data) {
                   {70, 16, 2},
                   {55, 16, 2},
                   {45, 16, 2},
+                  {38, 16, 2},
+                  {32, 16, 2},
                   {70, 4, 2},
                   {70, 64, 2},
                   {70, 16, 0},
@@ -201,7 +203,7 @@ int main(int argc, char** argv) {
   CLI::App app{"radmesh time-versus-error benchmark"};
   std::string out_dir = "bench-out", data = RADMESH_DATA_DIR, only;
   bool quick = false, reference = false;
-  double ref_edge = 30.0;
+  double ref_edge = 27.0;
   int ref_rays = 64;
   app.add_option("--out", out_dir, "output directory for bench.csv and bench.png");
   app.add_option("--data", data, "the data directory");

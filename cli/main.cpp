@@ -34,6 +34,7 @@ struct Params {
   std::string probe_file;
   bool quiet = false;
   bool png = true;
+  std::string discontinuity = "contacts";
 };
 
 // Progress on stderr for phases longer than a second: phase, percent, elapsed.
@@ -47,7 +48,10 @@ public:
   }
   void update(const std::string& phase, double fraction) {
     if (quiet_) return;
-    if (phase != phase_) begin(phase);
+    if (phase != phase_) {  // the library moved on: close the previous phase's line
+      end();
+      begin(phase);
+    }
     const auto now = Clock::now();
     const double elapsed = std::chrono::duration<double>(now - start_).count();
     if (elapsed < 1.0 || std::chrono::duration<double>(now - last_).count() < 0.5) return;
@@ -74,7 +78,8 @@ private:
 };
 
 // Options that can be checked without reading anything: done before any work.
-void check_params(const Params& p, bool solving) {
+void check_params(Params& p, bool solving) {
+  p.meshing.discontinuity = parse_discontinuity_mode(p.discontinuity);
   if (p.meshing.max_edge < 0.0 || !std::isfinite(p.meshing.max_edge))
     throw InputError("--max-edge " + std::to_string(p.meshing.max_edge) + " must be > 0 (or 0 for auto)");
   if (solving) check_solve_options(p.solve);
@@ -84,7 +89,7 @@ void check_params(const Params& p, bool solving) {
     throw InputError("--probe " + p.probe_file + ": no such file");
 }
 
-int run(const Params& p, bool solving) {
+int run(Params& p, bool solving) {
   check_params(p, solving);
   Reporter rep(p.quiet);
   RunInfo info;
@@ -171,6 +176,9 @@ void add_common(CLI::App* cmd, Params& p) {
       ->check(CLI::Range(0.0, 1e300));
   cmd->add_option("--min-angle", p.meshing.min_angle, "smallest triangle angle wanted, degrees (default 20)")
       ->check(CLI::Range(0.0, 30.0));
+  cmd->add_option("--discontinuity", p.discontinuity,
+                  "discontinuity lines built into the initial mesh: off or contacts (default contacts)")
+      ->check(CLI::IsMember({"off", "contacts", "full"}));
   cmd->add_flag("-q,--quiet", p.quiet, "no progress on stderr");
 }
 

@@ -46,6 +46,7 @@ nlohmann::json make_summary(const RunInfo& info, const Scene& scene, const Mesh&
   doc["scene"] = info.scene_path;
   doc["options"] = {{"max_edge", info.meshing.max_edge},
                     {"min_angle", info.meshing.min_angle},
+                    {"discontinuity", to_string(info.meshing.discontinuity)},
                     {"tolerance", info.solve.tolerance},
                     {"rays", info.solve.rays},
                     {"threads", info.solve.threads},
@@ -58,7 +59,9 @@ nlohmann::json make_summary(const RunInfo& info, const Scene& scene, const Mesh&
                    {"nonplanar_faces_split", scene.report.nonplanar_faces_split},
                    {"mesh_vertices", mesh.positions.size()},
                    {"elements", mesh.triangles.size()},
-                   {"boundary_rounds", info.mesh_report.boundary_rounds}};
+                   {"boundary_rounds", info.mesh_report.boundary_rounds},
+                   {"contact_segments", info.mesh_report.contact_segments},
+                   {"feature_edges", mesh.feature_edges.size()}};
   json seconds = json::object();
   double total = 0.0;
   for (const auto& [phase, s] : info.seconds) {

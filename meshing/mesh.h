@@ -1,6 +1,7 @@
 // The triangle mesh: flat arrays, plain types.
 #pragma once
 
+#include "meshing/discontinuity.h"
 #include "meshing/geometry.h"
 #include "meshing/scene.h"
 
@@ -14,6 +15,9 @@ struct Mesh {
   std::vector<Vec3> positions;                 // welded: patches sharing an edge share its vertices
   std::vector<std::array<int, 3>> triangles;   // counter-clockwise around the patch normal
   std::vector<int> patch;                      // per triangle: index into Scene::patches
+  // Edges inside a patch that lie on a discontinuity line (vertex pairs, the
+  // smaller index first): per-vertex values are not averaged across them.
+  std::vector<std::array<int, 2>> feature_edges;
 
   int triangle_count() const { return static_cast<int>(triangles.size()); }
   double area(int t) const;
@@ -27,12 +31,15 @@ struct MeshingOptions {
   // Smallest angle wanted in every triangle, degrees. CGAL's Delaunay mesher is
   // guaranteed to terminate up to about 20.7 degrees; we accept up to 30.
   double min_angle = 20.0;
+  // Discontinuity lines made mesh edges before refinement (see discontinuity.h).
+  DiscontinuityMode discontinuity = DiscontinuityMode::contacts;
 };
 
 struct MeshReport {
   double max_edge = 0.0;       // the value used (after resolving 0 = auto)
   int boundary_rounds = 0;     // rounds needed to agree on shared boundary vertices
   int constrained_vertices = 0;
+  int contact_segments = 0;    // D0 segments inserted as constraints
 };
 
 // Meshes every patch with a CGAL constrained Delaunay triangulation in its

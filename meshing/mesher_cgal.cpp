@@ -27,7 +27,6 @@
 #include <cmath>
 #include <map>
 #include <numbers>
-#include <queue>
 #include <set>
 #include <sstream>
 
@@ -54,6 +53,7 @@ constexpr int kMaxRounds = 12;
 struct Segment {
   int patch;
   int a, b;
+  int loop;  // 0: outer, 1..: holes
 };
 
 // Orthonormal frame of a patch's plane: (u, v, n) right-handed.
@@ -78,35 +78,36 @@ Frame make_frame(const Scene& scene, const Patch& patch) {
   return f;
 }
 
-// Marks faces inside the polygon (odd nesting depth across constraints).
-void mark_domain(CDT& cdt) {
+// Marks the faces inside the patch: odd nesting depth, counting only the
+// constrained edges for which `on_boundary` holds (interior constraints,
+// the discontinuity lines, do not change what is inside).
+template <class OnBoundary>
+void mark_domain(CDT& cdt, OnBoundary on_boundary) {
   for (auto f = cdt.all_faces_begin(); f != cdt.all_faces_end(); ++f) f->info() = -1;
-  std::queue<std::pair<CDT::Face_handle, int>> border;
-  border.push({cdt.infinite_face(), 0});
+  std::vector<std::pair<CDT::Face_handle, int>> border = {{cdt.infinite_face(), 0}};
   while (!border.empty()) {
-    auto [start, depth] = border.front();
-    border.pop();
+    auto [start, depth] = border.back();
+    border.pop_back();
     if (start->info() != -1) continue;
-    std::queue<CDT::Face_handle> q;
+    std::vector<CDT::Face_handle> stack = {start};
     start->info() = depth;
-    q.push(start);
-    while (!q.empty()) {
-      CDT::Face_handle f = q.front();
-      q.pop();
+    while (!stack.empty()) {
+      CDT::Face_handle f = stack.back();
+      stack.pop_back();
       for (int i = 0; i < 3; ++i) {
         CDT::Face_handle nb = f->neighbor(i);
         if (nb->info() != -1) continue;
-        if (cdt.is_constrained(CDT::Edge(f, i))) {
-          border.push({nb, depth + 1});
+        const CDT::Edge e(f, i);
+        if (cdt.is_constrained(e) && on_boundary(e)) {
+          border.push_back({nb, depth + 1});
         } else {
           nb->info() = depth;
-          q.push(nb);
+          stack.push_back(nb);
         }
       }
     }
   }
-  for (auto f = cdt.all_faces_begin(); f != cdt.all_faces_end(); ++f)
-    f->set_in_domain(f->info() % 2 == 1);
+  for (auto f = cdt.all_faces_begin(); f != cdt.all_faces_end(); ++f) f->set_in_domain(f->info() % 2 == 1);
 }
 
 // Shared state of one mesh_scene call.
@@ -118,8 +119,10 @@ public:
     positions_ = scene.vertices;
     eps_ = 1e-9 * std::max(scene.diagonal(), std::numeric_limits<double>::min());
     collect_segments();
+    contacts_.resize(scene.patches.size());
     if (refine_) {
       find_overlaps();
+      if (opt.discontinuity == DiscontinuityMode::contacts) setup_contacts();
       seed_points();
     }
   }
@@ -166,6 +169,12 @@ public:
         mesh.triangles.push_back(t);
         mesh.patch.push_back(p);
       }
+    for (auto& [p, edges] : features_)
+      for (auto e : edges) {
+        for (int& v : e)
+          if (auto it = alias_.find(v); it != alias_.end()) v = it->second;
+        mesh.feature_edges.push_back({std::min(e[0], e[1]), std::max(e[0], e[1])});
+      }
     compact(mesh);
     if (report) {
       report->max_edge = opt_.max_edge;
@@ -173,6 +182,7 @@ public:
       int c = 0;
       for (const auto& pts : seg_points_) c += static_cast<int>(pts.size());
       report->constrained_vertices = c;
+      report->contact_segments = contact_count_;
     }
     return mesh;
   }
@@ -181,9 +191,11 @@ private:
   void collect_segments() {
     for (int p = 0; p < static_cast<int>(scene_.patches.size()); ++p) {
       const Patch& patch = scene_.patches[static_cast<size_t>(p)];
+      int index = 0;
       auto add_loop = [&](const std::vector<int>& loop) {
         for (size_t i = 0; i < loop.size(); ++i)
-          segments_.push_back({p, loop[i], loop[(i + 1) % loop.size()]});
+          segments_.push_back({p, loop[i], loop[(i + 1) % loop.size()], index});
+        ++index;
       };
       add_loop(patch.outer);
       for (const auto& h : patch.holes) add_loop(h);
@@ -259,6 +271,32 @@ private:
     };
     put(s);
     for (int r : overlaps_[s]) put(static_cast<size_t>(r));
+  }
+
+  // Contact segments become constraints of their patch. Their end points get
+  // global ids once (shared by every round) and, where they lie on the
+  // patch's boundary, are shared with the neighbours like any boundary point.
+  void setup_contacts() {
+    std::vector<int> extra;  // global ids of contact points made so far
+    auto id_of = [&](const Vec3& p) {
+      for (int v = 0; v < static_cast<int>(scene_.vertices.size()); ++v)
+        if (glm::length(positions_[static_cast<size_t>(v)] - p) <= eps_) return v;
+      for (int g : extra)
+        if (glm::length(positions_[static_cast<size_t>(g)] - p) <= eps_) return g;
+      const int g = static_cast<int>(positions_.size());
+      positions_.push_back(p);
+      extra.push_back(g);
+      return g;
+    };
+    for (const DiscontinuitySegment& d : contact_segments(scene_)) {
+      const int a = id_of(d.a), b = id_of(d.b);
+      if (a == b) continue;
+      contacts_[static_cast<size_t>(d.patch)].push_back({a, b});
+      ++contact_count_;
+      for (int g : {a, b})
+        for (size_t s = 0; s < segments_.size(); ++s)
+          if (segments_[s].patch == d.patch) add_point(s, g, nullptr);
+    }
   }
 
   // Scene vertices on segments (T-junctions), then the even pre-split.
@@ -343,14 +381,32 @@ private:
         prev = cur;
       }
     }
-    mark_domain(cdt);
+    std::vector<std::pair<Point2, Point2>> contact2;
+    for (const auto& [a, b] : contacts_[static_cast<size_t>(p)]) {
+      CDT::Vertex_handle va = insert_vertex(a), vb = insert_vertex(b);
+      if (va != vb) cdt.insert_constraint(va, vb);
+      contact2.push_back({va->point(), vb->point()});
+    }
+    // A constrained edge is on the boundary unless both its ends lie on one
+    // contact segment (points the mesher adds on a contact lie on it too).
+    const double tol2 = std::pow(1e-9 * scene_.diagonal(), 2);
+    auto on_boundary = [&](const CDT::Edge& e) {
+      const Point2& p0 = e.first->vertex(CDT::cw(e.second))->point();
+      const Point2& p1 = e.first->vertex(CDT::ccw(e.second))->point();
+      for (const auto& [c0, c1] : contact2) {
+        const K::Segment_2 seg(c0, c1);
+        if (CGAL::squared_distance(p0, seg) <= tol2 && CGAL::squared_distance(p1, seg) <= tol2) return false;
+      }
+      return true;
+    };
+    mark_domain(cdt, on_boundary);
 
     if (refine) {
       const double s = std::sin(opt_.min_angle * std::numbers::pi / 180.0);
       Mesher mesher(cdt, Criteria(s * s, opt_.max_edge));
       mesher.init(true);
       mesher.refine_mesh();
-      mark_domain(cdt);
+      mark_domain(cdt, on_boundary);
     }
 
     // Global ids for new vertices. Those on a boundary segment get the
@@ -381,6 +437,17 @@ private:
         positions_.push_back(p3);
       }
       v->info().id = g;
+    }
+
+    // Constrained edges with the domain on both sides lie on discontinuity lines.
+    auto& features = features_[p];
+    features.clear();
+    for (auto e = cdt.finite_edges_begin(); e != cdt.finite_edges_end(); ++e) {
+      if (!cdt.is_constrained(*e)) continue;
+      const CDT::Face_handle f = e->first, g = f->neighbor(e->second);
+      if (!f->is_in_domain() || cdt.is_infinite(g) || !g->is_in_domain()) continue;
+      const int a = f->vertex(CDT::cw(e->second))->info().id, b = f->vertex(CDT::ccw(e->second))->info().id;
+      features.push_back({std::min(a, b), std::max(a, b)});
     }
 
     std::vector<std::array<int, 3>> tris;
@@ -419,6 +486,10 @@ private:
         }
         v = remap[static_cast<size_t>(v)];
       }
+    for (auto& e : mesh.feature_edges) {
+      for (int& v : e) v = remap[static_cast<size_t>(v)];
+      if (e[0] > e[1]) std::swap(e[0], e[1]);
+    }
     mesh.positions = std::move(pos);
   }
 
@@ -437,6 +508,9 @@ private:
   };
   std::vector<Pending> pending_;
   std::map<int, int> alias_;  // duplicate boundary point -> the one kept
+  std::vector<std::vector<std::array<int, 2>>> contacts_;   // per patch: constraint segments
+  std::map<int, std::vector<std::array<int, 2>>> features_;  // per patch: discontinuity edges
+  int contact_count_ = 0;
 };
 
 }  // namespace

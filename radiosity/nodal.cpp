@@ -6,6 +6,7 @@
 #include <numbers>
 #include <functional>
 #include <numeric>
+#include <set>
 
 namespace radmesh {
 
@@ -30,13 +31,15 @@ NodalField compute_nodal(const Scene& scene, const Mesh& mesh, const std::vector
     const Patch& pb = scene.patches[static_cast<size_t>(mesh.patch[static_cast<size_t>(b)])];
     return pa.material == pb.material && glm::dot(pa.normal, pb.normal) >= cos_crease;
   };
+  std::set<std::pair<int, int>> features;
+  for (const auto& e : mesh.feature_edges) features.insert({e[0], e[1]});
   auto share_edge_at = [&](int a, int b, int v) {
     // Triangles a and b both contain v; they share an edge through v when they
-    // have a second vertex in common.
+    // have a second vertex in common, unless that edge is a discontinuity line.
     for (int x : mesh.triangles[static_cast<size_t>(a)])
       if (x != v)
         for (int y : mesh.triangles[static_cast<size_t>(b)])
-          if (x == y) return true;
+          if (x == y) return !features.count({std::min(v, x), std::max(v, x)});
     return false;
   };
 

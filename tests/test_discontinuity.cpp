@@ -1,0 +1,168 @@
+// Contact lines (D0): exact positions, and a mesh that never crosses them.
+
+#include "io/obj_reader.h"
+#include "meshing/discontinuity.h"
+#include "meshing/errors.h"
+#include "meshing/mesh.h"
+#include "radiosity/solve.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <set>
+
+using namespace radmesh;
+
+namespace {
+const std::string kData = RADMESH_TEST_DATA;
+
+int patch_named(const Scene& s, const std::string& name) {
+  for (size_t p = 0; p < s.patches.size(); ++p)
+    if (s.patches[p].name == name) return static_cast<int>(p);
+  return -1;
+}
+
+// Side of the footprint square |x| <= 0.5, |z| <= 0.5: -1 inside, +1 outside, 0 on it.
+int side(const Vec3& p) {
+  const double m = std::max(std::abs(p.x), std::abs(p.z));
+  return m < 0.5 - 1e-12 ? -1 : (m > 0.5 + 1e-12 ? 1 : 0);
+}
+}  // namespace
+
+TEST(Contacts, BoxOnFloorOutlineIsTheBoxFootprintExactly) {
+  const Scene s = read_obj_scene(kData + "/box_on_floor/box_on_floor.obj");
+  const int floor = patch_named(s, "floor");
+  ASSERT_GE(floor, 0);
+  const auto segs = contact_segments(s);
+  ASSERT_EQ(segs.size(), 4u);
+  std::set<std::pair<double, double>> corners;
+  for (const auto& d : segs) {
+    EXPECT_EQ(d.patch, floor);
+    EXPECT_EQ(d.kind, 0);
+    for (const Vec3& p : {d.a, d.b}) {
+      EXPECT_EQ(p.y, 0.0);
+      EXPECT_EQ(std::max(std::abs(p.x), std::abs(p.z)), 0.5);  // exactly on the square
+      corners.insert({p.x, p.z});
+    }
+  }
+  EXPECT_EQ(corners, (std::set<std::pair<double, double>>{{-0.5, -0.5}, {-0.5, 0.5}, {0.5, -0.5}, {0.5, 0.5}}));
+}
+
+TEST(Contacts, NoFloorTriangleCrossesTheContactLine) {
+  const Scene s = read_obj_scene(kData + "/box_on_floor/box_on_floor.obj");
+  const int floor = patch_named(s, "floor");
+  MeshingOptions o;
+  o.max_edge = 0.35;
+  MeshReport rep;
+  const Mesh m = mesh_scene(s, o, &rep);
+  EXPECT_EQ(rep.contact_segments, 4);
+  int crossing = 0, inside = 0;
+  for (int t = 0; t < m.triangle_count(); ++t) {
+    if (m.patch[static_cast<size_t>(t)] != floor) continue;
+    int lo = 1, hi = -1;
+    for (int v : m.triangles[static_cast<size_t>(t)]) {
+      const int sd = side(m.positions[static_cast<size_t>(v)]);
+      lo = std::min(lo, sd);
+      hi = std::max(hi, sd);
+    }
+    if (lo < 0 && hi > 0) ++crossing;
+    if (hi <= 0) ++inside;
+  }
+  EXPECT_EQ(crossing, 0);
+  EXPECT_GT(inside, 0);  // the footprint is meshed (the floor keeps its area)
+  // Every feature edge lies on the outline.
+  ASSERT_FALSE(m.feature_edges.empty());
+  for (const auto& e : m.feature_edges) {
+    EXPECT_EQ(side(m.positions[static_cast<size_t>(e[0])]), 0);
+    EXPECT_EQ(side(m.positions[static_cast<size_t>(e[1])]), 0);
+  }
+  // The floor keeps its whole area.
+  double area = 0.0;
+  for (int t = 0; t < m.triangle_count(); ++t)
+    if (m.patch[static_cast<size_t>(t)] == floor) area += m.area(t);
+  EXPECT_NEAR(area, 16.0, 1e-12);
+}
+
+TEST(Contacts, VertexValuesAreNotAveragedAcrossTheContactLine) {
+  const Scene s = read_obj_scene(kData + "/box_on_floor/box_on_floor.obj");
+  MeshingOptions o;
+  o.max_edge = 0.35;
+  const Mesh m = mesh_scene(s, o);
+  const Solution sol = solve_matrix(s, m, {});
+  // Under the box the floor gets no light at all; just outside it does.
+  const int floor = patch_named(s, "floor");
+  double under = 0.0, beside = 1e300;
+  for (int t = 0; t < m.triangle_count(); ++t) {
+    if (m.patch[static_cast<size_t>(t)] != floor) continue;
+    const auto& tri = m.triangles[static_cast<size_t>(t)];
+    int sd = -1;
+    for (int v : tri) sd = std::max(sd, side(m.positions[static_cast<size_t>(v)]));
+    for (int k = 0; k < 3; ++k) {
+      const Vec3& p = m.positions[static_cast<size_t>(tri[static_cast<size_t>(k)])];
+      if (side(p) != 0) continue;  // values on the outline itself
+      const double b = sol.nodal.radiosity[static_cast<size_t>(sol.nodal.corners[static_cast<size_t>(t)][static_cast<size_t>(k)])].x;
+      if (sd <= 0) {
+        under = std::max(under, b);
+      } else {
+        beside = std::min(beside, b);
+      }
+    }
+  }
+  EXPECT_EQ(under, 0.0);   // the footprint side of the outline stays black
+  EXPECT_GT(beside, 0.0);  // the lit side does not
+}
+
+TEST(Contacts, APiercingWallCutsTheFloorAlongTheIntersection) {
+  // A floor [0,4]^2 at y = 0 facing up and a wall in the plane x = 2 from
+  // y = -1 to 1 and z = 1..3, facing +x: it crosses the floor along the
+  // segment x = 2, z in [1, 3].
+  RawFace floor, wall;
+  floor.name = "floor";
+  floor.material = 0;
+  floor.points = {{0, 0, 0}, {0, 0, 4}, {4, 0, 4}, {4, 0, 0}};
+  wall.name = "wall";
+  wall.material = 0;
+  wall.points = {{2, -1, 1}, {2, -1, 3}, {2, 1, 3}, {2, 1, 1}};
+  Material m;
+  m.name = "m";
+  m.reflectance = Rgb(0.5);
+  const Scene s = build_scene({floor, wall}, {m}, "test");
+  const auto segs = contact_segments(s);
+  ASSERT_EQ(segs.size(), 2u);  // one on the floor, one on the wall
+  for (const auto& d : segs) {
+    EXPECT_EQ(d.a.x, 2.0);
+    EXPECT_EQ(d.b.x, 2.0);
+    EXPECT_EQ(d.a.y, 0.0);
+    EXPECT_EQ(d.b.y, 0.0);
+    EXPECT_EQ(std::min(d.a.z, d.b.z), 1.0);
+    EXPECT_EQ(std::max(d.a.z, d.b.z), 3.0);
+  }
+  MeshingOptions o;
+  o.max_edge = 0.5;
+  const Mesh mesh = mesh_scene(s, o);
+  // No triangle of either patch crosses the line x = 2, y = 0 within z in [1, 3].
+  for (int t = 0; t < mesh.triangle_count(); ++t) {
+    const auto& tri = mesh.triangles[static_cast<size_t>(t)];
+    const bool on_floor = mesh.patch[static_cast<size_t>(t)] == 0;
+    int lo = 1, hi = -1;
+    bool near = true;
+    for (int v : tri) {
+      const Vec3& p = mesh.positions[static_cast<size_t>(v)];
+      const double c = on_floor ? p.x - 2.0 : p.y;
+      const int sd = c < -1e-12 ? -1 : (c > 1e-12 ? 1 : 0);
+      lo = std::min(lo, sd);
+      hi = std::max(hi, sd);
+      near = near && p.z > 1.0 && p.z < 3.0;
+    }
+    if (near) {
+      EXPECT_FALSE(lo < 0 && hi > 0) << "triangle " << t << " crosses the intersection";
+    }
+  }
+}
+
+TEST(Contacts, ModeNamesAreCheckedAndFullIsRefusedForNow) {
+  EXPECT_EQ(parse_discontinuity_mode("off"), DiscontinuityMode::off);
+  EXPECT_EQ(parse_discontinuity_mode("contacts"), DiscontinuityMode::contacts);
+  EXPECT_THROW(parse_discontinuity_mode("full"), InputError);
+  EXPECT_THROW(parse_discontinuity_mode("yes"), InputError);
+}
