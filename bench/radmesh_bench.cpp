@@ -35,6 +35,7 @@ struct Settings {
   double max_edge;  // scene units
   int rays;
   int quad_level;
+  DiscontinuityMode discontinuity = DiscontinuityMode::contacts;
 };
 
 struct Scenario {
@@ -124,6 +125,13 @@ std::vector<Scenario> scenes(const std::string& data) {
                   {45, 16, 2},
                   {38, 16, 2},
                   {32, 16, 2},
+                  {160, 16, 2, DiscontinuityMode::off},
+                  {120, 16, 2, DiscontinuityMode::off},
+                  {90, 16, 2, DiscontinuityMode::off},
+                  {70, 16, 2, DiscontinuityMode::off},
+                  {55, 16, 2, DiscontinuityMode::off},
+                  {45, 16, 2, DiscontinuityMode::off},
+                  {38, 16, 2, DiscontinuityMode::off},
                   {70, 4, 2},
                   {70, 64, 2},
                   {70, 16, 0},
@@ -146,6 +154,7 @@ Row run_one(const Scenario& sc, const Scene& scene, const std::vector<SurfaceSam
   const auto t0 = std::chrono::steady_clock::now();
   MeshingOptions mo;
   mo.max_edge = set.max_edge;
+  mo.discontinuity = set.discontinuity;
   const Mesh mesh = mesh_scene(scene, mo);
   SolveOptions so;
   so.rays = set.rays;
@@ -155,7 +164,7 @@ Row run_one(const Scenario& sc, const Scene& scene, const std::vector<SurfaceSam
   const std::vector<Rgb> values = interpolate_nodal(scene, mesh, sol.nodal, samples);
   const std::vector<Rgb> flat = element_values(scene, mesh, sol.element, samples);
   const auto ref = reflected_part(scene, samples, reference);
-  return {sc.name, "matrix", set, mesh.triangle_count(), sol.stats.form_factors, sol.stats.rays_cast, seconds,
+  return {sc.name, std::string("matrix/") + to_string(set.discontinuity), set, mesh.triangle_count(), sol.stats.form_factors, sol.stats.rays_cast, seconds,
           field_error(samples, reflected_part(scene, samples, values), ref),
           field_error(samples, reflected_part(scene, samples, flat), ref)};
 }
@@ -224,14 +233,18 @@ int main(int argc, char** argv) {
       const auto samples = surface_samples(scene, kSamples);
       const auto ref = sc.reference(scene, samples);
       bench::Series l2{sc.name + " L2", {}, {}}, pm{sc.name + " patch mean", {}, {}};
+      bench::Series l2_off{sc.name + " L2, no contacts", {}, {}};
       for (const Settings& set : quick ? sc.quick : sc.sweep) {
         const Row r = run_one(sc, scene, samples, ref, set);
-        std::fprintf(stderr, "%-16s edge %-6g rays %-3d q%d: %6lld elements %8.3f s  L2 %.3e  max %.3e  patch %.3e (elements %.3e) (%s)\n",
-                     r.scene.c_str(), set.max_edge, set.rays, set.quad_level, r.elements, r.seconds, r.err.l2,
+        std::fprintf(stderr, "%-16s %-15s edge %-6g rays %-3d q%d: %6lld elements %8.3f s  L2 %.3e  max %.3e  patch %.3e (elements %.3e) (%s)\n",
+                     r.scene.c_str(), r.method.c_str(), set.max_edge, set.rays, set.quad_level, r.elements, r.seconds, r.err.l2,
                      r.err.linf, r.err.patch_mean,
                      r.element.patch_mean, (r.err.worst_patch >= 0 ? scene.patches[static_cast<size_t>(r.err.worst_patch)].name + " #" + std::to_string(r.err.worst_patch) : std::string("-")).c_str());
         rows.push_back(r);
-        if (set.rays == 16 && set.quad_level == 2) {
+        if (set.rays == 16 && set.quad_level == 2 && set.discontinuity == DiscontinuityMode::off) {
+          l2_off.x.push_back(r.seconds);
+          l2_off.y.push_back(r.err.l2);
+        } else if (set.rays == 16 && set.quad_level == 2) {
           l2.x.push_back(r.seconds);
           l2.y.push_back(r.err.l2);
           pm.x.push_back(r.seconds);
@@ -240,13 +253,14 @@ int main(int argc, char** argv) {
       }
       series.push_back(l2);
       series.push_back(pm);
+      if (!l2_off.x.empty()) series.push_back(l2_off);
     }
     const std::string csv = (fs::path(out_dir) / "bench.csv").string();
     write_file_atomically(csv, [&](std::ostream& out) {
-      out << "scene,method,max_edge,rays,quad_level,elements,form_factors,rays_cast,wall_s,l2,linf,patch_mean,"
+      out << "scene,method,discontinuity,max_edge,rays,quad_level,elements,form_factors,rays_cast,wall_s,l2,linf,patch_mean,"
              "element_l2,element_patch_mean\n";
       for (const Row& r : rows)
-        out << r.scene << ',' << r.method << ',' << r.set.max_edge << ',' << r.set.rays << ',' << r.set.quad_level
+        out << r.scene << ',' << "matrix" << ',' << to_string(r.set.discontinuity) << ',' << r.set.max_edge << ',' << r.set.rays << ',' << r.set.quad_level
             << ',' << r.elements << ',' << r.form_factors << ',' << r.rays << ',' << r.seconds << ',' << r.err.l2
             << ',' << r.err.linf << ',' << r.err.patch_mean << ',' << r.element.l2 << ',' << r.element.patch_mean
             << '\n';
