@@ -135,7 +135,10 @@ std::vector<Scenario> scenes(const std::string& data) {
                   {70, 4, 2},
                   {70, 64, 2},
                   {70, 16, 0},
-                  {70, 16, 3}},
+                  {70, 16, 1},
+                  {70, 16, 3},
+                  {45, 16, 0},
+                  {45, 16, 1}},
                  {{160, 16, 2}, {120, 16, 2}}});
   return out;
 }
@@ -218,6 +221,9 @@ int main(int argc, char** argv) {
   app.add_option("--data", data, "the data directory");
   app.add_option("--scenes", only, "comma-separated scene names (default: all)");
   app.add_flag("--quick", quick, "two settings per scene");
+  std::vector<std::string> custom;
+  app.add_option("--settings", custom,
+                 "run these settings instead of the sweep: EDGE:RAYS:QUAD_LEVEL:off|contacts (repeatable)");
   app.add_flag("--make-reference", reference, "compute data/cornell_box/reference.csv and exit");
   app.add_option("--max-edge", ref_edge, "reference mesh size (mm)");
   app.add_option("--rays", ref_rays, "reference shadow rays per pair");
@@ -234,7 +240,19 @@ int main(int argc, char** argv) {
       const auto ref = sc.reference(scene, samples);
       bench::Series l2{sc.name + " L2", {}, {}}, pm{sc.name + " patch mean", {}, {}};
       bench::Series l2_off{sc.name + " L2, no contacts", {}, {}};
-      for (const Settings& set : quick ? sc.quick : sc.sweep) {
+      std::vector<Settings> sweep = quick ? sc.quick : sc.sweep;
+      if (!custom.empty()) {
+        sweep.clear();
+        for (const std::string& c : custom) {
+          Settings set{};
+          char mode[16] = "contacts";
+          if (std::sscanf(c.c_str(), "%lf:%d:%d:%15s", &set.max_edge, &set.rays, &set.quad_level, mode) < 3)
+            throw InputError("--settings '" + c + "': expected EDGE:RAYS:QUAD_LEVEL[:off|contacts]");
+          set.discontinuity = parse_discontinuity_mode(mode);
+          sweep.push_back(set);
+        }
+      }
+      for (const Settings& set : sweep) {
         const Row r = run_one(sc, scene, samples, ref, set);
         std::fprintf(stderr, "%-16s %-15s edge %-6g rays %-3d q%d: %6lld elements %8.3f s  L2 %.3e  max %.3e  patch %.3e (elements %.3e) (%s)\n",
                      r.scene.c_str(), r.method.c_str(), set.max_edge, set.rays, set.quad_level, r.elements, r.seconds, r.err.l2,

@@ -18,8 +18,11 @@ struct SolveOptions {
   int threads = 0;
   // Shadow rays per element pair; rounded up to a perfect square (stratified).
   int rays = 16;
-  // Receiver quadrature of the point-to-polygon formula.
-  QuadratureOptions quadrature;
+  // Receiver quadrature of the point-to-polygon formula. Level 1 by default:
+  // on the Cornell box benchmark levels 0, 1, 2 and 3 give the same field
+  // error (mesh discretization dominates), level 1 in 0.70x the time of level
+  // 2 while still giving adjacent elements more points (12 instead of 3).
+  QuadratureOptions quadrature{1.0, 1};
   // Memory the form-factor matrix may take, GiB (0 = half the physical memory).
   double max_memory_gb = 0.0;
   // Vertex values are averaged only over triangles of one material whose

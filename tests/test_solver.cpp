@@ -78,26 +78,31 @@ TEST(FormFactors, RowsOfAClosedSceneSumToOneAndReciprocityHolds) {
   MeshingOptions mo;
   mo.max_edge = 0.35;
   const Mesh mesh = mesh_scene(scene, mo);
-  SolveStats st;
-  const std::vector<double> F = form_factor_matrix(scene, mesh, {}, st);
-  const long long n = mesh.triangle_count();
-  double worst_rec = 0.0;
-  for (long long i = 0; i < n; ++i) {
-    double row = 0.0;
-    for (long long j = 0; j < n; ++j) {
-      row += F[static_cast<size_t>(i * n + j)];
-      const double a = mesh.area(static_cast<int>(i)) * F[static_cast<size_t>(i * n + j)];
-      const double b = mesh.area(static_cast<int>(j)) * F[static_cast<size_t>(j * n + i)];
-      if (a > 0.0) worst_rec = std::max(worst_rec, std::abs(a - b) / std::max(a, b));
-    }
-    // Exact up to rounding: all sources of a row share the receiver's points.
-    EXPECT_NEAR(row, 1.0, 1e-12) << "row " << i;
-  }
   // Each entry is a quadrature over its receiver; adjacent elements are the
-  // hardest. We claim 2% for any single pair (pair sums are far better: the
-  // Howell C-14 test gets 1e-5 for two squares sharing an edge).
-  EXPECT_LT(worst_rec, 2e-2);
-  std::printf("worst relative reciprocity error: %.3g\n", worst_rec);
+  // hardest. We claim, for any single pair, 6% at the solver's default level 1
+  // and 2% at level 2 (sums over whole patches are far better: the Howell
+  // C-14 test gets 1e-5 for two squares sharing an edge).
+  for (const auto& [level, claim] : {std::pair{1, 6e-2}, std::pair{2, 2e-2}}) {
+    SolveOptions so;
+    so.quadrature.max_level = level;
+    SolveStats st;
+    const std::vector<double> F = form_factor_matrix(scene, mesh, so, st);
+    const long long n = mesh.triangle_count();
+    double worst_rec = 0.0;
+    for (long long i = 0; i < n; ++i) {
+      double row = 0.0;
+      for (long long j = 0; j < n; ++j) {
+        row += F[static_cast<size_t>(i * n + j)];
+        const double a = mesh.area(static_cast<int>(i)) * F[static_cast<size_t>(i * n + j)];
+        const double b = mesh.area(static_cast<int>(j)) * F[static_cast<size_t>(j * n + i)];
+        if (a > 0.0) worst_rec = std::max(worst_rec, std::abs(a - b) / std::max(a, b));
+      }
+      // Exact up to rounding: all sources of a row share the receiver's points.
+      EXPECT_NEAR(row, 1.0, 1e-12) << "row " << i << " level " << level;
+    }
+    EXPECT_LT(worst_rec, claim) << "level " << level;
+    std::printf("level %d: worst relative reciprocity error of a pair %.3g\n", level, worst_rec);
+  }
 }
 
 TEST(ParallelPlates, ReceiverMeanIsRhoTimesHowellC11) {
@@ -141,11 +146,11 @@ TEST(Invariance, TranslateRotateScaleAndShuffleKeepTheRadiosity) {
   // CGAL's mesher is chaotic under rounding noise: a transformed scene gets
   // a different mesh (1119 to 1168 elements here), and a shuffled one other
   // element numbers, hence other ray seeds. Patch means then differ by the
-  // discretization and visibility-sampling error (about 1% at this mesh),
+  // discretization and visibility-sampling error (up to 0.5% at this mesh),
   // not more; a unit-dependent epsilon (self-shadowing rays, welding,
   // clipping) changes them by far more than that.
   const double edge = 0.3;
-  const double kTolerance = 2.5e-2;
+  const double kTolerance = 1e-2;
   auto solve_means = [&](const Scene& s, double scale) {
     MeshingOptions mo;
     mo.max_edge = edge * scale;
