@@ -180,19 +180,7 @@ bool plot_error_vs_time(const std::string& path, const std::string& title, const
   view->GetScene()->AddItem(chart);
   window->Render();
 
-  vtkNew<vtkWindowToImageFilter> grab;
-  grab->SetInput(window);
-  grab->SetInputBufferTypeToRGB();
-  grab->ReadFrontBufferOff();
-  vtkNew<vtkPNGWriter> writer;
-  writer->SetInputConnection(grab->GetOutputPort());
-  writer->WriteToMemoryOn();
-  io_detail::run_vtk_writer(writer.Get(), path);
-  vtkUnsignedCharArray* bytes = writer->GetResult();
-  write_file_atomically(path, [bytes](std::ostream& out) {
-    out.write(reinterpret_cast<const char*>(bytes->GetPointer(0)),
-              static_cast<std::streamsize>(bytes->GetNumberOfValues()));
-  });
+  io_detail::write_window_png(window, path);
   return true;
 }
 

@@ -11,6 +11,14 @@
 #include <vtkErrorCode.h>
 #include <vtkExecutive.h>
 #include <vtkNew.h>
+#include <vtkPNGWriter.h>
+#include <vtkRenderWindow.h>
+#include <vtkUnsignedCharArray.h>
+#include <vtkWindowToImageFilter.h>
+
+#include "io/atomic_file.h"
+
+#include <ostream>
 
 #include <string>
 
@@ -58,6 +66,24 @@ void run_vtk_writer(Writer* writer, const std::string& path) {
   writer->RemoveObservers(vtkCommand::ErrorEvent);
   writer->GetExecutive()->RemoveObservers(vtkCommand::ErrorEvent);
   if (!why.empty()) throw IoError(path + ": " + why);
+}
+
+// Renders nothing itself: grabs what `window` shows (after its Render()) and
+// writes it as a PNG to `path`, atomically. Throws IoError.
+inline void write_window_png(vtkRenderWindow* window, const std::string& path) {
+  vtkNew<vtkWindowToImageFilter> grab;
+  grab->SetInput(window);
+  grab->SetInputBufferTypeToRGB();
+  grab->ReadFrontBufferOff();
+  vtkNew<vtkPNGWriter> writer;
+  writer->SetInputConnection(grab->GetOutputPort());
+  writer->WriteToMemoryOn();
+  run_vtk_writer(writer.Get(), path);
+  vtkUnsignedCharArray* bytes = writer->GetResult();
+  write_file_atomically(path, [bytes](std::ostream& out) {
+    out.write(reinterpret_cast<const char*>(bytes->GetPointer(0)),
+              static_cast<std::streamsize>(bytes->GetNumberOfValues()));
+  });
 }
 
 }  // namespace radmesh::io_detail
