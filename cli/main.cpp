@@ -137,6 +137,11 @@ int run(Params& p, bool solving) {
   else
     write_mesh_vtu(vtu, scene, mesh, quality);
   written.push_back(vtu);
+  if (!info.mesh_report.discontinuities.empty()) {
+    const std::string lines = (fs::path(p.out_dir) / "discontinuities.vtu").string();
+    write_discontinuities_vtu(lines, info.mesh_report.discontinuities);
+    written.push_back(lines);
+  }
   if (!probes.empty()) {
     const std::string csv = (fs::path(p.out_dir) / "probes.csv").string();
     write_probe_csv(csv, scene, probes, probe_results);

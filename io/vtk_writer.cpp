@@ -164,6 +164,31 @@ void write_vtu(const std::string& path, const Scene& scene, const Mesh& mesh,
   write_grid(path, grid);
 }
 
+void write_discontinuities_vtu(const std::string& path, const std::vector<DiscontinuitySegment>& segments) {
+  vtkNew<vtkPoints> points;
+  points->SetDataTypeToDouble();
+  vtkNew<vtkCellArray> lines;
+  vtkNew<vtkIntArray> kind, emitter, patch, other;
+  kind->SetName("kind");
+  emitter->SetName("emitter");
+  patch->SetName("patch_id");
+  other->SetName("other_patch");
+  for (const DiscontinuitySegment& d : segments) {
+    const vtkIdType ids[2] = {points->InsertNextPoint(d.a.x, d.a.y, d.a.z),
+                              points->InsertNextPoint(d.b.x, d.b.y, d.b.z)};
+    lines->InsertNextCell(2, ids);
+    kind->InsertNextValue(d.kind);
+    emitter->InsertNextValue(d.kind == 0 ? -1 : d.other);  // contacts have no emitter
+    patch->InsertNextValue(d.patch);
+    other->InsertNextValue(d.other);
+  }
+  vtkNew<vtkUnstructuredGrid> grid;
+  grid->SetPoints(points);
+  grid->SetCells(VTK_LINE, lines);
+  for (vtkIntArray* a : {kind.Get(), emitter.Get(), patch.Get(), other.Get()}) grid->GetCellData()->AddArray(a);
+  write_grid(path, grid);
+}
+
 void write_mesh_vtu(const std::string& path, const Scene& scene, const Mesh& mesh,
                     const TriangleQuality& quality) {
   auto grid = triangle_grid(path, mesh.positions, mesh.triangles);

@@ -2,6 +2,7 @@
 // binary and zlib-compressed.
 #pragma once
 
+#include "meshing/discontinuity.h"
 #include "meshing/mesh.h"
 #include "meshing/scene.h"
 #include "radiosity/solution.h"
@@ -20,6 +21,11 @@ namespace radmesh {
 // naming `path` when writing fails or the inputs disagree in size or indices.
 void write_vtu(const std::string& path, const Scene& scene, const Mesh& mesh,
                const TriangleQuality& quality, const Solution& solution);
+
+// The discontinuity lines as a line dataset (VTK_LINE cells) with cell data
+// kind (0 = D0 contact, 1 = D1, 2 = D2), emitter (-1 for contacts), patch_id
+// (the patch the line lies on) and other_patch (the patch that causes it).
+void write_discontinuities_vtu(const std::string& path, const std::vector<DiscontinuitySegment>& segments);
 
 // Mesh only (radmesh mesh): points Mesh::positions, triangles Mesh::triangles,
 // cell data patch_id, area, min_angle, aspect_ratio, reflectance, emission.

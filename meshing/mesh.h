@@ -40,6 +40,7 @@ struct MeshReport {
   int boundary_rounds = 0;     // rounds needed to agree on shared boundary vertices
   int constrained_vertices = 0;
   int contact_segments = 0;    // D0 segments inserted as constraints
+  std::vector<DiscontinuitySegment> discontinuities;  // the lines inserted, for export
 };
 
 // Meshes every patch with a CGAL constrained Delaunay triangulation in its

@@ -183,6 +183,7 @@ public:
       for (const auto& pts : seg_points_) c += static_cast<int>(pts.size());
       report->constrained_vertices = c;
       report->contact_segments = contact_count_;
+      report->discontinuities = discontinuities_;
     }
     return mesh;
   }
@@ -292,6 +293,7 @@ private:
       const int a = id_of(d.a), b = id_of(d.b);
       if (a == b) continue;
       contacts_[static_cast<size_t>(d.patch)].push_back({a, b});
+      discontinuities_.push_back(d);
       ++contact_count_;
       for (int g : {a, b})
         for (size_t s = 0; s < segments_.size(); ++s)
@@ -511,6 +513,7 @@ private:
   std::vector<std::vector<std::array<int, 2>>> contacts_;   // per patch: constraint segments
   std::map<int, std::vector<std::array<int, 2>>> features_;  // per patch: discontinuity edges
   int contact_count_ = 0;
+  std::vector<DiscontinuitySegment> discontinuities_;
 };
 
 }  // namespace

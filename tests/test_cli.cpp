@@ -83,6 +83,7 @@ TEST(Cli, MeshWritesMeshAndSummary) {
   const Result r = radmesh("mesh " + kData + "/cornell_box/cornell_box.obj -o " + out.string() + " -q");
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_TRUE(fs::exists(out / "mesh.vtu"));
+  EXPECT_TRUE(fs::exists(out / "discontinuities.vtu"));  // the blocks' contact outlines
   std::ifstream in(out / "summary.json");
   const nlohmann::json s = nlohmann::json::parse(in);
   EXPECT_GE(s["mesh_quality"]["min_angle_min"].get<double>(), 20.0 - 1e-6);

@@ -1,6 +1,7 @@
 // Contact lines (D0): exact positions, and a mesh that never crosses them.
 
 #include "io/obj_reader.h"
+#include "io/vtk_writer.h"
 #include "meshing/discontinuity.h"
 #include "meshing/errors.h"
 #include "meshing/mesh.h"
@@ -8,7 +9,15 @@
 
 #include <gtest/gtest.h>
 
+#include <vtkCellData.h>
+#include <vtkCellType.h>
+#include <vtkDataArray.h>
+#include <vtkNew.h>
+#include <vtkUnstructuredGrid.h>
+#include <vtkXMLUnstructuredGridReader.h>
+
 #include <algorithm>
+#include <filesystem>
 #include <set>
 
 using namespace radmesh;
@@ -165,4 +174,39 @@ TEST(Contacts, ModeNamesAreCheckedAndFullIsRefusedForNow) {
   EXPECT_EQ(parse_discontinuity_mode("contacts"), DiscontinuityMode::contacts);
   EXPECT_THROW(parse_discontinuity_mode("full"), InputError);
   EXPECT_THROW(parse_discontinuity_mode("yes"), InputError);
+}
+
+TEST(Contacts, LineDatasetOpensWithItsFields) {
+  const Scene s = read_obj_scene(kData + "/box_on_floor/box_on_floor.obj");
+  MeshReport rep;
+  mesh_scene(s, {}, &rep);
+  ASSERT_EQ(rep.discontinuities.size(), 4u);
+  const std::string path = (std::filesystem::temp_directory_path() / "radmesh_test_lines.vtu").string();
+  write_discontinuities_vtu(path, rep.discontinuities);
+  vtkNew<vtkXMLUnstructuredGridReader> reader;
+  reader->SetFileName(path.c_str());
+  reader->Update();
+  vtkUnstructuredGrid* g = reader->GetOutput();
+  ASSERT_EQ(g->GetNumberOfCells(), 4);
+  EXPECT_EQ(g->GetNumberOfPoints(), 8);
+  for (vtkIdType c = 0; c < 4; ++c) EXPECT_EQ(g->GetCellType(c), VTK_LINE);
+  const int floor = patch_named(s, "floor");
+  for (const char* name : {"kind", "emitter", "patch_id", "other_patch"}) {
+    vtkDataArray* a = g->GetCellData()->GetArray(name);
+    ASSERT_NE(a, nullptr) << name;
+    for (vtkIdType c = 0; c < 4; ++c) {
+      const double v = a->GetTuple1(c);
+      const std::string n = name;
+      if (n == "kind") {
+        EXPECT_EQ(v, 0.0);
+      } else if (n == "emitter") {
+        EXPECT_EQ(v, -1.0);
+      } else if (n == "patch_id") {
+        EXPECT_EQ(v, floor);
+      } else {
+        EXPECT_NE(v, floor);
+      }
+    }
+  }
+  std::filesystem::remove(path);
 }
