@@ -210,3 +210,81 @@ TEST(Contacts, LineDatasetOpensWithItsFields) {
   }
   std::filesystem::remove(path);
 }
+
+namespace {
+// A floor [0, n]^2 (y = 0, facing up) with n*n open boxes of side 0.5 and
+// height 0.5 standing on it, each centred in its unit cell, the whole scene
+// moved by `offset`.
+Scene boxes_on_floor(int n, const Vec3& offset) {
+  std::vector<RawFace> faces;
+  auto face = [&](const std::string& name, std::vector<Vec3> pts) {
+    RawFace f;
+    f.name = name;
+    f.material = 0;
+    for (Vec3& p : pts) p += offset;
+    f.points = pts;
+    faces.push_back(f);
+  };
+  const double N = n;
+  face("floor", {{0, 0, 0}, {0, 0, N}, {N, 0, N}, {N, 0, 0}});
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j) {
+      const double x0 = i + 0.25, x1 = i + 0.75, z0 = j + 0.25, z1 = j + 0.75, h = 0.5;
+      face("box", {{x0, 0, z0}, {x0, h, z0}, {x1, h, z0}, {x1, 0, z0}});  // faces -z
+      face("box", {{x1, 0, z1}, {x1, h, z1}, {x0, h, z1}, {x0, 0, z1}});  // faces +z
+      face("box", {{x0, 0, z1}, {x0, h, z1}, {x0, h, z0}, {x0, 0, z0}});  // faces -x
+      face("box", {{x1, 0, z0}, {x1, h, z0}, {x1, h, z1}, {x1, 0, z1}});  // faces +x
+      face("box", {{x0, h, z0}, {x0, h, z1}, {x1, h, z1}, {x1, h, z0}});  // top, faces +y
+    }
+  Material m;
+  m.name = "m";
+  m.reflectance = Rgb(0.5);
+  return build_scene(faces, {m}, "boxes");
+}
+}  // namespace
+
+TEST(ContactsStress, TwoHundredOccludersOnOneReceiver) {
+  const Scene s = boxes_on_floor(14, Vec3(0.0));  // 196 boxes, 981 patches
+  MeshingOptions o;
+  o.max_edge = 0.5;
+  MeshReport rep;
+  const Mesh m = mesh_scene(s, o, &rep);
+  EXPECT_EQ(rep.contact_segments, 4 * 196);
+  double floor_area = 0.0;
+  for (int t = 0; t < m.triangle_count(); ++t)
+    if (m.patch[static_cast<size_t>(t)] == 0) floor_area += m.area(t);
+  EXPECT_NEAR(floor_area, 196.0, 1e-9);
+  EXPECT_GE(m.feature_edges.size(), static_cast<size_t>(4 * 196));
+}
+
+TEST(ContactsStress, CoordinatesAroundAMillionWithFeaturesOfOne) {
+  const Vec3 offset(1e6, 1e6, -1e6);
+  const Scene s = boxes_on_floor(2, offset);
+  MeshingOptions o;
+  o.max_edge = 0.25;
+  MeshReport rep;
+  const Mesh m = mesh_scene(s, o, &rep);
+  ASSERT_EQ(rep.contact_segments, 16);
+  for (const auto& d : rep.discontinuities) {
+    EXPECT_EQ(d.a.y, offset.y);  // exactly in the floor's plane
+    EXPECT_EQ(d.b.y, offset.y);
+  }
+  // No floor triangle crosses a footprint outline.
+  for (int t = 0; t < m.triangle_count(); ++t) {
+    if (m.patch[static_cast<size_t>(t)] != 0) continue;
+    for (int bx = 0; bx < 2; ++bx)
+      for (int bz = 0; bz < 2; ++bz) {
+        int lo = 1, hi = -1;
+        for (int v : m.triangles[static_cast<size_t>(t)]) {
+          const Vec3 p = m.positions[static_cast<size_t>(v)] - offset - Vec3(bx + 0.5, 0, bz + 0.5);
+          const double d = std::max(std::abs(p.x), std::abs(p.z));
+          const int sd = d < 0.25 - 1e-9 ? -1 : (d > 0.25 + 1e-9 ? 1 : 0);
+          lo = std::min(lo, sd);
+          hi = std::max(hi, sd);
+        }
+        EXPECT_FALSE(lo < 0 && hi > 0) << "triangle " << t;
+      }
+  }
+  const Solution sol = solve_matrix(s, m, {});
+  for (const Rgb& b : sol.element) EXPECT_TRUE(std::isfinite(b.x));
+}
