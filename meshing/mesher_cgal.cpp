@@ -53,7 +53,6 @@ constexpr int kMaxRounds = 12;
 struct Segment {
   int patch;
   int a, b;
-  int loop;  // 0: outer, 1..: holes
 };
 
 // Orthonormal frame of a patch's plane: (u, v, n) right-handed.
@@ -192,11 +191,8 @@ private:
   void collect_segments() {
     for (int p = 0; p < static_cast<int>(scene_.patches.size()); ++p) {
       const Patch& patch = scene_.patches[static_cast<size_t>(p)];
-      int index = 0;
       auto add_loop = [&](const std::vector<int>& loop) {
-        for (size_t i = 0; i < loop.size(); ++i)
-          segments_.push_back({p, loop[i], loop[(i + 1) % loop.size()], index});
-        ++index;
+        for (size_t i = 0; i < loop.size(); ++i) segments_.push_back({p, loop[i], loop[(i + 1) % loop.size()]});
       };
       add_loop(patch.outer);
       for (const auto& h : patch.holes) add_loop(h);
