@@ -10,7 +10,7 @@ packages=(
   libvtk9-dev
   libtinyobjloader-dev libcli11-dev nlohmann-json3-dev
   libgtest-dev libgmock-dev libbenchmark-dev
-  xvfb xauth
+  libx11-dev xvfb xauth
 )
 
 missing=()
