@@ -109,37 +109,37 @@ std::vector<Rgb> stored_reference(const std::string& csv, const Scene& s, const 
 std::vector<Scenario> scenes(const std::string& data) {
   std::vector<Scenario> out;
   out.push_back({"furnace_cube", "furnace_cube/furnace_cube.obj", furnace_reference,
-                 {{0.5, 16, 2}, {0.3, 16, 2}, {0.2, 16, 2}, {0.12, 16, 2}},
-                 {{0.5, 16, 2}, {0.3, 16, 2}}});
+                 {{0.5, 16, 1}, {0.3, 16, 1}, {0.2, 16, 1}, {0.12, 16, 1}},
+                 {{0.5, 16, 1}, {0.3, 16, 1}}});
   out.push_back({"parallel_plates", "parallel_plates/parallel_plates.obj", plates_reference,
-                 {{0.5, 16, 2}, {0.25, 16, 2}, {0.12, 16, 2}, {0.06, 16, 2}, {0.04, 16, 2}},
-                 {{0.5, 16, 2}, {0.25, 16, 2}}});
+                 {{0.5, 16, 1}, {0.25, 16, 1}, {0.12, 16, 1}, {0.06, 16, 1}, {0.04, 16, 1}},
+                 {{0.5, 16, 1}, {0.25, 16, 1}}});
   const std::string ref = data + "/cornell_box/reference.csv";
   out.push_back({"cornell_box", "cornell_box/cornell_box.obj",
                  [ref](const Scene& s, const std::vector<SurfaceSample>& sm) { return stored_reference(ref, s, sm); },
-                 {{160, 16, 2},
-                  {120, 16, 2},
-                  {90, 16, 2},
-                  {70, 16, 2},
-                  {55, 16, 2},
-                  {45, 16, 2},
-                  {38, 16, 2},
-                  {32, 16, 2},
-                  {160, 16, 2, DiscontinuityMode::off},
-                  {120, 16, 2, DiscontinuityMode::off},
-                  {90, 16, 2, DiscontinuityMode::off},
-                  {70, 16, 2, DiscontinuityMode::off},
-                  {55, 16, 2, DiscontinuityMode::off},
-                  {45, 16, 2, DiscontinuityMode::off},
-                  {38, 16, 2, DiscontinuityMode::off},
+                 {{160, 16, 1},
+                  {120, 16, 1},
+                  {90, 16, 1},
+                  {70, 16, 1},
+                  {55, 16, 1},
+                  {45, 16, 1},
+                  {38, 16, 1},
+                  {32, 16, 1},
+                  {160, 16, 1, DiscontinuityMode::off},
+                  {120, 16, 1, DiscontinuityMode::off},
+                  {90, 16, 1, DiscontinuityMode::off},
+                  {70, 16, 1, DiscontinuityMode::off},
+                  {55, 16, 1, DiscontinuityMode::off},
+                  {45, 16, 1, DiscontinuityMode::off},
+                  {38, 16, 1, DiscontinuityMode::off},
                   {70, 4, 2},
                   {70, 64, 2},
                   {70, 16, 0},
-                  {70, 16, 1},
+                  {70, 16, 2},
                   {70, 16, 3},
                   {45, 16, 0},
-                  {45, 16, 1}},
-                 {{160, 16, 2}, {120, 16, 2}}});
+                  {45, 16, 2}},
+                 {{160, 16, 1}, {120, 16, 1}}});
   return out;
 }
 
@@ -259,10 +259,10 @@ int main(int argc, char** argv) {
                      r.err.linf, r.err.patch_mean,
                      r.element.patch_mean, (r.err.worst_patch >= 0 ? scene.patches[static_cast<size_t>(r.err.worst_patch)].name + " #" + std::to_string(r.err.worst_patch) : std::string("-")).c_str());
         rows.push_back(r);
-        if (set.rays == 16 && set.quad_level == 2 && set.discontinuity == DiscontinuityMode::off) {
+        if (set.rays == 16 && set.quad_level == 1 && set.discontinuity == DiscontinuityMode::off) {
           l2_off.x.push_back(r.seconds);
           l2_off.y.push_back(r.err.l2);
-        } else if (set.rays == 16 && set.quad_level == 2) {
+        } else if (set.rays == 16 && set.quad_level == 1) {
           l2.x.push_back(r.seconds);
           l2.y.push_back(r.err.l2);
           pm.x.push_back(r.seconds);

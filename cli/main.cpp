@@ -35,6 +35,7 @@ struct Params {
   bool quiet = false;
   bool png = true;
   std::string discontinuity = "contacts";
+  std::string nodal = "fit";
 };
 
 // Progress on stderr for phases longer than a second: phase, percent, elapsed.
@@ -80,6 +81,7 @@ private:
 // Options that can be checked without reading anything: done before any work.
 void check_params(Params& p, bool solving) {
   p.meshing.discontinuity = parse_discontinuity_mode(p.discontinuity);
+  p.solve.nodal = p.nodal == "mean" ? NodalMethod::mean : NodalMethod::linear_fit;
   if (p.meshing.max_edge < 0.0 || !std::isfinite(p.meshing.max_edge))
     throw InputError("--max-edge " + std::to_string(p.meshing.max_edge) + " must be > 0 (or 0 for auto)");
   if (solving) check_solve_options(p.solve);
@@ -213,6 +215,10 @@ int main(int argc, char** argv) {
                       "probe file: lines 'label x y z nx ny nz'; writes probes.csv")
       ->check(CLI::ExistingFile);
   run_cmd->add_flag("!--no-png", run_p.png, "do not render radiosity.png");
+  run_cmd->add_option("--nodal", run_p.nodal,
+                      "vertex values from element values: fit (least-squares plane through the elements "
+                      "around the vertex, default) or mean (their area-weighted mean)")
+      ->check(CLI::IsMember({"fit", "mean"}));
 
   CLI::App* mesh_cmd = app.add_subcommand("mesh", "mesh the scene and report quality; writes mesh.vtu and summary.json");
   add_common(mesh_cmd, mesh_p);

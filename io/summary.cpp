@@ -50,7 +50,8 @@ nlohmann::json make_summary(const RunInfo& info, const Scene& scene, const Mesh&
                     {"tolerance", info.solve.tolerance},
                     {"rays", info.solve.rays},
                     {"threads", info.solve.threads},
-                    {"crease_angle", info.solve.crease_angle}};
+                    {"crease_angle", info.solve.crease_angle},
+                    {"nodal", info.solve.nodal == NodalMethod::mean ? "mean" : "fit"}};
   doc["counts"] = {{"faces_read", scene.report.faces_read},
                    {"patches", scene.patches.size()},
                    {"materials", scene.materials.size()},

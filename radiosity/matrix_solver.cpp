@@ -345,7 +345,7 @@ Solution solve_matrix(const Scene& scene, const Mesh& mesh, const SolveOptions& 
   st.seconds_solve = seconds_since(t1);
   if (progress) progress("solve", 1.0);
 
-  sol.nodal = compute_nodal(scene, mesh, sol.element, options.crease_angle);
+  sol.nodal = compute_nodal(scene, mesh, sol.element, options.crease_angle, options.nodal);
   return sol;
 }
 

@@ -11,7 +11,8 @@
 namespace radmesh {
 
 NodalField compute_nodal(const Scene& scene, const Mesh& mesh, const std::vector<Rgb>& element,
-                         double crease_angle_degrees) {
+                         double crease_angle_degrees, NodalMethod method) {
+  const bool fit = method == NodalMethod::linear_fit;
   const size_t nv = mesh.positions.size();
   const size_t nt = mesh.triangles.size();
   const double cos_crease = std::cos(crease_angle_degrees * std::numbers::pi / 180.0);
@@ -87,6 +88,50 @@ NodalField compute_nodal(const Scene& scene, const Mesh& mesh, const std::vector
     for (int i = 0; i < k; ++i)
       if (find(i) == i && weight[static_cast<size_t>(i)] > 0.0)
         field.radiosity[static_cast<size_t>(display[static_cast<size_t>(i)])] /= weight[static_cast<size_t>(i)];
+    if (!fit) continue;
+    // Linear fit: per group, the plane through the element values at the
+    // element centroids (area-weighted least squares, in the group's plane),
+    // evaluated at the vertex. Unlike the mean it extrapolates at a patch
+    // boundary, where the mean is biased towards the interior.
+    for (int i = 0; i < k; ++i) {
+      if (find(i) != i) continue;
+      const int first = around[static_cast<size_t>(b + i)];
+      const Patch& patch = scene.patches[static_cast<size_t>(mesh.patch[static_cast<size_t>(first)])];
+      const Vec3 n = patch.normal;
+      const Vec3 u = glm::normalize(std::abs(n.x) < 0.6 ? glm::cross(Vec3(1, 0, 0), n) : glm::cross(Vec3(0, 1, 0), n));
+      const Vec3 w = glm::cross(n, u);
+      double m[3][3] = {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}};
+      Rgb rhs[3] = {Rgb(0.0), Rgb(0.0), Rgb(0.0)};
+      double scale = 0.0;
+      for (int j = 0; j < k; ++j) {
+        if (find(j) != i) continue;
+        const int t = around[static_cast<size_t>(b + j)];
+        const Vec3 d = mesh.centroid(t) - mesh.positions[v];
+        const double row[3] = {1.0, glm::dot(d, u), glm::dot(d, w)};
+        const double a = mesh.area(t);
+        scale = std::max(scale, glm::length(d));
+        for (int r = 0; r < 3; ++r) {
+          for (int c = 0; c < 3; ++c) m[r][c] += a * row[r] * row[c];
+          rhs[r] += a * row[r] * element[static_cast<size_t>(t)];
+        }
+      }
+      // Cramer's rule for the constant term, with a conditioning check: a
+      // group whose centroids (nearly) line up keeps its mean.
+      const double det = m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) -
+                         m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0]) +
+                         m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
+      if (!(std::abs(det) > 1e-6 * m[0][0] * m[0][0] * m[0][0] * std::pow(scale, 4))) continue;
+      Rgb c0(0.0);
+      for (int ch = 0; ch < 3; ++ch) {
+        const double r0 = rhs[0][ch], r1 = rhs[1][ch], r2 = rhs[2][ch];
+        c0[ch] = (r0 * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) - m[0][1] * (r1 * m[2][2] - m[1][2] * r2) +
+                  m[0][2] * (r1 * m[2][1] - m[1][1] * r2)) /
+                 det;
+      }
+      // Radiosity is never below the surface's own emission.
+      const Rgb floor = scene.materials[static_cast<size_t>(patch.material)].emission;
+      field.radiosity[static_cast<size_t>(display[static_cast<size_t>(i)])] = glm::max(c0, floor);
+    }
   }
   return field;
 }

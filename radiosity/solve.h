@@ -9,6 +9,8 @@
 
 namespace radmesh {
 
+enum class NodalMethod { mean, linear_fit };
+
 struct SolveOptions {
   // Gauss-Seidel stops when the largest change of a sweep is below
   // tolerance * (largest radiosity); the final residual is reported.
@@ -28,6 +30,10 @@ struct SolveOptions {
   // Vertex values are averaged only over triangles of one material whose
   // normals differ by less than this angle (degrees).
   double crease_angle = 20.0;
+  // How vertex values are made from element values (see compute_nodal).
+  // linear_fit by default: on the Cornell box benchmark (45 mm) it gives 0.79x
+  // the L2 error and 0.45x the worst patch-mean error of the mean.
+  NodalMethod nodal = NodalMethod::linear_fit;
 };
 
 // Checks option ranges; throws InputError naming the option and the value.
@@ -51,8 +57,12 @@ std::vector<Triangle> element_triangles(const Scene& scene, const Mesh& mesh);
 double matrix_bytes(long long n);
 
 // Per-vertex radiosity from per-element values, never averaged across a
-// material change or a crease (see SolveOptions::crease_angle).
+// material change, a crease (see SolveOptions::crease_angle) or a
+// discontinuity edge. `mean`: area-weighted mean of the elements around the
+// vertex; `linear_fit`: least-squares plane through their values at their
+// centroids, evaluated at the vertex (falls back to the mean when the
+// centroids line up).
 NodalField compute_nodal(const Scene& scene, const Mesh& mesh, const std::vector<Rgb>& element,
-                         double crease_angle_degrees);
+                         double crease_angle_degrees, NodalMethod method);
 
 }  // namespace radmesh
