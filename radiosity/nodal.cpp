@@ -2,10 +2,13 @@
 
 #include "radiosity/solve.h"
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <functional>
+#include <map>
 #include <numeric>
+#include <optional>
 #include <set>
 
 namespace radmesh {
@@ -42,6 +45,60 @@ NodalField compute_nodal(const Scene& scene, const Mesh& mesh, const std::vector
         for (int y : mesh.triangles[static_cast<size_t>(b)])
           if (x == y) return !features.count({std::min(v, x), std::max(v, x)});
     return false;
+  };
+
+  // Triangles across each non-feature edge (for widening a degenerate fit).
+  std::map<std::pair<int, int>, std::vector<int>> edge_tris;
+  if (fit)
+    for (size_t t = 0; t < nt; ++t)
+      for (int c = 0; c < 3; ++c) {
+        const int x = mesh.triangles[t][static_cast<size_t>(c)], y = mesh.triangles[t][static_cast<size_t>((c + 1) % 3)];
+        edge_tris[{std::min(x, y), std::max(x, y)}].push_back(static_cast<int>(t));
+      }
+  auto edge_neighbours = [&](int t) {
+    std::vector<int> out;
+    for (int c = 0; c < 3; ++c) {
+      const int x = mesh.triangles[static_cast<size_t>(t)][static_cast<size_t>(c)];
+      const int y = mesh.triangles[static_cast<size_t>(t)][static_cast<size_t>((c + 1) % 3)];
+      const std::pair<int, int> e{std::min(x, y), std::max(x, y)};
+      if (features.count(e)) continue;
+      for (int o : edge_tris[e])
+        if (o != t) out.push_back(o);
+    }
+    return out;
+  };
+  // Least-squares plane through the values at the centroids of `tris`,
+  // evaluated at vertex v; empty when the centroids (nearly) line up.
+  auto fit_at = [&](int v, const std::vector<int>& tris) -> std::optional<Rgb> {
+    const Vec3 n = scene.patches[static_cast<size_t>(mesh.patch[static_cast<size_t>(tris[0])])].normal;
+    const Vec3 u = glm::normalize(std::abs(n.x) < 0.6 ? glm::cross(Vec3(1, 0, 0), n) : glm::cross(Vec3(0, 1, 0), n));
+    const Vec3 w = glm::cross(n, u);
+    double m[3][3] = {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}};
+    Rgb rhs[3] = {Rgb(0.0), Rgb(0.0), Rgb(0.0)};
+    double scale = 0.0;
+    for (int t : tris) {
+      const Vec3 d = mesh.centroid(t) - mesh.positions[static_cast<size_t>(v)];
+      const double row[3] = {1.0, glm::dot(d, u), glm::dot(d, w)};
+      const double a = mesh.area(t);
+      scale = std::max(scale, glm::length(d));
+      for (int r = 0; r < 3; ++r) {
+        for (int c = 0; c < 3; ++c) m[r][c] += a * row[r] * row[c];
+        rhs[r] += a * row[r] * element[static_cast<size_t>(t)];
+      }
+    }
+    // Cramer's rule for the constant term, with a conditioning check.
+    const double det = m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) -
+                       m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0]) +
+                       m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
+    if (!(std::abs(det) > 1e-6 * m[0][0] * m[0][0] * m[0][0] * std::pow(scale, 4))) return std::nullopt;
+    Rgb c0(0.0);
+    for (int ch = 0; ch < 3; ++ch) {
+      const double r0 = rhs[0][ch], r1 = rhs[1][ch], r2 = rhs[2][ch];
+      c0[ch] = (r0 * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) - m[0][1] * (r1 * m[2][2] - m[1][2] * r2) +
+                m[0][2] * (r1 * m[2][1] - m[1][1] * r2)) /
+               det;
+    }
+    return c0;
   };
 
   NodalField field;
@@ -92,45 +149,29 @@ NodalField compute_nodal(const Scene& scene, const Mesh& mesh, const std::vector
     // Linear fit: per group, the plane through the element values at the
     // element centroids (area-weighted least squares, in the group's plane),
     // evaluated at the vertex. Unlike the mean it extrapolates at a patch
-    // boundary, where the mean is biased towards the interior.
+    // boundary, where the mean is biased towards the interior. Where the
+    // group's centroids line up (a corner with one or two triangles), the
+    // triangles next to the group across ordinary edges join the fit (up to
+    // three rings).
     for (int i = 0; i < k; ++i) {
       if (find(i) != i) continue;
-      const int first = around[static_cast<size_t>(b + i)];
-      const Patch& patch = scene.patches[static_cast<size_t>(mesh.patch[static_cast<size_t>(first)])];
-      const Vec3 n = patch.normal;
-      const Vec3 u = glm::normalize(std::abs(n.x) < 0.6 ? glm::cross(Vec3(1, 0, 0), n) : glm::cross(Vec3(0, 1, 0), n));
-      const Vec3 w = glm::cross(n, u);
-      double m[3][3] = {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}};
-      Rgb rhs[3] = {Rgb(0.0), Rgb(0.0), Rgb(0.0)};
-      double scale = 0.0;
-      for (int j = 0; j < k; ++j) {
-        if (find(j) != i) continue;
-        const int t = around[static_cast<size_t>(b + j)];
-        const Vec3 d = mesh.centroid(t) - mesh.positions[v];
-        const double row[3] = {1.0, glm::dot(d, u), glm::dot(d, w)};
-        const double a = mesh.area(t);
-        scale = std::max(scale, glm::length(d));
-        for (int r = 0; r < 3; ++r) {
-          for (int c = 0; c < 3; ++c) m[r][c] += a * row[r] * row[c];
-          rhs[r] += a * row[r] * element[static_cast<size_t>(t)];
-        }
+      std::vector<int> tris;
+      for (int j = 0; j < k; ++j)
+        if (find(j) == i) tris.push_back(around[static_cast<size_t>(b + j)]);
+      std::optional<Rgb> value = fit_at(static_cast<int>(v), tris);
+      for (int grow = 0; !value && grow < 3; ++grow) {
+        const std::vector<int> ring = tris;
+        for (int t : ring)
+          for (int nb : edge_neighbours(t))
+            if (compatible(t, nb) && std::find(tris.begin(), tris.end(), nb) == tris.end()) tris.push_back(nb);
+        if (tris.size() == ring.size()) break;
+        value = fit_at(static_cast<int>(v), tris);
       }
-      // Cramer's rule for the constant term, with a conditioning check: a
-      // group whose centroids (nearly) line up keeps its mean.
-      const double det = m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) -
-                         m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0]) +
-                         m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
-      if (!(std::abs(det) > 1e-6 * m[0][0] * m[0][0] * m[0][0] * std::pow(scale, 4))) continue;
-      Rgb c0(0.0);
-      for (int ch = 0; ch < 3; ++ch) {
-        const double r0 = rhs[0][ch], r1 = rhs[1][ch], r2 = rhs[2][ch];
-        c0[ch] = (r0 * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) - m[0][1] * (r1 * m[2][2] - m[1][2] * r2) +
-                  m[0][2] * (r1 * m[2][1] - m[1][1] * r2)) /
-                 det;
-      }
+      if (!value) continue;  // keep the mean
       // Radiosity is never below the surface's own emission.
+      const Patch& patch = scene.patches[static_cast<size_t>(mesh.patch[static_cast<size_t>(tris[0])])];
       const Rgb floor = scene.materials[static_cast<size_t>(patch.material)].emission;
-      field.radiosity[static_cast<size_t>(display[static_cast<size_t>(i)])] = glm::max(c0, floor);
+      field.radiosity[static_cast<size_t>(display[static_cast<size_t>(i)])] = glm::max(*value, floor);
     }
   }
   return field;

@@ -269,3 +269,32 @@ TEST(ErrorMetric, CornellReferenceWasMadeAtTodaysSamplePoints) {
   }
   EXPECT_EQ(k, samples.size());
 }
+
+TEST(Nodal, LinearFitReproducesALinearFieldAtEveryVertexIncludingTheBoundary) {
+  RawFace f;
+  f.name = "plate";
+  f.material = 0;
+  f.points = {{0, 0, 0}, {3, 0, 0}, {3, 2, 0}, {0, 2, 0}};
+  Material m;
+  m.name = "m";
+  m.reflectance = Rgb(0.5);
+  const Scene s = build_scene({f}, {m}, "test");
+  MeshingOptions mo;
+  mo.max_edge = 0.4;
+  const Mesh mesh = mesh_scene(s, mo);
+  // Element values sampled from a linear field at the centroids: the mean of
+  // a linear field over a triangle is its value at the centroid.
+  auto field = [](const Vec3& p) { return Rgb(1.0 + 0.5 * p.x - 0.25 * p.y, 2.0 + p.y, 3.0); };
+  std::vector<Rgb> element;
+  for (int t = 0; t < mesh.triangle_count(); ++t) element.push_back(field(mesh.centroid(t)));
+  const NodalField fit = compute_nodal(s, mesh, element, 20.0, NodalMethod::linear_fit);
+  const NodalField mean = compute_nodal(s, mesh, element, 20.0, NodalMethod::mean);
+  double worst_fit = 0.0, worst_mean = 0.0;
+  for (size_t d = 0; d < fit.points.size(); ++d) {
+    const Rgb want = field(fit.points[d]);
+    worst_fit = std::max(worst_fit, glm::length(fit.radiosity[d] - want));
+    worst_mean = std::max(worst_mean, glm::length(mean.radiosity[d] - want));
+  }
+  EXPECT_LT(worst_fit, 1e-9);    // exact, corners and edges included
+  EXPECT_GT(worst_mean, 1e-2);   // the mean is biased at the boundary
+}
