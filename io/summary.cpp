@@ -11,16 +11,6 @@ namespace {
 
 nlohmann::json rgb(const Rgb& c) { return nlohmann::json::array({c.x, c.y, c.z}); }
 
-// Percentile of a copy of v (nearest rank), ignoring non-finite values.
-double percentile(std::vector<double> v, double q) {
-  v.erase(std::remove_if(v.begin(), v.end(), [](double x) { return !std::isfinite(x); }), v.end());
-  if (v.empty()) return 0.0;
-  std::sort(v.begin(), v.end());
-  const size_t k = std::min(v.size() - 1, static_cast<size_t>(std::ceil(q * static_cast<double>(v.size()))) -
-                                              (q > 0.0 ? 1 : 0));
-  return v[k];
-}
-
 }  // namespace
 
 std::vector<Rgb> patch_mean_radiosity(const Scene& scene, const Mesh& mesh, const std::vector<Rgb>& element) {
@@ -117,6 +107,17 @@ nlohmann::json make_summary(const RunInfo& info, const Scene& scene, const Mesh&
     doc["skips"] = st.skips;
   }
   return doc;
+}
+
+void write_quality_csv(const std::string& path, const Scene& scene, const std::vector<PatchQuality>& rows) {
+  write_file_atomically(path, [&](std::ostream& out) {
+    out << "patch_id,name,triangles,min_angle,max_angle,aspect_p50,aspect_p95,aspect_max,contact_segments,zero_area\n";
+    out.precision(8);
+    for (const PatchQuality& r : rows)
+      out << r.patch << ',' << (r.patch < 0 ? std::string("total") : scene.patches[static_cast<size_t>(r.patch)].name)
+          << ',' << r.triangles << ',' << r.min_angle << ',' << r.max_angle << ',' << r.aspect_p50 << ','
+          << r.aspect_p95 << ',' << r.aspect_max << ',' << r.contact_segments << ',' << r.zero_area << '\n';
+  });
 }
 
 void write_json(const std::string& path, const nlohmann::json& doc) {

@@ -61,8 +61,25 @@ MeshingOptions resolve_meshing_options(const Scene& scene, MeshingOptions option
 // Per-triangle quality.
 struct TriangleQuality {
   std::vector<double> min_angle;     // degrees
+  std::vector<double> max_angle;     // degrees
   std::vector<double> aspect_ratio;  // longest edge / (2 sqrt(3) inradius): 1 for equilateral
 };
 TriangleQuality compute_quality(const Mesh& mesh);
+
+// Nearest-rank percentile (q in [0, 1]) of the finite values; 0 when none.
+double percentile(std::vector<double> values, double q);
+
+// Quality of one patch's triangles (or of all: patch = -1), for mesh studies.
+struct PatchQuality {
+  int patch = -1;
+  int triangles = 0;
+  double min_angle = 0.0, max_angle = 0.0;                    // degrees, extremes
+  double aspect_p50 = 0.0, aspect_p95 = 0.0, aspect_max = 0.0;
+  int contact_segments = 0;  // D0 constraint segments on the patch
+  int zero_area = 0;         // triangles of zero area
+};
+// One row per patch, then the total (patch = -1).
+std::vector<PatchQuality> patch_quality(const Scene& scene, const Mesh& mesh, const TriangleQuality& quality,
+                                        const std::vector<DiscontinuitySegment>& discontinuities);
 
 }  // namespace radmesh

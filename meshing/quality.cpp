@@ -12,19 +12,21 @@ TriangleQuality compute_quality(const Mesh& mesh) {
   const int n = mesh.triangle_count();
   q.min_angle.resize(static_cast<size_t>(n));
   q.aspect_ratio.resize(static_cast<size_t>(n));
+  q.max_angle.resize(static_cast<size_t>(n));
   for (int t = 0; t < n; ++t) {
     const auto& tri = mesh.triangles[static_cast<size_t>(t)];
     const Vec3 p[3] = {mesh.positions[tri[0]], mesh.positions[tri[1]], mesh.positions[tri[2]]};
     // Edge i is opposite vertex i.
     const double len[3] = {glm::length(p[2] - p[1]), glm::length(p[0] - p[2]),
                            glm::length(p[1] - p[0])};
-    double min_angle = 180.0;
+    double min_angle = 180.0, max_angle = 0.0;
     for (int i = 0; i < 3; ++i) {
       const Vec3 u = p[(i + 1) % 3] - p[i];
       const Vec3 v = p[(i + 2) % 3] - p[i];
       // atan2 form is accurate for tiny and near-180 angles alike.
       const double a = std::atan2(glm::length(glm::cross(u, v)), glm::dot(u, v));
       min_angle = std::min(min_angle, a * 180.0 / std::numbers::pi);
+      max_angle = std::max(max_angle, a * 180.0 / std::numbers::pi);
     }
     const double area = mesh.area(t);
     const double s = 0.5 * (len[0] + len[1] + len[2]);
@@ -35,9 +37,51 @@ TriangleQuality compute_quality(const Mesh& mesh) {
       aspect = longest / (2.0 * std::sqrt(3.0) * inradius);
     }
     q.min_angle[static_cast<size_t>(t)] = min_angle;
+    q.max_angle[static_cast<size_t>(t)] = max_angle;
     q.aspect_ratio[static_cast<size_t>(t)] = aspect;
   }
   return q;
+}
+
+double percentile(std::vector<double> v, double q) {
+  v.erase(std::remove_if(v.begin(), v.end(), [](double x) { return !std::isfinite(x); }), v.end());
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  const double rank = std::ceil(q * static_cast<double>(v.size()));
+  const size_t k = std::min(v.size() - 1, static_cast<size_t>(std::max(rank, 1.0)) - 1);
+  return v[k];
+}
+
+std::vector<PatchQuality> patch_quality(const Scene& scene, const Mesh& mesh, const TriangleQuality& quality,
+                                        const std::vector<DiscontinuitySegment>& discontinuities) {
+  const size_t np = scene.patches.size();
+  std::vector<std::vector<int>> tris(np + 1);  // last: all
+  for (int t = 0; t < mesh.triangle_count(); ++t) {
+    tris[static_cast<size_t>(mesh.patch[static_cast<size_t>(t)])].push_back(t);
+    tris[np].push_back(t);
+  }
+  std::vector<PatchQuality> rows;
+  for (size_t p = 0; p <= np; ++p) {
+    PatchQuality r;
+    r.patch = p < np ? static_cast<int>(p) : -1;
+    r.triangles = static_cast<int>(tris[p].size());
+    std::vector<double> aspect;
+    r.min_angle = tris[p].empty() ? 0.0 : 180.0;
+    for (int t : tris[p]) {
+      const size_t u = static_cast<size_t>(t);
+      r.min_angle = std::min(r.min_angle, quality.min_angle[u]);
+      r.max_angle = std::max(r.max_angle, quality.max_angle[u]);
+      aspect.push_back(quality.aspect_ratio[u]);
+      if (mesh.area(t) == 0.0) ++r.zero_area;
+    }
+    r.aspect_p50 = percentile(aspect, 0.5);
+    r.aspect_p95 = percentile(aspect, 0.95);
+    r.aspect_max = percentile(aspect, 1.0);
+    for (const DiscontinuitySegment& d : discontinuities)
+      if (d.kind == 0 && (r.patch < 0 || d.patch == r.patch)) ++r.contact_segments;
+    rows.push_back(r);
+  }
+  return rows;
 }
 
 }  // namespace radmesh

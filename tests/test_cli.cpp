@@ -8,7 +8,9 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <string>
+#include <vector>
 
 namespace fs = std::filesystem;
 
@@ -129,3 +131,32 @@ INSTANTIATE_TEST_SUITE_P(
         name += std::isalnum(static_cast<unsigned char>(ch)) ? ch : '_';
       return name;
     });
+
+TEST(Cli, QualityWritesOneRowPerPatchAndATotal) {
+  const fs::path out = fresh_dir("quality");
+  const Result r = radmesh("quality " + kData + "/box_on_floor/box_on_floor.obj -o " + out.string() + " -q");
+  ASSERT_EQ(r.status, 0) << r.err;
+  std::ifstream csv(out / "quality.csv");
+  std::string line;
+  std::getline(csv, line);
+  EXPECT_EQ(line, "patch_id,name,triangles,min_angle,max_angle,aspect_p50,aspect_p95,aspect_max,contact_segments,zero_area");
+  int rows = 0, sum = 0, total = -1, floor_contacts = -1;
+  while (std::getline(csv, line)) {
+    std::vector<std::string> f;
+    std::stringstream ss(line);
+    for (std::string x; std::getline(ss, x, ',');) f.push_back(x);
+    ASSERT_EQ(f.size(), 10u) << line;
+    if (f[0] == "-1") {
+      total = std::stoi(f[2]);
+    } else {
+      ++rows;
+      sum += std::stoi(f[2]);
+      if (f[1] == "floor") floor_contacts = std::stoi(f[8]);
+      EXPECT_GE(std::stod(f[3]), 20.0 - 1e-6) << line;  // the requested minimum angle
+    }
+  }
+  EXPECT_EQ(rows, 7);  // box_on_floor has 7 patches
+  EXPECT_EQ(total, sum);
+  EXPECT_EQ(floor_contacts, 4);  // the box's footprint
+  fs::remove_all(out);
+}
