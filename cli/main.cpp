@@ -2,6 +2,7 @@
 // `mesh` (mesh and quality only). Every error is caught here, once, and
 // printed as one line; the exit status is then non-zero.
 
+#include "io/histogram.h"
 #include "io/obj_reader.h"
 #include "io/png_render.h"
 #include "io/probe_file.h"
@@ -195,6 +196,17 @@ int quality(Params& p) {
   const std::string csv = (fs::path(p.out_dir) / "quality.csv").string();
   write_quality_csv(csv, scene, rows);
   std::printf("%s\n", csv.c_str());
+  // Histograms of every triangle's smallest angle and aspect ratio.
+  const std::pair<const char*, const std::vector<double>*> plots[] = {{"min_angle", &q.min_angle},
+                                                                      {"aspect_ratio", &q.aspect_ratio}};
+  for (const auto& [name, values] : plots) {
+    const std::string png = (fs::path(p.out_dir) / ("quality_" + std::string(name) + ".png")).string();
+    std::string why;
+    if (plot_histogram(png, std::string("radmesh quality: ") + name, name, *values, 30, &why))
+      std::printf("%s\n", png.c_str());
+    else if (!p.quiet)
+      std::fprintf(stderr, "[radmesh] histograms skipped: %s\n", why.c_str());
+  }
   return 0;
 }
 
