@@ -170,17 +170,7 @@ bool plot_error_vs_time(const std::string& path, const std::string& title, const
   chart->GetLegend()->SetHorizontalAlignment(vtkChartLegend::LEFT);
   chart->GetLegend()->SetVerticalAlignment(vtkChartLegend::BOTTOM);
 
-  vtkNew<vtkRenderWindow> window;
-  window->SetDisplayId(x.get());
-  window->SetOffScreenRendering(1);
-  window->SetSize(kWidth, kHeight);
-  vtkNew<vtkContextView> view;
-  view->SetRenderWindow(window);
-  view->GetRenderer()->SetBackground(1.0, 1.0, 1.0);
-  view->GetScene()->AddItem(chart);
-  window->Render();
-
-  io_detail::write_window_png(window, path);
+  io_detail::write_chart_png(chart, x.get(), kWidth, kHeight, path);
   return true;
 }
 

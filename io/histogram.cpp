@@ -62,16 +62,7 @@ bool plot_histogram(const std::string& path, const std::string& title, const std
   chart->GetAxis(vtkAxis::BOTTOM)->SetTitle(x_label);
   chart->GetAxis(vtkAxis::LEFT)->SetTitle("triangles");
 
-  vtkNew<vtkRenderWindow> window;
-  window->SetDisplayId(x.get());
-  window->SetOffScreenRendering(1);
-  window->SetSize(800, 500);
-  vtkNew<vtkContextView> view;
-  view->SetRenderWindow(window);
-  view->GetRenderer()->SetBackground(1.0, 1.0, 1.0);
-  view->GetScene()->AddItem(chart);
-  window->Render();
-  io_detail::write_window_png(window, path);
+  io_detail::write_chart_png(chart, x.get(), 800, 500, path);
   return true;
 }
 
