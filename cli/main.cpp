@@ -231,7 +231,7 @@ int main(int argc, char** argv) {
                "Lengths are in the scene file's units; emission (Ke) is radiant exitance, and\n"
                "radiosity comes out in the same unit (per unit area of the file's unit)."};
   app.require_subcommand(1);
-  Params run_p, mesh_p;  // quality_p is declared with its subcommand
+  Params run_p, mesh_p, quality_p;
 
   CLI::App* run_cmd = app.add_subcommand("run", "mesh the scene, solve radiosity, write .vtu, .png, summary.json");
   add_common(run_cmd, run_p);
@@ -257,7 +257,6 @@ int main(int argc, char** argv) {
 
   CLI::App* mesh_cmd = app.add_subcommand("mesh", "mesh the scene and report quality; writes mesh.vtu and summary.json");
   add_common(mesh_cmd, mesh_p);
-  Params quality_p;
   CLI::App* quality_cmd = app.add_subcommand(
       "quality", "mesh the scene; print per-patch and total mesh quality and write quality.csv");
   add_common(quality_cmd, quality_p);

@@ -36,9 +36,7 @@ struct MeshingOptions {
 };
 
 struct MeshReport {
-  double max_edge = 0.0;       // the value used (after resolving 0 = auto)
   int boundary_rounds = 0;     // rounds needed to agree on shared boundary vertices
-  int constrained_vertices = 0;
   int contact_segments = 0;    // D0 segments inserted as constraints
   std::vector<DiscontinuitySegment> discontinuities;  // the lines inserted, for export
 };

@@ -176,11 +176,7 @@ public:
       }
     compact(mesh);
     if (report) {
-      report->max_edge = opt_.max_edge;
       report->boundary_rounds = rounds;
-      int c = 0;
-      for (const auto& pts : seg_points_) c += static_cast<int>(pts.size());
-      report->constrained_vertices = c;
       report->contact_segments = contact_count_;
       report->discontinuities = discontinuities_;
     }

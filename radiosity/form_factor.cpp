@@ -45,22 +45,19 @@ double point_polygon_form_factor(const Vec3& x, const Vec3& n, const Vec3* pts, 
   return std::abs(sum) / (2.0 * std::numbers::pi);
 }
 
-double Triangle::radius() const {
-  const Vec3 c = centroid();
-  return std::max({glm::length(v[0] - c), glm::length(v[1] - c), glm::length(v[2] - c)});
-}
-
 Triangle make_triangle(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& normal) {
   Triangle t;
   t.v = {a, b, c};
   t.normal = normal;
   t.area = triangle_area(a, b, c);
+  const Vec3 m = t.centroid();
+  t.radius = std::max({glm::length(a - m), glm::length(b - m), glm::length(c - m)});
   return t;
 }
 
 bool facing_away(const Triangle& r, const Triangle& s) {
   auto any_in_front = [](const Triangle& plane, const Triangle& t) {
-    const double scale = std::max(plane.radius(), t.radius());
+    const double scale = std::max(plane.radius, t.radius);
     const double eps = 1e-12 * scale;
     for (const Vec3& p : t.v)
       if (glm::dot(p - plane.v[0], plane.normal) > eps) return true;

@@ -18,13 +18,14 @@ namespace radmesh {
 double point_polygon_form_factor(const Vec3& x, const Vec3& n, const Vec3* pts, int count,
                                  const Vec3& poly_normal);
 
-// A flat triangle with its unit normal and area.
+// A flat triangle with its unit normal, area and radius (made by make_triangle,
+// so that pair loops do not recompute them).
 struct Triangle {
   std::array<Vec3, 3> v;
   Vec3 normal{0.0};
   double area = 0.0;
+  double radius = 0.0;  // largest distance from the centroid to a vertex
   Vec3 centroid() const { return (v[0] + v[1] + v[2]) / 3.0; }
-  double radius() const;  // largest distance from the centroid to a vertex
 };
 
 Triangle make_triangle(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& normal);
