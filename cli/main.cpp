@@ -112,6 +112,7 @@ int run(Params& p, bool solving) {
   const Mesh mesh = mesh_scene(scene, info.meshing, &info.mesh_report);
   const TriangleQuality quality = compute_quality(mesh);
   info.seconds.push_back({"mesh", rep.end()});
+  for (const std::string& w : info.mesh_report.shadow.warnings) rep.note("warning: " + w);
   rep.note(std::to_string(scene.patches.size()) + " patches, " + std::to_string(mesh.triangle_count()) +
            " elements (max edge " + std::to_string(info.meshing.max_edge) + ")");
 
@@ -176,25 +177,44 @@ int run(Params& p, bool solving) {
   return 0;
 }
 
-// radmesh quality: the mesh study table on stdout and in quality.csv.
+// radmesh quality: the mesh study table on stdout and in quality.csv. The
+// input is a scene (meshed here with the given options) or a mesh written by
+// radmesh (mesh.vtu or radiosity.vtu; the discontinuities.vtu beside it, when
+// there is one, gives the line counts).
 int quality(Params& p) {
   check_params(p, false);
-  const Scene scene = read_obj_scene(p.scene);
-  const MeshingOptions mo = resolve_meshing_options(scene, p.meshing);
-  MeshReport report;
-  const Mesh mesh = mesh_scene(scene, mo, &report);
+  Mesh mesh;
+  std::vector<DiscontinuitySegment> lines;
+  std::vector<std::string> names;
+  if (fs::path(p.scene).extension() == ".vtu") {
+    mesh = read_mesh_vtu(p.scene);
+    const fs::path beside = fs::path(p.scene).parent_path() / "discontinuities.vtu";
+    if (fs::exists(beside)) lines = read_discontinuities_vtu(beside.string());
+    int np = 0;
+    for (int q : mesh.patch) np = std::max(np, q + 1);
+    for (int q = 0; q < np; ++q) names.push_back("patch_" + std::to_string(q));
+  } else {
+    const Scene scene = read_obj_scene(p.scene);
+    const MeshingOptions mo = resolve_meshing_options(scene, p.meshing);
+    MeshReport report;
+    mesh = mesh_scene(scene, mo, &report);
+    lines = report.discontinuities;
+    for (const Patch& patch : scene.patches) names.push_back(patch.name);
+    if (!p.quiet)
+      for (const std::string& w : report.shadow.warnings) std::fprintf(stderr, "[radmesh] warning: %s\n", w.c_str());
+  }
   const TriangleQuality q = compute_quality(mesh);
-  const auto rows = patch_quality(scene, mesh, q, report.discontinuities);
-  std::printf("%-4s %-20s %9s %8s %8s %8s %8s %8s %8s %9s\n", "id", "patch", "triangles", "min_ang", "max_ang",
-              "asp_p50", "asp_p95", "asp_max", "D0_segs", "zero_area");
+  const auto rows = patch_quality(static_cast<int>(names.size()), mesh, q, lines);
+  std::printf("%-4s %-20s %9s %8s %8s %8s %8s %8s %7s %7s %7s %9s\n", "id", "patch", "triangles", "min_ang",
+              "max_ang", "asp_p50", "asp_p95", "asp_max", "D0_segs", "D1_segs", "D2_segs", "zero_area");
   for (const PatchQuality& r : rows)
-    std::printf("%-4d %-20s %9d %8.2f %8.2f %8.3f %8.3f %8.3f %8d %9d\n", r.patch,
-                (r.patch < 0 ? std::string("total") : scene.patches[static_cast<size_t>(r.patch)].name).c_str(),
-                r.triangles, r.min_angle, r.max_angle, r.aspect_p50, r.aspect_p95, r.aspect_max, r.contact_segments,
-                r.zero_area);
+    std::printf("%-4d %-20s %9d %8.2f %8.2f %8.3f %8.3f %8.3f %7d %7d %7d %9d\n", r.patch,
+                (r.patch < 0 ? std::string("total") : names[static_cast<size_t>(r.patch)]).c_str(), r.triangles,
+                r.min_angle, r.max_angle, r.aspect_p50, r.aspect_p95, r.aspect_max, r.contact_segments,
+                r.d1_segments, r.d2_segments, r.zero_area);
   fs::create_directories(p.out_dir);
   const std::string csv = (fs::path(p.out_dir) / "quality.csv").string();
-  write_quality_csv(csv, scene, rows);
+  write_quality_csv(csv, names, rows);
   std::printf("%s\n", csv.c_str());
   // Histograms of every triangle's smallest angle and aspect ratio.
   const std::pair<const char*, const std::vector<double>*> plots[] = {{"min_angle", &q.min_angle},
@@ -210,8 +230,8 @@ int quality(Params& p) {
   return 0;
 }
 
-void add_common(CLI::App* cmd, Params& p) {
-  cmd->add_option("SCENE", p.scene, "scene file (OBJ + MTL)")->required()->check(CLI::ExistingFile);
+void add_common(CLI::App* cmd, Params& p, const char* scene_help = "scene file (OBJ + MTL)") {
+  cmd->add_option("SCENE", p.scene, scene_help)->required()->check(CLI::ExistingFile);
   cmd->add_option("-o,--output", p.out_dir, "output directory (created; default radmesh-out)");
   cmd->add_option("--max-edge", p.meshing.max_edge,
                   "longest mesh edge, in scene units (default 0 = scene diagonal / 12)")
@@ -219,8 +239,12 @@ void add_common(CLI::App* cmd, Params& p) {
   cmd->add_option("--min-angle", p.meshing.min_angle, "smallest triangle angle wanted, degrees (default 20)")
       ->check(CLI::Range(0.0, 30.0));
   cmd->add_option("--discontinuity", p.discontinuity,
-                  "discontinuity lines built into the initial mesh: off or contacts (default contacts)")
+                  "discontinuity lines built into the initial mesh: off, contacts (where patches meet) or "
+                  "full (contacts and the D1/D2 shadow boundaries of every emitter; default contacts)")
       ->check(CLI::IsMember({"off", "contacts", "full"}));
+  cmd->add_option("--max-shadow-lines", p.meshing.shadow.max_lines_per_receiver,
+                  "with --discontinuity full: shadow-line segments kept per receiving patch (default 400)")
+      ->check(CLI::Range(0, 1000000));
   cmd->add_flag("-q,--quiet", p.quiet, "no progress on stderr");
 }
 
@@ -259,7 +283,7 @@ int main(int argc, char** argv) {
   add_common(mesh_cmd, mesh_p);
   CLI::App* quality_cmd = app.add_subcommand(
       "quality", "mesh the scene; print per-patch and total mesh quality and write quality.csv");
-  add_common(quality_cmd, quality_p);
+  add_common(quality_cmd, quality_p, "scene file (OBJ + MTL), or a mesh written by radmesh (.vtu)");
 
   try {
     app.parse(argc, argv);

@@ -52,6 +52,9 @@ nlohmann::json make_summary(const RunInfo& info, const Scene& scene, const Mesh&
                    {"elements", mesh.triangles.size()},
                    {"boundary_rounds", info.mesh_report.boundary_rounds},
                    {"contact_segments", info.mesh_report.contact_segments},
+                   {"shadow_segments", info.mesh_report.shadow_segments},
+                   {"line_crossings", info.mesh_report.crossings},
+                   {"rounding_crossings", info.mesh_report.rounding_crossings},
                    {"feature_edges", mesh.feature_edges.size()}};
   json seconds = json::object();
   double total = 0.0;
@@ -68,6 +71,23 @@ nlohmann::json make_summary(const RunInfo& info, const Scene& scene, const Mesh&
                          {"aspect_ratio_p95", percentile(quality.aspect_ratio, 0.95)},
                          {"aspect_ratio_max", percentile(quality.aspect_ratio, 1.0)}};
   doc["warnings"] = scene.report.warnings;
+  for (const std::string& w : info.mesh_report.shadow.warnings) doc["warnings"].push_back(w);
+  if (info.meshing.discontinuity == DiscontinuityMode::full) {
+    const ShadowReport& sh = info.mesh_report.shadow;
+    doc["shadow_lines"] = {{"d1_segments", sh.d1},
+                           {"d2_segments", sh.d2},
+                           {"emitters", sh.emitters},
+                           {"weak_emitters_skipped", sh.weak_emitters_skipped},
+                           {"pairs", sh.pairs},
+                           {"back_facing_pairs_skipped", sh.back_facing_pairs_skipped},
+                           {"no_occluder_pairs_skipped", sh.no_occluder_pairs_skipped},
+                           {"non_silhouette_skipped", sh.non_silhouette_skipped},
+                           {"hidden_pieces_dropped", sh.hidden_pieces_dropped},
+                           {"budget_receivers", sh.budget_receivers},
+                           {"lines_dropped_by_budget", sh.lines_dropped_by_budget},
+                           {"max_lines_per_receiver", info.meshing.shadow.max_lines_per_receiver},
+                           {"left_out", "EEE events (critical surfaces of three edges) are not computed"}};
+  }
 
   json patches = json::array();
   std::vector<Rgb> mean;
@@ -109,14 +129,17 @@ nlohmann::json make_summary(const RunInfo& info, const Scene& scene, const Mesh&
   return doc;
 }
 
-void write_quality_csv(const std::string& path, const Scene& scene, const std::vector<PatchQuality>& rows) {
+void write_quality_csv(const std::string& path, const std::vector<std::string>& patch_names,
+                       const std::vector<PatchQuality>& rows) {
   write_file_atomically(path, [&](std::ostream& out) {
-    out << "patch_id,name,triangles,min_angle,max_angle,aspect_p50,aspect_p95,aspect_max,contact_segments,zero_area\n";
+    out << "patch_id,name,triangles,min_angle,max_angle,aspect_p50,aspect_p95,aspect_max,contact_segments,"
+           "d1_segments,d2_segments,zero_area\n";
     out.precision(8);
     for (const PatchQuality& r : rows)
-      out << r.patch << ',' << (r.patch < 0 ? std::string("total") : scene.patches[static_cast<size_t>(r.patch)].name)
+      out << r.patch << ',' << (r.patch < 0 ? std::string("total") : patch_names.at(static_cast<size_t>(r.patch)))
           << ',' << r.triangles << ',' << r.min_angle << ',' << r.max_angle << ',' << r.aspect_p50 << ','
-          << r.aspect_p95 << ',' << r.aspect_max << ',' << r.contact_segments << ',' << r.zero_area << '\n';
+          << r.aspect_p95 << ',' << r.aspect_max << ',' << r.contact_segments << ',' << r.d1_segments << ','
+          << r.d2_segments << ',' << r.zero_area << '\n';
   });
 }
 

@@ -32,8 +32,9 @@ nlohmann::json make_summary(const RunInfo& info, const Scene& scene, const Mesh&
 
 // quality.csv: one row per patch and a total row (patch_id -1, name "total"):
 // patch_id,name,triangles,min_angle,max_angle,aspect_p50,aspect_p95,aspect_max,
-// contact_segments,zero_area. Written atomically. Throws IoError.
-void write_quality_csv(const std::string& path, const Scene& scene, const std::vector<PatchQuality>& rows);
+// contact_segments,d1_segments,d2_segments,zero_area. Written atomically. Throws IoError.
+void write_quality_csv(const std::string& path, const std::vector<std::string>& patch_names,
+                       const std::vector<PatchQuality>& rows);
 
 // Writes JSON atomically (tmp + rename). Throws IoError.
 void write_json(const std::string& path, const nlohmann::json& doc);

@@ -15,9 +15,13 @@
 #include <vtkPointData.h>
 #include <vtkPoints.h>
 #include <vtkUnstructuredGrid.h>
+#include <vtkXMLUnstructuredGridReader.h>
 #include <vtkXMLUnstructuredGridWriter.h>
+#include <vtkSmartPointer.h>
 
 #include <array>
+#include <cmath>
+#include <filesystem>
 #include <ostream>
 #include <string>
 #include <vector>
@@ -168,8 +172,9 @@ void write_discontinuities_vtu(const std::string& path, const std::vector<Discon
   vtkNew<vtkPoints> points;
   points->SetDataTypeToDouble();
   vtkNew<vtkCellArray> lines;
-  vtkNew<vtkIntArray> kind, emitter, patch, other;
+  vtkNew<vtkIntArray> kind, event, emitter, patch, other;
   kind->SetName("kind");
+  event->SetName("event");
   emitter->SetName("emitter");
   patch->SetName("patch_id");
   other->SetName("other_patch");
@@ -178,14 +183,16 @@ void write_discontinuities_vtu(const std::string& path, const std::vector<Discon
                               points->InsertNextPoint(d.b.x, d.b.y, d.b.z)};
     lines->InsertNextCell(2, ids);
     kind->InsertNextValue(d.kind);
-    emitter->InsertNextValue(d.kind == 0 ? -1 : d.other);  // contacts have no emitter
+    event->InsertNextValue(static_cast<int>(d.event));
+    emitter->InsertNextValue(d.emitter);
     patch->InsertNextValue(d.patch);
     other->InsertNextValue(d.other);
   }
   vtkNew<vtkUnstructuredGrid> grid;
   grid->SetPoints(points);
   grid->SetCells(VTK_LINE, lines);
-  for (vtkIntArray* a : {kind.Get(), emitter.Get(), patch.Get(), other.Get()}) grid->GetCellData()->AddArray(a);
+  for (vtkIntArray* a : {kind.Get(), event.Get(), emitter.Get(), patch.Get(), other.Get()})
+    grid->GetCellData()->AddArray(a);
   write_grid(path, grid);
 }
 
@@ -194,6 +201,87 @@ void write_mesh_vtu(const std::string& path, const Scene& scene, const Mesh& mes
   auto grid = triangle_grid(path, mesh.positions, mesh.triangles);
   add_mesh_cell_data(path, grid->GetCellData(), scene, mesh, quality);
   write_grid(path, grid);
+}
+
+namespace {
+
+vtkSmartPointer<vtkUnstructuredGrid> read_grid(const std::string& path) {
+  if (!std::filesystem::is_regular_file(path)) throw IoError(path + ": no such file");
+  vtkNew<vtkXMLUnstructuredGridReader> reader;
+  reader->SetFileName(path.c_str());
+  reader->Update();
+  vtkUnstructuredGrid* grid = reader->GetOutput();
+  if (reader->GetErrorCode() != 0 || grid == nullptr || grid->GetNumberOfPoints() == 0)
+    throw IoError(path + ": not a VTK XML unstructured grid (.vtu) with points");
+  return grid;
+}
+
+vtkDataArray* int_cell_array(const std::string& path, vtkUnstructuredGrid* grid, const char* name) {
+  vtkDataArray* a = grid->GetCellData()->GetArray(name);
+  if (a == nullptr || a->GetNumberOfComponents() != 1 || a->GetNumberOfTuples() != grid->GetNumberOfCells())
+    throw IoError(path + ": cell array '" + name + "' missing or of the wrong size");
+  return a;
+}
+
+}  // namespace
+
+Mesh read_mesh_vtu(const std::string& path) {
+  auto grid = read_grid(path);
+  vtkDataArray* patch = int_cell_array(path, grid, "patch_id");
+  Mesh mesh;
+  for (vtkIdType i = 0; i < grid->GetNumberOfPoints(); ++i) {
+    double p[3];
+    grid->GetPoint(i, p);
+    if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2]))
+      throw IoError(path + ": point " + std::to_string(i) + " is not finite");
+    mesh.positions.emplace_back(p[0], p[1], p[2]);
+  }
+  for (vtkIdType c = 0; c < grid->GetNumberOfCells(); ++c) {
+    vtkIdType n = 0;
+    const vtkIdType* ids = nullptr;
+    grid->GetCellPoints(c, n, ids);
+    if (grid->GetCellType(c) != VTK_TRIANGLE || n != 3)
+      throw IoError(path + ": cell " + std::to_string(c) + " is not a triangle");
+    const double pid = patch->GetTuple1(c);
+    if (!(pid >= 0.0) || pid != std::floor(pid))
+      throw IoError(path + ": cell " + std::to_string(c) + " has patch_id " + std::to_string(pid));
+    mesh.triangles.push_back({static_cast<int>(ids[0]), static_cast<int>(ids[1]), static_cast<int>(ids[2])});
+    mesh.patch.push_back(static_cast<int>(pid));
+  }
+  return mesh;
+}
+
+std::vector<DiscontinuitySegment> read_discontinuities_vtu(const std::string& path) {
+  auto grid = read_grid(path);
+  vtkDataArray* kind = int_cell_array(path, grid, "kind");
+  vtkDataArray* patch = int_cell_array(path, grid, "patch_id");
+  vtkDataArray* other = int_cell_array(path, grid, "other_patch");
+  vtkDataArray* emitter = int_cell_array(path, grid, "emitter");
+  vtkDataArray* event = grid->GetCellData()->GetArray("event");
+  std::vector<DiscontinuitySegment> out;
+  for (vtkIdType c = 0; c < grid->GetNumberOfCells(); ++c) {
+    vtkIdType n = 0;
+    const vtkIdType* ids = nullptr;
+    grid->GetCellPoints(c, n, ids);
+    if (grid->GetCellType(c) != VTK_LINE || n != 2)
+      throw IoError(path + ": cell " + std::to_string(c) + " is not a line");
+    const double k = kind->GetTuple1(c);
+    if (k != 0.0 && k != 1.0 && k != 2.0)
+      throw IoError(path + ": cell " + std::to_string(c) + " has kind " + std::to_string(k));
+    DiscontinuitySegment d;
+    d.kind = static_cast<int>(k);
+    d.event = event ? static_cast<VisualEvent>(static_cast<int>(event->GetTuple1(c))) : VisualEvent::contact;
+    d.patch = static_cast<int>(patch->GetTuple1(c));
+    d.other = static_cast<int>(other->GetTuple1(c));
+    d.emitter = static_cast<int>(emitter->GetTuple1(c));
+    double a[3], b[3];
+    grid->GetPoint(ids[0], a);
+    grid->GetPoint(ids[1], b);
+    d.a = Vec3(a[0], a[1], a[2]);
+    d.b = Vec3(b[0], b[1], b[2]);
+    out.push_back(d);
+  }
+  return out;
 }
 
 }  // namespace radmesh

@@ -23,9 +23,19 @@ void write_vtu(const std::string& path, const Scene& scene, const Mesh& mesh,
                const TriangleQuality& quality, const Solution& solution);
 
 // The discontinuity lines as a line dataset (VTK_LINE cells) with cell data
-// kind (0 = D0 contact, 1 = D1, 2 = D2), emitter (-1 for contacts), patch_id
-// (the patch the line lies on) and other_patch (the patch that causes it).
+// kind (0 = D0 contact, 1 = D1, 2 = D2), event (0 = contact, 1 = emitter
+// vertex - occluder edge, 2 = occluder vertex - emitter edge), emitter (-1
+// for contacts), patch_id (the patch the line lies on) and other_patch (the
+// patch that causes it: the touching patch or the occluder).
 void write_discontinuities_vtu(const std::string& path, const std::vector<DiscontinuitySegment>& segments);
+
+// Reads back a mesh written by write_mesh_vtu or write_vtu (points, triangles,
+// cell array patch_id) for `radmesh quality MESH.vtu`. Throws IoError naming
+// the file and the bad cell when it is not such a mesh.
+Mesh read_mesh_vtu(const std::string& path);
+
+// Reads back a line dataset written by write_discontinuities_vtu.
+std::vector<DiscontinuitySegment> read_discontinuities_vtu(const std::string& path);
 
 // Mesh only (radmesh mesh): points Mesh::positions, triangles Mesh::triangles,
 // cell data patch_id, area, min_angle, aspect_ratio, reflectance, emission.

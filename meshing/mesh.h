@@ -33,11 +33,16 @@ struct MeshingOptions {
   double min_angle = 20.0;
   // Discontinuity lines made mesh edges before refinement (see discontinuity.h).
   DiscontinuityMode discontinuity = DiscontinuityMode::contacts;
+  ShadowOptions shadow;  // used with DiscontinuityMode::full
 };
 
 struct MeshReport {
   int boundary_rounds = 0;     // rounds needed to agree on shared boundary vertices
   int contact_segments = 0;    // D0 segments inserted as constraints
+  int shadow_segments = 0;     // D1/D2 segments inserted as constraints
+  int crossings = 0;           // exact crossings between lines, where both were split
+  int rounding_crossings = 0;  // crossings CGAL still found after rounding (0 expected)
+  ShadowReport shadow;         // what the shadow-line pass did and skipped
   std::vector<DiscontinuitySegment> discontinuities;  // the lines inserted, for export
 };
 
@@ -74,10 +79,12 @@ struct PatchQuality {
   double min_angle = 0.0, max_angle = 0.0;                    // degrees, extremes
   double aspect_p50 = 0.0, aspect_p95 = 0.0, aspect_max = 0.0;
   int contact_segments = 0;  // D0 constraint segments on the patch
+  int d1_segments = 0;       // D1 shadow-boundary segments
+  int d2_segments = 0;       // D2 shadow-boundary segments
   int zero_area = 0;         // triangles of zero area
 };
-// One row per patch, then the total (patch = -1).
-std::vector<PatchQuality> patch_quality(const Scene& scene, const Mesh& mesh, const TriangleQuality& quality,
+// One row per patch (patch ids 0 .. patch_count - 1), then the total (patch = -1).
+std::vector<PatchQuality> patch_quality(int patch_count, const Mesh& mesh, const TriangleQuality& quality,
                                         const std::vector<DiscontinuitySegment>& discontinuities);
 
 }  // namespace radmesh

@@ -15,10 +15,12 @@
 #include "meshing/mesh.h"
 
 #include <CGAL/Constrained_Delaunay_triangulation_2.h>
+#include <CGAL/Constrained_triangulation_plus_2.h>
 #include <CGAL/Delaunay_mesh_face_base_2.h>
 #include <CGAL/Delaunay_mesh_size_criteria_2.h>
 #include <CGAL/Delaunay_mesh_vertex_base_2.h>
 #include <CGAL/Delaunay_mesher_2.h>
+#include <CGAL/Exact_predicates_exact_constructions_kernel.h>
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Triangulation_face_base_with_info_2.h>
 #include <CGAL/Triangulation_vertex_base_with_info_2.h>
@@ -42,7 +44,10 @@ struct VertexId {
 using Vb = CGAL::Triangulation_vertex_base_with_info_2<VertexId, K, CGAL::Delaunay_mesh_vertex_base_2<K>>;
 using Fb = CGAL::Triangulation_face_base_with_info_2<int, K, CGAL::Delaunay_mesh_face_base_2<K>>;
 using Tds = CGAL::Triangulation_data_structure_2<Vb, Fb>;
-using CDT = CGAL::Constrained_Delaunay_triangulation_2<K, Tds, CGAL::Exact_predicates_tag>;
+using CDTBase = CGAL::Constrained_Delaunay_triangulation_2<K, Tds, CGAL::Exact_predicates_tag>;
+// The constraint hierarchy lets discontinuity lines cross and overlap.
+using CDT = CGAL::Constrained_triangulation_plus_2<CDTBase>;
+using EK = CGAL::Exact_predicates_exact_constructions_kernel;
 using Criteria = CGAL::Delaunay_mesh_size_criteria_2<CDT>;
 using Mesher = CGAL::Delaunay_mesher_2<CDT, Criteria>;
 using Point2 = K::Point_2;
@@ -118,10 +123,9 @@ public:
     positions_ = scene.vertices;
     eps_ = 1e-9 * std::max(scene.diagonal(), std::numeric_limits<double>::min());
     collect_segments();
-    contacts_.resize(scene.patches.size());
     if (refine_) {
       find_overlaps();
-      if (opt.discontinuity == DiscontinuityMode::contacts) setup_contacts();
+      if (opt.discontinuity != DiscontinuityMode::off) setup_constraints();
       seed_points();
     }
   }
@@ -178,6 +182,11 @@ public:
     if (report) {
       report->boundary_rounds = rounds;
       report->contact_segments = contact_count_;
+      report->shadow_segments = shadow_count_;
+      report->crossings = crossings_;
+      report->rounding_crossings = 0;
+      for (const auto& [p, n] : rounding_crossings_) report->rounding_crossings += n;
+      report->shadow = shadow_report_;
       report->discontinuities = discontinuities_;
     }
     return mesh;
@@ -266,11 +275,19 @@ private:
     for (int r : overlaps_[s]) put(static_cast<size_t>(r));
   }
 
-  // Contact segments become constraints of their patch. Their end points get
+  // Discontinuity segments become constraints of their patch. Where two of
+  // them cross, the crossing is constructed exactly (CGAL Epeck, in the
+  // patch's plane) and rounded once; both are split there, so the CDT gets
+  // constraints that meet only at shared end points. Their end points get
   // global ids once (shared by every round) and, where they lie on the
   // patch's boundary, are shared with the neighbours like any boundary point.
-  void setup_contacts() {
-    std::vector<int> extra;  // global ids of contact points made so far
+  void setup_constraints() {
+    std::vector<DiscontinuitySegment> lines = contact_segments(scene_);
+    if (opt_.discontinuity == DiscontinuityMode::full) {
+      std::vector<DiscontinuitySegment> shadows = shadow_segments(scene_, opt_.shadow, &shadow_report_);
+      lines.insert(lines.end(), shadows.begin(), shadows.end());
+    }
+    std::vector<int> extra;  // global ids of constraint points made so far
     auto id_of = [&](const Vec3& p) {
       for (int v = 0; v < static_cast<int>(scene_.vertices.size()); ++v)
         if (glm::length(positions_[static_cast<size_t>(v)] - p) <= eps_) return v;
@@ -281,15 +298,54 @@ private:
       extra.push_back(g);
       return g;
     };
-    for (const DiscontinuitySegment& d : contact_segments(scene_)) {
-      const int a = id_of(d.a), b = id_of(d.b);
-      if (a == b) continue;
-      contacts_[static_cast<size_t>(d.patch)].push_back({a, b});
-      discontinuities_.push_back(d);
-      ++contact_count_;
-      for (int g : {a, b})
-        for (size_t s = 0; s < segments_.size(); ++s)
-          if (segments_[s].patch == d.patch) add_point(s, g, nullptr);
+    std::vector<std::vector<size_t>> by_patch(scene_.patches.size());
+    for (size_t i = 0; i < lines.size(); ++i) by_patch[static_cast<size_t>(lines[i].patch)].push_back(i);
+    for (size_t p = 0; p < by_patch.size(); ++p) {
+      if (by_patch[p].empty()) continue;
+      const Frame frame = make_frame(scene_, scene_.patches[p]);
+      // Exact crossings of the patch's lines, as parameters along each line.
+      std::vector<std::vector<std::pair<double, Vec3>>> cuts(by_patch[p].size());
+      std::vector<EK::Segment_2> seg2;
+      std::vector<K::Iso_rectangle_2> box;
+      for (size_t i : by_patch[p]) {
+        const Point2 a = frame.to2(lines[i].a), b = frame.to2(lines[i].b);
+        seg2.emplace_back(EK::Point_2(a.x(), a.y()), EK::Point_2(b.x(), b.y()));
+        box.emplace_back(std::min(a.x(), b.x()), std::min(a.y(), b.y()), std::max(a.x(), b.x()),
+                         std::max(a.y(), b.y()));
+      }
+      for (size_t i = 0; i < seg2.size(); ++i)
+        for (size_t j = i + 1; j < seg2.size(); ++j) {
+          if (!CGAL::do_overlap(box[i].bbox(), box[j].bbox())) continue;
+          const auto hit = CGAL::intersection(seg2[i], seg2[j]);
+          if (!hit) continue;
+          const EK::Point_2* x = boost::get<EK::Point_2>(&*hit);
+          if (!x) continue;  // collinear overlap: the constraint hierarchy handles it
+          const Vec3 q = frame.to3(Point2(CGAL::to_double(x->x()), CGAL::to_double(x->y())));
+          for (size_t k : {i, j}) {
+            const DiscontinuitySegment& d = lines[by_patch[p][k]];
+            const double t = glm::dot(q - d.a, d.b - d.a) / glm::dot(d.b - d.a, d.b - d.a);
+            if (glm::length(q - d.a) > eps_ && glm::length(q - d.b) > eps_) cuts[k].push_back({t, q});
+          }
+          ++crossings_;
+        }
+      for (size_t k = 0; k < by_patch[p].size(); ++k) {
+        const DiscontinuitySegment& d = lines[by_patch[p][k]];
+        auto& c = cuts[k];
+        c.push_back({0.0, d.a});
+        c.push_back({1.0, d.b});
+        std::sort(c.begin(), c.end(), [](auto& x, auto& y) { return x.first < y.first; });
+        int prev = id_of(c[0].second);
+        for (size_t i = 1; i < c.size(); ++i) {
+          const int cur = id_of(c[i].second);
+          if (cur != prev) constraints_[p].push_back({prev, cur, d.kind});
+          prev = cur;
+        }
+        for (int g : {id_of(d.a), id_of(d.b)})
+          for (size_t s = 0; s < segments_.size(); ++s)
+            if (segments_[s].patch == static_cast<int>(p)) add_point(s, g, nullptr);
+        discontinuities_.push_back(d);
+        ++(d.kind == 0 ? contact_count_ : shadow_count_);
+      }
     }
   }
 
@@ -375,23 +431,52 @@ private:
         prev = cur;
       }
     }
-    std::vector<std::pair<Point2, Point2>> contact2;
-    for (const auto& [a, b] : contacts_[static_cast<size_t>(p)]) {
+    struct Line2 {
+      K::Segment_2 seg;
+      CGAL::Bbox_2 box;
+      int kind;
+    };
+    std::vector<Line2> lines2;
+    for (const auto& [a, b, kind] : constraints_[static_cast<size_t>(p)]) {
       CDT::Vertex_handle va = insert_vertex(a), vb = insert_vertex(b);
       if (va != vb) cdt.insert_constraint(va, vb);
-      contact2.push_back({va->point(), vb->point()});
+      const K::Segment_2 seg(va->point(), vb->point());
+      lines2.push_back({seg, seg.bbox(), kind});
     }
-    // A constrained edge is on the boundary unless both its ends lie on one
-    // contact segment (points the mesher adds on a contact lie on it too).
+    // The rounded end points must not make lines cross anywhere but at
+    // their shared ends: CGAL would then add a crossing vertex (counted; the
+    // triangulation stays valid, as it uses exact predicates).
+    int& extra_crossings = rounding_crossings_[p];
+    extra_crossings = 0;
+    for (auto v = cdt.finite_vertices_begin(); v != cdt.finite_vertices_end(); ++v)
+      if (v->info().id < 0) ++extra_crossings;
+    if (!cdt.is_valid()) {
+      std::ostringstream m;
+      m << where(patch.file, patch.line) << "face '" << patch.name
+        << "': the triangulation with its discontinuity lines is not valid after rounding";
+      throw GeometryError(m.str());
+    }
+    // The kind of discontinuity line an edge lies on (both ends on one line;
+    // points the mesher adds on a line lie on it too), or -1 for none.
     const double tol2 = std::pow(1e-9 * scene_.diagonal(), 2);
-    auto on_boundary = [&](const CDT::Edge& e) {
-      const Point2& p0 = e.first->vertex(CDT::cw(e.second))->point();
-      const Point2& p1 = e.first->vertex(CDT::ccw(e.second))->point();
-      for (const auto& [c0, c1] : contact2) {
-        const K::Segment_2 seg(c0, c1);
-        if (CGAL::squared_distance(p0, seg) <= tol2 && CGAL::squared_distance(p1, seg) <= tol2) return false;
+    auto line_kind = [&](const Point2& p0, const Point2& p1) {
+      const CGAL::Bbox_2 eb = p0.bbox() + p1.bbox();
+      for (const Line2& l : lines2) {
+        if (eb.xmax() + 1e-9 * scene_.diagonal() < l.box.xmin() || l.box.xmax() < eb.xmin() - 1e-9 * scene_.diagonal() ||
+            eb.ymax() + 1e-9 * scene_.diagonal() < l.box.ymin() || l.box.ymax() < eb.ymin() - 1e-9 * scene_.diagonal())
+          continue;
+        if (CGAL::squared_distance(p0, l.seg) <= tol2 && CGAL::squared_distance(p1, l.seg) <= tol2) return l.kind;
       }
-      return true;
+      return -1;
+    };
+    auto edge_points = [](const CDT::Edge& e) {
+      return std::pair<Point2, Point2>(e.first->vertex(CDT::cw(e.second))->point(),
+                                       e.first->vertex(CDT::ccw(e.second))->point());
+    };
+    // A constrained edge is on the patch boundary unless it lies on a line.
+    auto on_boundary = [&](const CDT::Edge& e) {
+      const auto [p0, p1] = edge_points(e);
+      return line_kind(p0, p1) < 0;
     };
     mark_domain(cdt, on_boundary);
 
@@ -433,13 +518,16 @@ private:
       v->info().id = g;
     }
 
-    // Constrained edges with the domain on both sides lie on discontinuity lines.
+    // Constrained edges with the domain on both sides lie on discontinuity
+    // lines; those on contact lines (the value jumps) become feature edges.
     auto& features = features_[p];
     features.clear();
     for (auto e = cdt.finite_edges_begin(); e != cdt.finite_edges_end(); ++e) {
       if (!cdt.is_constrained(*e)) continue;
       const CDT::Face_handle f = e->first, g = f->neighbor(e->second);
       if (!f->is_in_domain() || cdt.is_infinite(g) || !g->is_in_domain()) continue;
+      const auto [p0, p1] = edge_points(*e);
+      if (line_kind(p0, p1) != 0) continue;
       const int a = f->vertex(CDT::cw(e->second))->info().id, b = f->vertex(CDT::ccw(e->second))->info().id;
       features.push_back({std::min(a, b), std::max(a, b)});
     }
@@ -502,9 +590,11 @@ private:
   };
   std::vector<Pending> pending_;
   std::map<int, int> alias_;  // duplicate boundary point -> the one kept
-  std::vector<std::vector<std::array<int, 2>>> contacts_;   // per patch: constraint segments
+  std::map<size_t, std::vector<std::array<int, 3>>> constraints_;  // per patch: (a, b, kind) line pieces
   std::map<int, std::vector<std::array<int, 2>>> features_;  // per patch: discontinuity edges
-  int contact_count_ = 0;
+  int contact_count_ = 0, shadow_count_ = 0, crossings_ = 0;
+  std::map<int, int> rounding_crossings_;  // per patch, from its last meshing round
+  ShadowReport shadow_report_;
   std::vector<DiscontinuitySegment> discontinuities_;
 };
 

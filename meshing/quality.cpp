@@ -52,9 +52,9 @@ double percentile(std::vector<double> v, double q) {
   return v[k];
 }
 
-std::vector<PatchQuality> patch_quality(const Scene& scene, const Mesh& mesh, const TriangleQuality& quality,
+std::vector<PatchQuality> patch_quality(int patch_count, const Mesh& mesh, const TriangleQuality& quality,
                                         const std::vector<DiscontinuitySegment>& discontinuities) {
-  const size_t np = scene.patches.size();
+  const size_t np = static_cast<size_t>(std::max(patch_count, 0));
   std::vector<std::vector<int>> tris(np + 1);  // last: all
   for (int t = 0; t < mesh.triangle_count(); ++t) {
     tris[static_cast<size_t>(mesh.patch[static_cast<size_t>(t)])].push_back(t);
@@ -78,7 +78,7 @@ std::vector<PatchQuality> patch_quality(const Scene& scene, const Mesh& mesh, co
     r.aspect_p95 = percentile(aspect, 0.95);
     r.aspect_max = percentile(aspect, 1.0);
     for (const DiscontinuitySegment& d : discontinuities)
-      if (d.kind == 0 && (r.patch < 0 || d.patch == r.patch)) ++r.contact_segments;
+      if (r.patch < 0 || d.patch == r.patch) ++(d.kind == 0 ? r.contact_segments : d.kind == 1 ? r.d1_segments : r.d2_segments);
     rows.push_back(r);
   }
   return rows;

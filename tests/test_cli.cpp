@@ -139,7 +139,7 @@ TEST(Cli, QualityWritesOneRowPerPatchAndATotal) {
   std::ifstream csv(out / "quality.csv");
   std::string line;
   std::getline(csv, line);
-  EXPECT_EQ(line, "patch_id,name,triangles,min_angle,max_angle,aspect_p50,aspect_p95,aspect_max,contact_segments,zero_area");
+  EXPECT_EQ(line, "patch_id,name,triangles,min_angle,max_angle,aspect_p50,aspect_p95,aspect_max,contact_segments,d1_segments,d2_segments,zero_area");
   int rows = 0, sum = 0, total = -1, floor_contacts = -1;
   while (std::getline(csv, line)) {
     std::vector<std::string> f;

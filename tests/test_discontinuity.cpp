@@ -18,6 +18,7 @@
 
 #include <algorithm>
 #include <filesystem>
+#include <map>
 #include <set>
 
 using namespace radmesh;
@@ -173,10 +174,10 @@ TEST(Contacts, APiercingWallCutsTheFloorAlongTheIntersection) {
   }
 }
 
-TEST(Contacts, ModeNamesAreCheckedAndFullIsRefusedForNow) {
+TEST(Contacts, ModeNamesAreChecked) {
   EXPECT_EQ(parse_discontinuity_mode("off"), DiscontinuityMode::off);
   EXPECT_EQ(parse_discontinuity_mode("contacts"), DiscontinuityMode::contacts);
-  EXPECT_THROW(parse_discontinuity_mode("full"), InputError);
+  EXPECT_EQ(parse_discontinuity_mode("full"), DiscontinuityMode::full);
   EXPECT_THROW(parse_discontinuity_mode("yes"), InputError);
 }
 
@@ -291,4 +292,96 @@ TEST(ContactsStress, CoordinatesAroundAMillionWithFeaturesOfOne) {
   }
   const Solution sol = solve_matrix(s, m, {});
   for (const Rgb& b : sol.element) EXPECT_TRUE(std::isfinite(b.x));
+}
+
+namespace {
+// Triangle edges of the mesh that properly cross a discontinuity segment of
+// their own patch (in the patch's plane).
+int crossing_edges(const Scene& s, const Mesh& m, const std::vector<DiscontinuitySegment>& lines) {
+  int count = 0;
+  const double tol = 1e-10 * s.diagonal();
+  for (const DiscontinuitySegment& d : lines) {
+    const Vec3 n = s.patches[static_cast<size_t>(d.patch)].normal;
+    const Vec3 dir = d.b - d.a;
+    // Signed distance of p to the segment's line within the patch plane.
+    const Vec3 side = glm::normalize(glm::cross(n, dir));
+    for (int t = 0; t < m.triangle_count(); ++t) {
+      if (m.patch[static_cast<size_t>(t)] != d.patch) continue;
+      const auto& tri = m.triangles[static_cast<size_t>(t)];
+      for (int k = 0; k < 3; ++k) {
+        const Vec3 p = m.positions[static_cast<size_t>(tri[static_cast<size_t>(k)])];
+        const Vec3 q = m.positions[static_cast<size_t>(tri[static_cast<size_t>((k + 1) % 3)])];
+        const double sp = glm::dot(p - d.a, side), sq = glm::dot(q - d.a, side);
+        if (!((sp > tol && sq < -tol) || (sp < -tol && sq > tol))) continue;
+        // Where the edge meets the line: inside the segment (not at its ends)?
+        const Vec3 x = p + (sp / (sp - sq)) * (q - p);
+        const double u = glm::dot(x - d.a, dir) / glm::dot(dir, dir);
+        if (u * glm::length(dir) > tol && (1.0 - u) * glm::length(dir) > tol) ++count;
+      }
+    }
+  }
+  return count;
+}
+}  // namespace
+
+TEST(Shadows, BoxOnFloorPenumbraLinesMatchHandDerivedCoordinates) {
+  // Light: the square |x|, |z| <= 0.1 at y = 3 facing down; box: |x|, |z| <=
+  // 0.5, 0 <= y <= 1. From a light vertex (sx, 3, sz) the top edge x = 0.5
+  // projects to the floor at x = sx + 1.5 (0.5 - sx): 0.7 (umbra boundary,
+  // sx = 0.1) and 0.8 (outer penumbra, sx = -0.1). Every light edge is
+  // parallel to a box edge, so each critical plane holds both: all lines are
+  // D1. Each line runs over |z| <= 0.8 (its two light vertices' wedges and
+  // the box corners' VE wedges together).
+  const Scene s = read_obj_scene(kData + "/box_on_floor/box_on_floor.obj");
+  const int floor = patch_named(s, "floor"), light = patch_named(s, "light");
+  ShadowReport rep;
+  const auto lines = shadow_segments(s, {}, &rep);
+  ASSERT_FALSE(lines.empty());
+  EXPECT_EQ(rep.d2, 0);
+  EXPECT_EQ(rep.d1, static_cast<int>(lines.size()));
+  std::map<std::pair<int, int>, std::pair<double, std::pair<double, double>>> by_line;  // (axis, 10*c) -> length, extent
+  for (const DiscontinuitySegment& d : lines) {
+    EXPECT_EQ(d.patch, floor);
+    EXPECT_EQ(d.emitter, light);
+    EXPECT_EQ(d.kind, 1);
+    EXPECT_EQ(d.a.y, 0.0);
+    EXPECT_EQ(d.b.y, 0.0);
+    // Constant x (axis 0) or constant z (axis 2), at +-0.7 or +-0.8.
+    const int axis = std::abs(d.a.x - d.b.x) < 1e-15 ? 0 : 2;
+    const double c = axis == 0 ? d.a.x : d.a.z, c2 = axis == 0 ? d.b.x : d.b.z;
+    EXPECT_NEAR(c, c2, 1e-15);
+    const double k = std::round(std::abs(c) * 10.0);
+    EXPECT_TRUE(k == 7.0 || k == 8.0) << c;
+    EXPECT_NEAR(std::abs(c), k / 10.0, 1e-15);
+    const double u0 = axis == 0 ? d.a.z : d.a.x, u1 = axis == 0 ? d.b.z : d.b.x;
+    auto& entry = by_line[{axis, static_cast<int>(std::round(c * 10.0))}];
+    if (entry.first == 0.0) entry.second = {1e9, -1e9};
+    entry.first += std::abs(u1 - u0);
+    entry.second.first = std::min({entry.second.first, u0, u1});
+    entry.second.second = std::max({entry.second.second, u0, u1});
+  }
+  ASSERT_EQ(by_line.size(), 8u);
+  for (const auto& [key, entry] : by_line) {
+    EXPECT_NEAR(entry.first, 1.6, 1e-12) << "axis " << key.first << " at " << key.second / 10.0;  // no overlap
+    EXPECT_NEAR(entry.second.first, -0.8, 1e-15);
+    EXPECT_NEAR(entry.second.second, 0.8, 1e-15);
+  }
+  EXPECT_EQ(rep.back_facing_pairs_skipped, 4);  // the box's four sides face away from the light
+}
+
+TEST(Shadows, FullMeshHasNoEdgeCrossingALine) {
+  const Scene s = read_obj_scene(kData + "/box_on_floor/box_on_floor.obj");
+  MeshingOptions o;
+  o.max_edge = 0.35;
+  o.discontinuity = DiscontinuityMode::full;
+  MeshReport rep;
+  const Mesh m = mesh_scene(s, o, &rep);
+  EXPECT_EQ(rep.contact_segments, 4);
+  EXPECT_GT(rep.shadow_segments, 0);
+  EXPECT_EQ(rep.rounding_crossings, 0);
+  EXPECT_EQ(crossing_edges(s, m, rep.discontinuities), 0);
+  double area = 0.0;
+  for (int t = 0; t < m.triangle_count(); ++t)
+    if (m.patch[static_cast<size_t>(t)] == patch_named(s, "floor")) area += m.area(t);
+  EXPECT_NEAR(area, 16.0, 1e-12);
 }
