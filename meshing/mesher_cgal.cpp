@@ -8,8 +8,9 @@
 // (3) the points CGAL's mesher adds when it splits an encroached boundary
 // edge; (3) are passed to every other patch with a collinear overlapping
 // segment, which is then meshed again. This repeats until no patch gains a
-// point; the last allowed round inserts the points without refinement, so the
-// result is always conforming.
+// point; the last allowed round inserts the points without refinement (the
+// patch's interior points from its last refinement are kept), so the result
+// is always conforming.
 
 #include "meshing/errors.h"
 #include "meshing/mesh.h"
@@ -52,7 +53,7 @@ using Criteria = CGAL::Delaunay_mesh_size_criteria_2<CDT>;
 using Mesher = CGAL::Delaunay_mesher_2<CDT, Criteria>;
 using Point2 = K::Point_2;
 
-constexpr int kMaxRounds = 12;
+constexpr int kMaxRounds = 5;
 
 // One directed boundary segment of a patch loop, between global vertex ids.
 struct Segment {
@@ -437,12 +438,30 @@ private:
       int kind;
     };
     std::vector<Line2> lines2;
+    // The last round (no refinement) keeps the patch's interior points from
+    // its last refined mesh; those the mesher put on a line are chained into
+    // it, so the line is not crossed by a sliver.
+    const std::vector<Steiner>& kept = refine ? std::vector<Steiner>{} : steiner_[p];
+    const double on_tol = 1e-7 * scene_.diagonal();
     for (const auto& [a, b, kind] : constraints_[static_cast<size_t>(p)]) {
       CDT::Vertex_handle va = insert_vertex(a), vb = insert_vertex(b);
-      if (va != vb) cdt.insert_constraint(va, vb);
       const K::Segment_2 seg(va->point(), vb->point());
+      std::vector<std::pair<double, int>> chain;
+      for (const Steiner& st : kept)
+        if (st.on_line && CGAL::squared_distance(st.q, seg) <= on_tol * on_tol)
+          chain.push_back({std::sqrt(CGAL::squared_distance(st.q, va->point())), st.id});
+      std::sort(chain.begin(), chain.end());
+      CDT::Vertex_handle prev = va;
+      for (const auto& [d, g] : chain) {
+        CDT::Vertex_handle cur = insert_vertex(g);
+        if (cur != prev) cdt.insert_constraint(prev, cur);
+        prev = cur;
+      }
+      if (prev != vb) cdt.insert_constraint(prev, vb);
       lines2.push_back({seg, seg.bbox(), kind});
     }
+    for (const Steiner& st : kept)
+      if (!st.on_line) insert_vertex(st.id);
     // The rounded end points must not make lines cross anywhere but at
     // their shared ends: CGAL would then add a crossing vertex (counted; the
     // triangulation stays valid, as it uses exact predicates).
@@ -489,7 +508,9 @@ private:
     }
 
     // Global ids for new vertices. Those on a boundary segment get the
-    // segment's exact 3-D point and are shared.
+    // segment's exact 3-D point and are shared; the others are remembered
+    // for a last round without refinement.
+    std::vector<Steiner> steiner;
     for (auto v = cdt.finite_vertices_begin(); v != cdt.finite_vertices_end(); ++v) {
       if (v->info().id >= 0) continue;
       const Vec3 p3 = frame.to3(v->point());
@@ -514,9 +535,12 @@ private:
         pending_.push_back({static_cast<size_t>(best), g, p});
       } else {
         positions_.push_back(p3);
+        steiner.push_back({g, v->point(), is_on_constraint(cdt, v)});
       }
       v->info().id = g;
     }
+
+    if (refine) steiner_[p] = std::move(steiner);
 
     // Constrained edges with the domain on both sides lie on discontinuity
     // lines; those on contact lines (the value jumps) become feature edges.
@@ -593,7 +617,13 @@ private:
   std::map<size_t, std::vector<std::array<int, 3>>> constraints_;  // per patch: (a, b, kind) line pieces
   std::map<int, std::vector<std::array<int, 2>>> features_;  // per patch: discontinuity edges
   int contact_count_ = 0, shadow_count_ = 0, crossings_ = 0;
-  std::map<int, int> rounding_crossings_;  // per patch, from its last meshing round
+  std::map<int, int> rounding_crossings_;
+  struct Steiner {
+    int id;
+    Point2 q;
+    bool on_line;  // on a discontinuity line
+  };
+  std::map<int, std::vector<Steiner>> steiner_;  // per patch: interior points of its last refinement
   ShadowReport shadow_report_;
   std::vector<DiscontinuitySegment> discontinuities_;
 };

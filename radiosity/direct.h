@@ -1,0 +1,56 @@
+// Exact direct illumination with shadows: the reference that meshing error
+// is measured against, apart from any solver error.
+#pragma once
+
+#include "meshing/geometry.h"
+#include "meshing/mesh.h"
+#include "meshing/scene.h"
+
+#include <memory>
+#include <vector>
+
+namespace radmesh {
+
+// For a point x on a receiver, every emitter polygon is clipped against the
+// occluders as seen from x: each occluder triangle is clipped to the pyramid
+// from x over the emitter and to the slab between x and the emitter plane,
+// projected from x into the emitter's plane, and the union of these shadows
+// is subtracted from the emitter polygon (exact 2-D Boolean operations,
+// CGAL Epeck, in the emitter's plane). Lambert's contour formula applied to
+// what is left gives the exact unoccluded-part form factor; rounding happens
+// only when the visible polygon is turned back into doubles for that formula.
+class DirectIllumination {
+public:
+  explicit DirectIllumination(const Scene& scene);
+  ~DirectIllumination();
+  DirectIllumination(const DirectIllumination&) = delete;
+  DirectIllumination& operator=(const DirectIllumination&) = delete;
+
+  // Form factor from a differential area at x (unit normal n, on patch
+  // `receiver`, whose own triangles are not occluders) to the part of emitter
+  // patch `emitter` that x sees.
+  double visible_form_factor(const Vec3& x, const Vec3& n, int receiver, int emitter) const;
+
+  // The same with nothing occluding (Lambert's closed form for the polygon).
+  double unoccluded_form_factor(const Vec3& x, const Vec3& n, int emitter) const;
+
+  // Direct radiosity reflected at x on `patch`: rho * sum over emitters of
+  // E_emitter * visible_form_factor (per channel). Emission of `patch`
+  // itself is not included.
+  Rgb reflected(const Vec3& x, int patch) const;
+
+  const std::vector<int>& emitters() const;
+
+private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+// The direct field of a mesh as a per-vertex linear interpolant: the exact
+// reflected direct radiosity at every triangle corner (taken a hair inside
+// the triangle, so a corner on a contact line gets the value of its own
+// side). Per triangle, three corners. Runs in parallel.
+std::vector<std::array<Rgb, 3>> direct_corner_values(const DirectIllumination& direct, const Scene& scene,
+                                                     const Mesh& mesh);
+
+}  // namespace radmesh

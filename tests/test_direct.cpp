@@ -1,0 +1,120 @@
+// The exact direct-illumination reference against closed forms and
+// hand-computed shadows.
+
+#include "io/obj_reader.h"
+#include "meshing/mesh.h"
+#include "radiosity/direct.h"
+#include "radiosity/error_metric.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+
+using namespace radmesh;
+
+namespace {
+const std::string kData = RADMESH_TEST_DATA;
+
+int patch_named(const Scene& s, const std::string& name) {
+  for (size_t p = 0; p < s.patches.size(); ++p)
+    if (s.patches[p].name == name) return static_cast<int>(p);
+  return -1;
+}
+
+// Form factor from a differential area to a parallel a x b rectangle at
+// distance c, the area lying under one of its corners (Howell's catalogue B-3).
+double corner_rectangle(double a, double b, double c) {
+  const double A = a / c, B = b / c;
+  const double sa = std::sqrt(1.0 + A * A), sb = std::sqrt(1.0 + B * B);
+  return (A / sa * std::atan(B / sa) + B / sb * std::atan(A / sb)) / (2.0 * std::numbers::pi);
+}
+// A point at (px, 0, 0) under a rectangle x in [x0, x1], |z| <= h at height c:
+// sums and differences of corner rectangles.
+double strip(double px, double x0, double x1, double h, double c) {
+  auto f = [&](double x) {  // signed: rectangle from px to x
+    const double a = std::abs(x - px);
+    return (x >= px ? 1.0 : -1.0) * 2.0 * corner_rectangle(a, h, c);
+  };
+  return std::abs(f(x1) - f(x0));
+}
+}  // namespace
+
+class BoxOnFloor : public ::testing::Test {
+protected:
+  BoxOnFloor() : s(read_obj_scene(kData + "/box_on_floor/box_on_floor.obj")), direct(s) {
+    floor = patch_named(s, "floor");
+    light = patch_named(s, "light");
+  }
+  Scene s;
+  DirectIllumination direct;
+  int floor = -1, light = -1;
+  const Vec3 up{0.0, 1.0, 0.0};
+};
+
+TEST_F(BoxOnFloor, UnoccludedPointsMatchTheClosedForm) {
+  // Light |x|, |z| <= 0.1 at height 3. Beyond x = 0.8 nothing occludes.
+  for (double px : {0.85, 1.0, 1.5, 1.99}) {
+    const Vec3 x(px, 0.0, 0.0);
+    const double expected = strip(px, -0.1, 0.1, 0.1, 3.0);
+    EXPECT_NEAR(direct.visible_form_factor(x, up, floor, light), expected, 1e-15) << px;
+    EXPECT_NEAR(direct.unoccluded_form_factor(x, up, light), expected, 1e-15) << px;
+  }
+  // Straight under the light the box hides all of it; unoccluded it is four corners.
+  EXPECT_NEAR(direct.unoccluded_form_factor(Vec3(0.0, 0.0, 0.0), up, light), 4.0 * corner_rectangle(0.1, 0.1, 3.0),
+              1e-15);
+}
+
+TEST_F(BoxOnFloor, UmbraIsExactlyBlack) {
+  for (double px : {0.55, 0.6, 0.69}) EXPECT_EQ(direct.visible_form_factor(Vec3(px, 0.0, 0.0), up, floor, light), 0.0);
+  EXPECT_EQ(direct.visible_form_factor(Vec3(0.6, 0.0, 0.3), up, floor, light), 0.0);
+}
+
+TEST_F(BoxOnFloor, PenumbraMatchesTheHandComputedVisiblePart) {
+  // From (0.75, 0, 0) the box's top edge (x = 0.5, y = 1) projects onto the
+  // light's plane at x = 0.75 - 3 * 0.25 = 0: only the strip x in [0, 0.1]
+  // of the light is visible (the box spans |z| <= 0.5, wider than the shadow).
+  const double f = direct.visible_form_factor(Vec3(0.75, 0.0, 0.0), up, floor, light);
+  EXPECT_NEAR(f, strip(0.75, 0.0, 0.1, 0.1, 3.0), 1e-15);
+  // General point: from (px, 0, 0) the edge projects to x = px - 3 (px - 0.5).
+  for (double px : {0.71, 0.73, 0.78, 0.79}) {
+    const double cut = px - 3.0 * (px - 0.5);
+    EXPECT_NEAR(direct.visible_form_factor(Vec3(px, 0.0, 0.0), up, floor, light), strip(px, cut, 0.1, 0.1, 3.0), 1e-15)
+        << px;
+  }
+  // Reflected radiosity: rho * E * F.
+  const Rgb b = direct.reflected(Vec3(0.75, 0.0, 0.0), floor);
+  const Material& white = s.materials[static_cast<size_t>(s.patches[static_cast<size_t>(floor)].material)];
+  const Material& lamp = s.materials[static_cast<size_t>(s.patches[static_cast<size_t>(light)].material)];
+  EXPECT_NEAR(b.x, white.reflectance.x * lamp.emission.x * f, 1e-13);
+}
+
+TEST_F(BoxOnFloor, LinearInterpolantErrorFallsWithTheMesh) {
+  // The meshing error measured against the exact reference: a finer mesh
+  // must be closer, and a mesh with the shadow lines closer than one without.
+  const auto samples = surface_samples(s, 400);
+  std::vector<Rgb> exact;
+  for (const SurfaceSample& q : samples) exact.push_back(direct.reflected(q.x, q.patch));
+  auto error = [&](double edge, DiscontinuityMode mode) {
+    MeshingOptions o;
+    o.max_edge = edge;
+    o.discontinuity = mode;
+    const Mesh m = mesh_scene(s, o);
+    const auto corners = direct_corner_values(direct, s, m);
+    NodalField f;
+    for (int t = 0; t < m.triangle_count(); ++t) {
+      std::array<int, 3> c{};
+      for (int k = 0; k < 3; ++k) {
+        c[static_cast<size_t>(k)] = static_cast<int>(f.points.size());
+        f.points.push_back(m.positions[static_cast<size_t>(m.triangles[static_cast<size_t>(t)][static_cast<size_t>(k)])]);
+        f.radiosity.push_back(corners[static_cast<size_t>(t)][static_cast<size_t>(k)]);
+      }
+      f.corners.push_back(c);
+    }
+    return field_error(samples, interpolate_nodal(s, m, f, samples), exact).l2;
+  };
+  const double coarse = error(0.5, DiscontinuityMode::contacts), fine = error(0.25, DiscontinuityMode::contacts);
+  const double full = error(0.5, DiscontinuityMode::full);
+  EXPECT_LT(fine, coarse);
+  EXPECT_LT(full, coarse);
+}
