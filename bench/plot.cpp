@@ -74,7 +74,7 @@ struct Extent {
 // the extents; null when none.
 vtkSmartPointer<vtkTable> series_table(const Series& s, Extent& x_extent, Extent& y_extent) {
   vtkNew<vtkDoubleArray> x;
-  x->SetName("wall time [s]");
+  x->SetName("x");
   vtkNew<vtkDoubleArray> y;
   y->SetName(s.name.c_str());
   for (std::size_t i = 0; i < s.x.size(); ++i) {
@@ -116,7 +116,7 @@ void style_axis(vtkAxis* axis, const std::string& title, const Extent& extent) {
 }  // namespace
 
 bool plot_error_vs_time(const std::string& path, const std::string& title, const std::string& y_label,
-                        const std::vector<Series>& series, std::string* why) {
+                        const std::vector<Series>& series, std::string* why, const std::string& x_label) {
   for (const Series& s : series) {
     if (s.x.size() != s.y.size()) {
       throw InputError("plot " + path + ": series \"" + s.name + "\" has " +
@@ -158,7 +158,7 @@ bool plot_error_vs_time(const std::string& path, const std::string& title, const
     }
     ++drawn;
   }
-  style_axis(chart->GetAxis(vtkAxis::BOTTOM), "wall time [s]", x_extent);
+  style_axis(chart->GetAxis(vtkAxis::BOTTOM), x_label, x_extent);
   style_axis(chart->GetAxis(vtkAxis::LEFT), y_label, y_extent);
   chart->SetShowLegend(drawn > 0);
   if (drawn == 0) {  // VTK draws neither axes nor plots then: say why the picture is empty

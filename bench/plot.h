@@ -20,6 +20,7 @@ struct Series {            // one line on the plot: e.g. "cornell_box / matrix"
 // (VTK needs one); throws radmesh::InputError when a series has x and y of
 // different lengths, radmesh::IoError (meshing/errors.h) when writing fails.
 bool plot_error_vs_time(const std::string& path, const std::string& title, const std::string& y_label,
-                        const std::vector<Series>& series, std::string* why);
+                        const std::vector<Series>& series, std::string* why,
+                        const std::string& x_label = "wall time [s]");
 
 }  // namespace radmesh::bench

@@ -4,12 +4,14 @@
 // entry to `methods()` or `scenes()`.
 //
 //   radmesh_bench [--out DIR] [--scenes a,b] [--quick]
+//   radmesh_bench --direct [--out DIR] [--quick]   (meshing study: direct light only)
 //   radmesh_bench --make-reference [--max-edge L] [--rays N]   (Cornell box reference)
 
 #include "bench/plot.h"
 #include "io/atomic_file.h"
 #include "io/obj_reader.h"
 #include "meshing/errors.h"
+#include "radiosity/direct.h"
 #include "radiosity/error_metric.h"
 #include "radiosity/probe.h"
 #include "radiosity/solve.h"
@@ -209,12 +211,83 @@ int make_reference(const std::string& data, double max_edge, int rays) {
   return 0;
 }
 
+// The meshing study: the direct light reflected by every surface, exact at
+// every triangle corner (radiosity/direct.h) and interpolated linearly, against
+// the exact value at the samples. No solver is involved, so the error is the
+// mesh's alone. One row per (scene, discontinuity mode, max edge).
+int direct_study(const std::string& data, const std::string& out_dir, bool quick) {
+  struct Study {
+    std::string name, obj;
+    std::vector<double> edges;
+  };
+  std::vector<Study> studies = {
+      {"box_on_floor", "box_on_floor/box_on_floor.obj", {0.8, 0.5, 0.35, 0.25, 0.18, 0.12, 0.09, 0.065, 0.045}},
+      {"cornell_box", "cornell_box/cornell_box.obj", {160, 110, 80, 55, 40, 28, 20, 14}}};
+  if (quick)
+    for (Study& s : studies) s.edges.resize(2);
+  std::vector<bench::Series> series;
+  std::ostringstream csv;
+  csv << "scene,discontinuity,max_edge,triangles,lines,mesh_s,l2,linf,patch_mean\n";
+  for (const Study& st : studies) {
+    const Scene scene = read_obj_scene(data + "/" + st.obj);
+    const DirectIllumination direct(scene);
+    const auto samples = surface_samples(scene, kSamples);
+    std::vector<Rgb> exact(samples.size());
+    for (size_t k = 0; k < samples.size(); ++k) exact[k] = direct.reflected(samples[k].x, samples[k].patch);
+    for (DiscontinuityMode mode : {DiscontinuityMode::off, DiscontinuityMode::contacts, DiscontinuityMode::full}) {
+      bench::Series s{st.name + " " + to_string(mode), {}, {}};
+      for (double edge : st.edges) {
+        MeshingOptions mo;
+        mo.max_edge = edge;
+        mo.discontinuity = mode;
+        MeshReport rep;
+        const auto t0 = std::chrono::steady_clock::now();
+        const Mesh mesh = mesh_scene(scene, mo, &rep);
+        const double mesh_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        const auto corners = direct_corner_values(direct, scene, mesh);
+        NodalField f;
+        for (int t = 0; t < mesh.triangle_count(); ++t) {
+          std::array<int, 3> c{};
+          for (int k = 0; k < 3; ++k) {
+            c[static_cast<size_t>(k)] = static_cast<int>(f.points.size());
+            f.points.push_back(mesh.positions[static_cast<size_t>(mesh.triangles[static_cast<size_t>(t)][static_cast<size_t>(k)])]);
+            f.radiosity.push_back(corners[static_cast<size_t>(t)][static_cast<size_t>(k)]);
+          }
+          f.corners.push_back(c);
+        }
+        const FieldError e = field_error(samples, interpolate_nodal(scene, mesh, f, samples), exact);
+        const size_t lines = rep.discontinuities.size();
+        std::fprintf(stderr, "%-13s %-9s edge %-6g %7d triangles %5zu lines  mesh %7.3f s  L2 %.3e  max %.3e  patch %.3e\n",
+                     st.name.c_str(), to_string(mode), edge, mesh.triangle_count(), lines, mesh_s, e.l2, e.linf,
+                     e.patch_mean);
+        csv << st.name << ',' << to_string(mode) << ',' << edge << ',' << mesh.triangle_count() << ',' << lines << ','
+            << mesh_s << ',' << e.l2 << ',' << e.linf << ',' << e.patch_mean << '\n';
+        s.x.push_back(mesh.triangle_count());
+        s.y.push_back(e.l2);
+      }
+      series.push_back(s);
+    }
+  }
+  fs::create_directories(out_dir);
+  const std::string path = (fs::path(out_dir) / "direct.csv").string();
+  write_file_atomically(path, [&](std::ostream& out) { out << csv.str(); });
+  std::printf("%s\n", path.c_str());
+  std::string why;
+  const std::string png = (fs::path(out_dir) / "direct.png").string();
+  if (bench::plot_error_vs_time(png, "radmesh: direct-light meshing error (linear interpolant vs exact)",
+                                "relative L2 error", series, &why, "triangles"))
+    std::printf("%s\n", png.c_str());
+  else
+    std::fprintf(stderr, "plot skipped: %s\n", why.c_str());
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{"radmesh time-versus-error benchmark"};
   std::string out_dir = "bench-out", data = RADMESH_DATA_DIR, only;
-  bool quick = false, reference = false;
+  bool quick = false, reference = false, direct = false;
   double ref_edge = 27.0;
   int ref_rays = 64;
   app.add_option("--out", out_dir, "output directory for bench.csv and bench.png");
@@ -223,13 +296,17 @@ int main(int argc, char** argv) {
   app.add_flag("--quick", quick, "two settings per scene");
   std::vector<std::string> custom;
   app.add_option("--settings", custom,
-                 "run these settings instead of the sweep: EDGE:RAYS:QUAD_LEVEL:off|contacts (repeatable)");
+                 "run these settings instead of the sweep: EDGE:RAYS:QUAD_LEVEL:off|contacts|full (repeatable)");
   app.add_flag("--make-reference", reference, "compute data/cornell_box/reference.csv and exit");
+  app.add_flag("--direct", direct,
+               "meshing study instead: direct light only, exact at the triangle corners, for discontinuity "
+               "off, contacts and full; writes direct.csv and direct.png");
   app.add_option("--max-edge", ref_edge, "reference mesh size (mm)");
   app.add_option("--rays", ref_rays, "reference shadow rays per pair");
   CLI11_PARSE(app, argc, argv);
   try {
     if (reference) return make_reference(data, ref_edge, ref_rays);
+    if (direct) return direct_study(data, out_dir, quick);
     fs::create_directories(out_dir);
     std::vector<Row> rows;
     std::vector<bench::Series> series;
@@ -247,7 +324,7 @@ int main(int argc, char** argv) {
           Settings set{};
           char mode[16] = "contacts";
           if (std::sscanf(c.c_str(), "%lf:%d:%d:%15s", &set.max_edge, &set.rays, &set.quad_level, mode) < 3)
-            throw InputError("--settings '" + c + "': expected EDGE:RAYS:QUAD_LEVEL[:off|contacts]");
+            throw InputError("--settings '" + c + "': expected EDGE:RAYS:QUAD_LEVEL[:off|contacts|full]");
           set.discontinuity = parse_discontinuity_mode(mode);
           sweep.push_back(set);
         }

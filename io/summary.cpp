@@ -83,6 +83,7 @@ nlohmann::json make_summary(const RunInfo& info, const Scene& scene, const Mesh&
                            {"no_occluder_pairs_skipped", sh.no_occluder_pairs_skipped},
                            {"non_silhouette_skipped", sh.non_silhouette_skipped},
                            {"hidden_pieces_dropped", sh.hidden_pieces_dropped},
+                           {"near_duplicates_dropped", sh.near_duplicates_dropped},
                            {"budget_receivers", sh.budget_receivers},
                            {"lines_dropped_by_budget", sh.lines_dropped_by_budget},
                            {"max_lines_per_receiver", info.meshing.shadow.max_lines_per_receiver},

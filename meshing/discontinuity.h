@@ -67,6 +67,12 @@ struct ShadowOptions {
   int max_lines_per_receiver = 400;
   // Visibility checks per segment: it is cut into at most this many pieces.
   int visibility_pieces = 16;
+  // A segment lying within this distance of a line already kept (at both
+  // ends and its middle) is dropped: two lines that close would force the
+  // mesher into slivers or a flood of tiny triangles, while the light
+  // between them barely changes. 0 keeps everything. mesh_scene sets it to
+  // min_separation_fraction x the maximum edge length.
+  double min_separation = 0.0;
 };
 
 struct ShadowReport {
@@ -77,6 +83,7 @@ struct ShadowReport {
   int no_occluder_pairs_skipped = 0;   // nothing in the emitter-receiver shaft
   int non_silhouette_skipped = 0;      // occluder edges/vertices the critical plane cuts through
   int hidden_pieces_dropped = 0;       // pieces whose generator line is blocked
+  int near_duplicates_dropped = 0;     // segments within min_separation of a kept line
   int budget_receivers = 0;            // receivers that reached max_lines_per_receiver
   int lines_dropped_by_budget = 0;
   int d1 = 0, d2 = 0;                  // segments returned

@@ -243,7 +243,7 @@ class ShadowCaster {
 public:
   ShadowCaster(const Scene& scene, const ShadowOptions& opt, ShadowReport& rep)
       : scene_(scene), opt_(opt), rep_(rep), polys_(make_polys(scene)),
-        eps_(1e-9 * std::max(scene.diagonal(), std::numeric_limits<double>::min())),
+        diag_(std::max(scene.diagonal(), std::numeric_limits<double>::min())), eps_(1e-9 * diag_),
         blockers_(polys_, eps_) {
     for (size_t p = 0; p < scene.patches.size(); ++p)
       for (const auto& loop : loops(static_cast<int>(p)))
@@ -440,7 +440,7 @@ private:
       if (x)
         if (const EK::Point_3* p = boost::get<EK::Point_3>(&*x)) cut_points.push_back(to_vec(*p));
     }
-    const double piece_len = scene_.diagonal() / 64.0;
+    const double piece_len = diag_ / 64.0;
     for (const auto& [c, d] : clip(R, A, B, eps_)) {
       const Vec3 cd = d - c;
       const double len2 = glm::dot(cd, cd), len = std::sqrt(len2);
@@ -491,6 +491,10 @@ private:
       int added = 0, over = 0;
       for (const DiscontinuitySegment& s : f) {
         for (const DiscontinuitySegment& piece : subtract(s, kept[r])) {
+          if (near_duplicate(piece, kept[r])) {
+            ++rep_.near_duplicates_dropped;
+            continue;
+          }
           if (added >= opt_.max_lines_per_receiver) {
             ++over;
             continue;
@@ -511,6 +515,21 @@ private:
       }
     }
     return out;
+  }
+
+  // Is s within min_separation of one kept segment at both ends and its middle?
+  bool near_duplicate(const DiscontinuitySegment& s, const std::vector<DiscontinuitySegment>& kept) const {
+    const double tol = opt_.min_separation;
+    if (!(tol > 0.0)) return false;
+    auto dist = [](const Vec3& p, const DiscontinuitySegment& k) {
+      const Vec3 ab = k.b - k.a;
+      const double t = std::clamp(glm::dot(p - k.a, ab) / glm::dot(ab, ab), 0.0, 1.0);
+      return glm::length(p - (k.a + t * ab));
+    };
+    const Vec3 mid = 0.5 * (s.a + s.b);
+    for (const DiscontinuitySegment& k : kept)
+      if (dist(s.a, k) <= tol && dist(s.b, k) <= tol && dist(mid, k) <= tol) return true;
+    return false;
   }
 
   // The parts of s not covered by collinear segments in `kept`.
@@ -554,6 +573,7 @@ private:
   ShadowOptions opt_;
   ShadowReport& rep_;
   std::vector<Poly> polys_;
+  double diag_;
   double eps_;
   Blockers blockers_;
   std::map<std::pair<int, int>, std::vector<int>> edge_patches_;

@@ -34,6 +34,10 @@ struct MeshingOptions {
   // Discontinuity lines made mesh edges before refinement (see discontinuity.h).
   DiscontinuityMode discontinuity = DiscontinuityMode::contacts;
   ShadowOptions shadow;  // used with DiscontinuityMode::full
+  // ShadowOptions::min_separation = this x max_edge (when min_separation is
+  // 0); triangles with an edge shorter than this x max_edge are not refined
+  // for their angle (small angles between input lines cannot be removed).
+  double min_separation_fraction = 0.02;
 };
 
 struct MeshReport {

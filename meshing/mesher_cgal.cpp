@@ -49,7 +49,43 @@ using CDTBase = CGAL::Constrained_Delaunay_triangulation_2<K, Tds, CGAL::Exact_p
 // The constraint hierarchy lets discontinuity lines cross and overlap.
 using CDT = CGAL::Constrained_triangulation_plus_2<CDTBase>;
 using EK = CGAL::Exact_predicates_exact_constructions_kernel;
-using Criteria = CGAL::Delaunay_mesh_size_criteria_2<CDT>;
+using SizeCriteria = CGAL::Delaunay_mesh_size_criteria_2<CDT>;
+
+// CGAL's size-and-angle criteria, except that a triangle whose shortest edge
+// is below `floor` is not refined for its angle. Where discontinuity lines
+// meet or run at small angles, the angle bound alone would ask for ever
+// smaller triangles (the small angle is in the input); the floor bounds that.
+class Criteria : public SizeCriteria {
+public:
+  Criteria(double squared_sine_bound, double size_bound, double floor)
+      : CGAL::Delaunay_mesh_criteria_2<CDT>(squared_sine_bound),
+        SizeCriteria(squared_sine_bound, size_bound),
+        floor2_(floor * floor) {}
+
+  class Is_bad : public SizeCriteria::Is_bad {
+  public:
+    Is_bad(double bound, double size_bound, const Geom_traits& traits, double floor2)
+        : SizeCriteria::Is_bad(bound, size_bound, traits), floor2_(floor2) {}
+    CGAL::Mesh_2::Face_badness operator()(const Quality q) const { return SizeCriteria::Is_bad::operator()(q); }
+    CGAL::Mesh_2::Face_badness operator()(const CDT::Face_handle& fh, Quality& q) const {
+      const CGAL::Mesh_2::Face_badness r = SizeCriteria::Is_bad::operator()(fh, q);
+      if (r != CGAL::Mesh_2::BAD) return r;  // too large (imperative), or fine
+      const K::Point_2 &a = fh->vertex(0)->point(), &b = fh->vertex(1)->point(), &c = fh->vertex(2)->point();
+      const double shortest = std::min({CGAL::squared_distance(a, b), CGAL::squared_distance(b, c),
+                                        CGAL::squared_distance(c, a)});
+      if (shortest >= floor2_) return r;
+      q = Quality(1.0, q.size());  // so that re-checking the stored quality agrees
+      return CGAL::Mesh_2::NOT_BAD;
+    }
+
+  private:
+    double floor2_;
+  };
+  Is_bad is_bad_object() const { return Is_bad(this->bound(), this->size_bound(), this->traits, floor2_); }
+
+private:
+  double floor2_;
+};
 using Mesher = CGAL::Delaunay_mesher_2<CDT, Criteria>;
 using Point2 = K::Point_2;
 
@@ -285,7 +321,9 @@ private:
   void setup_constraints() {
     std::vector<DiscontinuitySegment> lines = contact_segments(scene_);
     if (opt_.discontinuity == DiscontinuityMode::full) {
-      std::vector<DiscontinuitySegment> shadows = shadow_segments(scene_, opt_.shadow, &shadow_report_);
+      ShadowOptions so = opt_.shadow;
+      if (so.min_separation == 0.0) so.min_separation = opt_.min_separation_fraction * opt_.max_edge;
+      std::vector<DiscontinuitySegment> shadows = shadow_segments(scene_, so, &shadow_report_);
       lines.insert(lines.end(), shadows.begin(), shadows.end());
     }
     std::vector<int> extra;  // global ids of constraint points made so far
@@ -442,7 +480,7 @@ private:
     // its last refined mesh; those the mesher put on a line are chained into
     // it, so the line is not crossed by a sliver.
     const std::vector<Steiner>& kept = refine ? std::vector<Steiner>{} : steiner_[p];
-    const double on_tol = 1e-7 * scene_.diagonal();
+    const double on_tol = 100.0 * eps_;
     for (const auto& [a, b, kind] : constraints_[static_cast<size_t>(p)]) {
       CDT::Vertex_handle va = insert_vertex(a), vb = insert_vertex(b);
       const K::Segment_2 seg(va->point(), vb->point());
@@ -477,12 +515,12 @@ private:
     }
     // The kind of discontinuity line an edge lies on (both ends on one line;
     // points the mesher adds on a line lie on it too), or -1 for none.
-    const double tol2 = std::pow(1e-9 * scene_.diagonal(), 2);
+    const double tol2 = eps_ * eps_;
     auto line_kind = [&](const Point2& p0, const Point2& p1) {
       const CGAL::Bbox_2 eb = p0.bbox() + p1.bbox();
       for (const Line2& l : lines2) {
-        if (eb.xmax() + 1e-9 * scene_.diagonal() < l.box.xmin() || l.box.xmax() < eb.xmin() - 1e-9 * scene_.diagonal() ||
-            eb.ymax() + 1e-9 * scene_.diagonal() < l.box.ymin() || l.box.ymax() < eb.ymin() - 1e-9 * scene_.diagonal())
+        if (eb.xmax() + eps_ < l.box.xmin() || l.box.xmax() < eb.xmin() - eps_ || eb.ymax() + eps_ < l.box.ymin() ||
+            l.box.ymax() < eb.ymin() - eps_)
           continue;
         if (CGAL::squared_distance(p0, l.seg) <= tol2 && CGAL::squared_distance(p1, l.seg) <= tol2) return l.kind;
       }
@@ -501,7 +539,7 @@ private:
 
     if (refine) {
       const double s = std::sin(opt_.min_angle * std::numbers::pi / 180.0);
-      Mesher mesher(cdt, Criteria(s * s, opt_.max_edge));
+      Mesher mesher(cdt, Criteria(s * s, opt_.max_edge, opt_.min_separation_fraction * opt_.max_edge));
       mesher.init(true);
       mesher.refine_mesh();
       mark_domain(cdt, on_boundary);
@@ -528,7 +566,7 @@ private:
         }
       }
       const int g = static_cast<int>(positions_.size());
-      if (best >= 0 && best_d <= 1e-7 * scene_.diagonal() && is_on_constraint(cdt, v)) {
+      if (best >= 0 && best_d <= 100.0 * eps_ && is_on_constraint(cdt, v)) {
         const Vec3 A = positions_[static_cast<size_t>(segments_[static_cast<size_t>(best)].a)];
         const Vec3 B = positions_[static_cast<size_t>(segments_[static_cast<size_t>(best)].b)];
         positions_.push_back(A + best_t * (B - A));

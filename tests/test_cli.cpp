@@ -145,7 +145,7 @@ TEST(Cli, QualityWritesOneRowPerPatchAndATotal) {
     std::vector<std::string> f;
     std::stringstream ss(line);
     for (std::string x; std::getline(ss, x, ',');) f.push_back(x);
-    ASSERT_EQ(f.size(), 10u) << line;
+    ASSERT_EQ(f.size(), 12u) << line;
     if (f[0] == "-1") {
       total = std::stoi(f[2]);
     } else {
@@ -159,4 +159,44 @@ TEST(Cli, QualityWritesOneRowPerPatchAndATotal) {
   EXPECT_EQ(total, sum);
   EXPECT_EQ(floor_contacts, 4);  // the box's footprint
   fs::remove_all(out);
+}
+
+namespace {
+// The total row of a quality.csv as its fields.
+std::vector<std::string> quality_total(const fs::path& csv_path) {
+  std::ifstream csv(csv_path);
+  std::string line;
+  while (std::getline(csv, line))
+    if (line.rfind("-1,", 0) == 0) {
+      std::vector<std::string> f;
+      std::stringstream ss(line);
+      for (std::string x; std::getline(ss, x, ',');) f.push_back(x);
+      return f;
+    }
+  return {};
+}
+}  // namespace
+
+TEST(Cli, QualityOfAWrittenMeshMatchesTheSceneRunWithShadowLines) {
+  const fs::path a = fresh_dir("quality_full"), m = fresh_dir("mesh_full"), b = fresh_dir("quality_vtu");
+  const std::string scene = kData + "/box_on_floor/box_on_floor.obj --discontinuity full --max-edge 0.5 -q";
+  ASSERT_EQ(radmesh("quality " + scene + " -o " + a.string()).status, 0);
+  ASSERT_EQ(radmesh("mesh " + scene + " -o " + m.string()).status, 0);
+  const Result r = radmesh("quality " + (m / "mesh.vtu").string() + " -o " + b.string() + " -q");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const auto from_scene = quality_total(a / "quality.csv"), from_mesh = quality_total(b / "quality.csv");
+  ASSERT_EQ(from_scene.size(), 12u);
+  ASSERT_EQ(from_mesh.size(), 12u);
+  EXPECT_EQ(from_mesh[2], from_scene[2]);    // triangles
+  EXPECT_EQ(from_mesh[8], "4");              // D0: the box's footprint
+  EXPECT_EQ(from_mesh[9], from_scene[9]);    // D1 segments (read back from discontinuities.vtu)
+  EXPECT_GT(std::stoi(from_mesh[9]), 0);
+  EXPECT_EQ(from_mesh[10], "0");             // the box is axis-aligned with the light: no D2
+  // A file that is not a mesh is refused with its name.
+  const Result bad = radmesh("quality " + (m / "summary.json").string() + " -o " + b.string() + " -q");
+  EXPECT_NE(bad.status, 0);
+  const Result bad_vtu = radmesh("quality " + (m / "discontinuities.vtu").string() + " -o " + b.string() + " -q");
+  EXPECT_NE(bad_vtu.status, 0);
+  EXPECT_NE(bad_vtu.err.find("discontinuities.vtu"), std::string::npos) << bad_vtu.err;
+  for (const auto& d : {a, m, b}) fs::remove_all(d);
 }

@@ -5,6 +5,8 @@
 #include "meshing/discontinuity.h"
 #include "meshing/errors.h"
 #include "meshing/mesh.h"
+#include "radiosity/direct.h"
+#include "radiosity/error_metric.h"
 #include "radiosity/solve.h"
 
 #include <gtest/gtest.h>
@@ -17,6 +19,8 @@
 #include <vtkXMLUnstructuredGridReader.h>
 
 #include <algorithm>
+#include <chrono>
+#include <cstdio>
 #include <filesystem>
 #include <map>
 #include <set>
@@ -384,4 +388,136 @@ TEST(Shadows, FullMeshHasNoEdgeCrossingALine) {
   for (int t = 0; t < m.triangle_count(); ++t)
     if (m.patch[static_cast<size_t>(t)] == patch_named(s, "floor")) area += m.area(t);
   EXPECT_NEAR(area, 16.0, 1e-12);
+}
+
+namespace {
+// Scenes for the stress cases: a white floor [0, 4]^2 (y = 0, facing up)
+// lit by a square light of side `light` centred above (2, h, 2), facing down,
+// plus whatever `extra` adds (material 0 = white, 1 = light).
+struct Builder {
+  std::vector<RawFace> faces;
+  void quad(const std::string& name, int material, std::vector<Vec3> pts, const Vec3& offset = Vec3(0.0)) {
+    RawFace f;
+    f.name = name;
+    f.material = material;
+    for (Vec3& p : pts) p += offset;
+    f.points = pts;
+    f.line = static_cast<int>(faces.size()) + 1;
+    f.file = "stress";
+    faces.push_back(f);
+  }
+  // Axis-aligned box [lo, hi] without a bottom; faces point outwards.
+  void box(const Vec3& lo, const Vec3& hi) {
+    quad("box", 0, {{lo.x, lo.y, lo.z}, {lo.x, hi.y, lo.z}, {hi.x, hi.y, lo.z}, {hi.x, lo.y, lo.z}});
+    quad("box", 0, {{hi.x, lo.y, hi.z}, {hi.x, hi.y, hi.z}, {lo.x, hi.y, hi.z}, {lo.x, lo.y, hi.z}});
+    quad("box", 0, {{lo.x, lo.y, hi.z}, {lo.x, hi.y, hi.z}, {lo.x, hi.y, lo.z}, {lo.x, lo.y, lo.z}});
+    quad("box", 0, {{hi.x, lo.y, lo.z}, {hi.x, hi.y, lo.z}, {hi.x, hi.y, hi.z}, {hi.x, lo.y, hi.z}});
+    quad("box", 0, {{lo.x, hi.y, lo.z}, {lo.x, hi.y, hi.z}, {hi.x, hi.y, hi.z}, {hi.x, hi.y, lo.z}});
+  }
+  // A horizontal plate at height y facing down (towards the floor) and one facing up.
+  void plate(double x0, double z0, double x1, double z1, double y) {
+    quad("plate_up", 0, {{x0, y, z0}, {x0, y, z1}, {x1, y, z1}, {x1, y, z0}});
+  }
+  Scene build(double light_half = 0.2, double height = 3.0, const Vec3& offset = Vec3(0.0)) {
+    quad("floor", 0, {{0, 0, 0}, {0, 0, 4}, {4, 0, 4}, {4, 0, 0}}, offset);
+    const double a = 2.0 - light_half, b = 2.0 + light_half;
+    quad("light", 1, {{a, height, a}, {b, height, a}, {b, height, b}, {a, height, b}}, offset);
+    for (auto& f : faces)
+      if (f.name != "floor" && f.name != "light")
+        for (Vec3& p : f.points) p += offset;
+    Material white, lamp;
+    white.name = "white";
+    white.reflectance = Rgb(0.5);
+    lamp.name = "light";
+    lamp.emission = Rgb(10.0);
+    return build_scene(faces, {white, lamp}, "stress");
+  }
+};
+
+// Meshes with every discontinuity line and checks what a valid result must
+// be: finite points, each patch's area kept, no triangle edge across a line,
+// finite exact direct light at sample points. Prints the time taken.
+void check_full_mesh(const Scene& s, const std::string& what, double seconds_bound = 120.0) {
+  const auto t0 = std::chrono::steady_clock::now();
+  MeshingOptions o;
+  o.discontinuity = DiscontinuityMode::full;
+  MeshReport rep;
+  const Mesh m = mesh_scene(s, o, &rep);
+  const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  std::printf("[stress] %-40s %6d triangles, %4d D0 + %4d D1/D2 lines, %5d crossings, %2d rounding crossings, %.3f s\n",
+              what.c_str(), m.triangle_count(), rep.contact_segments, rep.shadow_segments, rep.crossings,
+              rep.rounding_crossings, secs);
+  EXPECT_LT(secs, seconds_bound) << what;
+  for (const Vec3& p : m.positions) ASSERT_TRUE(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z)) << what;
+  std::vector<double> area(s.patches.size(), 0.0);
+  for (int t = 0; t < m.triangle_count(); ++t) {
+    const double a = m.area(t);
+    EXPECT_TRUE(std::isfinite(a)) << what;
+    area[static_cast<size_t>(m.patch[static_cast<size_t>(t)])] += a;
+  }
+  for (size_t p = 0; p < s.patches.size(); ++p)
+    EXPECT_NEAR(area[p], s.patch_area(static_cast<int>(p)), 1e-9 * s.patch_area(static_cast<int>(p)) + 1e-300)
+        << what << ": patch " << p;
+  EXPECT_EQ(crossing_edges(s, m, rep.discontinuities), 0) << what;
+  const DirectIllumination direct(s);
+  for (const SurfaceSample& q : surface_samples(s, 200)) {
+    const Rgb b = direct.reflected(q.x, q.patch);
+    ASSERT_TRUE(std::isfinite(b.x) && b.x >= 0.0) << what;
+  }
+}
+}  // namespace
+
+TEST(ShadowsStress, SurfacesOneNanometreApart) {
+  // A plate 1e-9 above the floor (relative to its size 1), and a box whose
+  // top is 1e-9 below a plate's underside.
+  Builder b;
+  b.plate(1.0, 1.0, 2.0, 2.0, 1e-9);
+  b.box(Vec3(2.5, 0.0, 2.5), Vec3(3.0, 0.5, 3.0));
+  b.plate(2.4, 2.4, 3.1, 3.1, 0.5 + 1e-9);
+  check_full_mesh(b.build(), "surfaces 1e-9 apart");
+}
+
+TEST(ShadowsStress, OccluderEdgesParallelToEmitterEdges) {
+  Builder b;
+  b.plate(1.5, 1.5, 2.5, 2.5, 1.0);  // every edge parallel to a light edge
+  b.box(Vec3(0.5, 0.0, 0.5), Vec3(1.0, 0.7, 1.0));
+  check_full_mesh(b.build(), "edges parallel to the emitter's");
+}
+
+TEST(ShadowsStress, OccluderCoplanarWithTheReceiver) {
+  Builder b;
+  b.quad("mat", 0, {{1, 0, 1}, {1, 0, 2}, {2, 0, 2}, {2, 0, 1}});  // lies in the floor
+  b.box(Vec3(2.5, 0.0, 1.0), Vec3(3.0, 0.5, 1.5));
+  check_full_mesh(b.build(), "occluder coplanar with the receiver");
+}
+
+TEST(ShadowsStress, EmitterLyingInTheCeilingItBelongsTo) {
+  Builder b;
+  b.quad("ceiling", 0, {{0, 3, 0}, {4, 3, 0}, {4, 3, 4}, {0, 3, 4}});  // faces down, overlaps the light
+  b.box(Vec3(1.5, 0.0, 1.5), Vec3(2.2, 1.0, 2.2));
+  check_full_mesh(b.build(), "emitter lying in its ceiling");
+}
+
+TEST(ShadowsStress, TinyOccluder) {
+  Builder b;
+  b.box(Vec3(2.0, 0.5, 2.0), Vec3(2.0 + 1e-6, 0.5 + 1e-6, 2.0 + 1e-6));
+  b.box(Vec3(1.0, 0.0, 1.0), Vec3(1.0 + 1e-5, 1e-5, 1.0 + 1e-5));
+  check_full_mesh(b.build(), "tiny occluders (1e-6, 1e-5)");
+}
+
+TEST(ShadowsStress, TwoHundredOccludersAboveOneReceiver) {
+  Builder b;
+  for (int i = 0; i < 20; ++i)
+    for (int j = 0; j < 10; ++j) {
+      const double x = 0.1 + 0.19 * i, z = 0.1 + 0.38 * j;
+      b.plate(x, z, x + 0.08, z + 0.2, 1.0 + 0.01 * ((i + j) % 5));
+    }
+  check_full_mesh(b.build(), "200 occluders above one receiver");
+}
+
+TEST(ShadowsStress, CoordinatesAroundAMillionWithFeaturesOfOne) {
+  Builder b;
+  b.box(Vec3(1.5, 0.0, 1.5), Vec3(2.5, 1.0, 2.5));
+  b.plate(0.5, 0.5, 1.0, 1.0, 1.5);
+  check_full_mesh(b.build(0.2, 3.0, Vec3(1e6, 1e6, -1e6)), "coordinates around 1e6");
 }
