@@ -93,6 +93,26 @@ TEST(Cli, MeshWritesMeshAndSummary) {
   fs::remove_all(out);
 }
 
+TEST(Cli, RunWithShadowLinesReportsThemAndWhatWasSkipped) {
+  const fs::path out = fresh_dir("run_full");
+  const Result r = radmesh("run " + kData + "/box_on_floor/box_on_floor.obj --discontinuity full --max-edge 0.5 "
+                           "--no-png -q -o " + out.string());
+  ASSERT_EQ(r.status, 0) << r.err;
+  std::ifstream in(out / "summary.json");
+  const nlohmann::json s = nlohmann::json::parse(in);
+  EXPECT_EQ(s["options"]["discontinuity"], "full");
+  EXPECT_EQ(s["counts"]["contact_segments"], 4);
+  EXPECT_EQ(s["counts"]["rounding_crossings"], 0);
+  const auto& sh = s["shadow_lines"];
+  EXPECT_GT(sh["d1_segments"].get<int>(), 0);
+  EXPECT_EQ(sh["d2_segments"], 0);  // every box edge is parallel to a light edge
+  EXPECT_EQ(s["counts"]["shadow_segments"].get<int>(), sh["d1_segments"].get<int>());
+  EXPECT_EQ(sh["back_facing_pairs_skipped"], 4);  // the box's sides face away from the light
+  EXPECT_NE(sh["left_out"].get<std::string>().find("EEE"), std::string::npos);
+  EXPECT_TRUE(fs::exists(out / "discontinuities.vtu"));
+  fs::remove_all(out);
+}
+
 struct BadRun {
   const char* args;
   const char* must_contain;

@@ -390,6 +390,28 @@ TEST(Shadows, FullMeshHasNoEdgeCrossingALine) {
   EXPECT_NEAR(area, 16.0, 1e-12);
 }
 
+TEST(Shadows, CornellBoxFullMeshIsValidAndNeverCrossesALine) {
+  const Scene s = read_obj_scene(kData + "/cornell_box/cornell_box.obj");
+  MeshingOptions o;
+  o.discontinuity = DiscontinuityMode::full;
+  MeshReport rep;
+  const Mesh m = mesh_scene(s, o, &rep);
+  EXPECT_EQ(rep.contact_segments, 8);
+  EXPECT_GT(rep.shadow.d2, 0);  // the blocks are turned against the light
+  EXPECT_EQ(rep.shadow.emitters, 1);
+  EXPECT_EQ(rep.rounding_crossings, 0);
+  EXPECT_EQ(crossing_edges(s, m, rep.discontinuities), 0);
+  for (const DiscontinuitySegment& d : rep.discontinuities)
+    if (d.kind > 0) {
+      EXPECT_EQ(s.patches[static_cast<size_t>(d.emitter)].name, "light");
+      EXPECT_NE(d.patch, d.emitter);
+    }
+  std::vector<double> area(s.patches.size(), 0.0);
+  for (int t = 0; t < m.triangle_count(); ++t) area[static_cast<size_t>(m.patch[static_cast<size_t>(t)])] += m.area(t);
+  for (size_t p = 0; p < s.patches.size(); ++p)
+    EXPECT_NEAR(area[p], s.patch_area(static_cast<int>(p)), 1e-9 * s.patch_area(static_cast<int>(p)));
+}
+
 namespace {
 // Scenes for the stress cases: a white floor [0, 4]^2 (y = 0, facing up)
 // lit by a square light of side `light` centred above (2, h, 2), facing down,
