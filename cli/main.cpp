@@ -35,7 +35,7 @@ struct Params {
   std::string probe_file;
   bool quiet = false;
   bool png = true;
-  std::string discontinuity = "contacts";
+  std::string discontinuity = "full";
   std::string nodal = "fit";
 };
 
@@ -240,7 +240,7 @@ void add_common(CLI::App* cmd, Params& p, const char* scene_help = "scene file (
       ->check(CLI::Range(0.0, 30.0));
   cmd->add_option("--discontinuity", p.discontinuity,
                   "discontinuity lines built into the initial mesh: off, contacts (where patches meet) or "
-                  "full (contacts and the D1/D2 shadow boundaries of every emitter; default contacts)")
+                  "full (contacts and the D1/D2 shadow boundaries of every emitter; the default)")
       ->check(CLI::IsMember({"off", "contacts", "full"}));
   cmd->add_option("--max-shadow-lines", p.meshing.shadow.max_lines_per_receiver,
                   "with --discontinuity full: shadow-line segments kept per receiving patch (default 400)")

@@ -32,7 +32,9 @@ struct MeshingOptions {
   // guaranteed to terminate up to about 20.7 degrees; we accept up to 30.
   double min_angle = 20.0;
   // Discontinuity lines made mesh edges before refinement (see discontinuity.h).
-  DiscontinuityMode discontinuity = DiscontinuityMode::contacts;
+  // Full (contacts and shadow boundaries) had the best time to error on the
+  // Cornell box benchmark.
+  DiscontinuityMode discontinuity = DiscontinuityMode::full;
   ShadowOptions shadow;  // used with DiscontinuityMode::full
   // ShadowOptions::min_separation = this x max_edge (when min_separation is
   // 0); triangles with an edge shorter than this x max_edge are not refined

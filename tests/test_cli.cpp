@@ -82,7 +82,8 @@ TEST(Cli, RunWritesVtuSummaryAndProbes) {
 
 TEST(Cli, MeshWritesMeshAndSummary) {
   const fs::path out = fresh_dir("mesh");
-  const Result r = radmesh("mesh " + kData + "/cornell_box/cornell_box.obj -o " + out.string() + " -q");
+  const Result r =
+      radmesh("mesh " + kData + "/cornell_box/cornell_box.obj --discontinuity contacts -o " + out.string() + " -q");
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_TRUE(fs::exists(out / "mesh.vtu"));
   EXPECT_TRUE(fs::exists(out / "discontinuities.vtu"));  // the blocks' contact outlines

@@ -188,7 +188,9 @@ TEST(Contacts, ModeNamesAreChecked) {
 TEST(Contacts, LineDatasetOpensWithItsFields) {
   const Scene s = read_obj_scene(kData + "/box_on_floor/box_on_floor.obj");
   MeshReport rep;
-  mesh_scene(s, {}, &rep);
+  MeshingOptions o;
+  o.discontinuity = DiscontinuityMode::contacts;
+  mesh_scene(s, o, &rep);
   ASSERT_EQ(rep.discontinuities.size(), 4u);
   const std::string path = (std::filesystem::temp_directory_path() / "radmesh_test_lines.vtu").string();
   write_discontinuities_vtu(path, rep.discontinuities);

@@ -81,8 +81,11 @@ TEST(Mesh, ClosedCubeIsClosedAndConsistentlyOriented) {
 
 TEST(Mesh, CornellBoxPatchesShareEdgeVerticesAndKeepTheirArea) {
   const Scene s = read_obj_scene(kData + "/cornell_box/cornell_box.obj");
+  for (DiscontinuityMode mode : {DiscontinuityMode::contacts, DiscontinuityMode::full}) {
+  SCOPED_TRACE(to_string(mode));
   MeshingOptions o;
   o.max_edge = 60.0;
+  o.discontinuity = mode;
   MeshReport rep;
   const Mesh m = mesh_scene(s, o, &rep);
   std::vector<double> area(s.patches.size(), 0.0);
@@ -97,7 +100,13 @@ TEST(Mesh, CornellBoxPatchesShareEdgeVerticesAndKeepTheirArea) {
   for (const auto& [e, n] : edge_use(m, room)) EXPECT_EQ(n, 2) << e.first << "-" << e.second;
   EXPECT_LE(longest_edge(m), 60.0 * (1 + 1e-12));
   const TriangleQuality q = compute_quality(m);
-  EXPECT_GE(*std::min_element(q.min_angle.begin(), q.min_angle.end()), 20.0 - 1e-6);
+  // The angle bound holds where the input allows it: with contact lines
+  // only. Shadow lines cross at angles of their own, which no mesh removes.
+  if (mode == DiscontinuityMode::contacts)
+    EXPECT_GE(*std::min_element(q.min_angle.begin(), q.min_angle.end()), 20.0 - 1e-6);
+  else
+    EXPECT_GT(*std::min_element(q.min_angle.begin(), q.min_angle.end()), 1.0);
+  }
 }
 
 TEST(Mesh, HolesAndConcaveOutlines) {
