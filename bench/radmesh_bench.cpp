@@ -13,6 +13,7 @@
 #include "meshing/errors.h"
 #include "radiosity/direct.h"
 #include "radiosity/error_metric.h"
+#include "radiosity/hierarchical.h"
 #include "radiosity/probe.h"
 #include "radiosity/solve.h"
 
@@ -25,6 +26,7 @@
 #include <functional>
 #include <iomanip>
 #include <sstream>
+#include <tuple>
 
 namespace {
 
@@ -34,10 +36,11 @@ namespace fs = std::filesystem;
 constexpr int kSamples = 2000;  // error-metric points per scene
 
 struct Settings {
-  double max_edge;  // scene units
+  double max_edge;  // scene units (hierarchical: the initial mesh)
   int rays;
   int quad_level;
   DiscontinuityMode discontinuity = DiscontinuityMode::contacts;
+  double epsilon = 0.0;  // > 0: hierarchical radiosity with this oracle epsilon
 };
 
 struct Scenario {
@@ -154,22 +157,55 @@ struct Row {
   FieldError element;   // the per-element constant field
 };
 
+// The leaves of a hierarchical solution as a plain mesh and solution (the
+// zero-area triangles carry no area, so the error metric leaves them out).
+std::pair<Mesh, Solution> leaves_only(const HierarchicalSolution& h) {
+  Mesh m;
+  m.positions = h.mesh.positions;
+  m.feature_edges = h.mesh.feature_edges;
+  Solution s;
+  s.nodal.points = h.solution.nodal.points;
+  s.nodal.source_vertex = h.solution.nodal.source_vertex;
+  s.nodal.radiosity = h.solution.nodal.radiosity;
+  s.stats = h.solution.stats;
+  for (size_t t = 0; t < h.leaf_of.size(); ++t) {
+    if (h.leaf_of[t] < 0) continue;
+    m.triangles.push_back(h.mesh.triangles[t]);
+    m.patch.push_back(h.mesh.patch[t]);
+    s.element.push_back(h.solution.element[t]);
+    s.nodal.corners.push_back(h.solution.nodal.corners[t]);
+  }
+  return {m, s};
+}
+
 Row run_one(const Scenario& sc, const Scene& scene, const std::vector<SurfaceSample>& samples,
             const std::vector<Rgb>& reference, const Settings& set) {
   const auto t0 = std::chrono::steady_clock::now();
   MeshingOptions mo;
   mo.max_edge = set.max_edge;
   mo.discontinuity = set.discontinuity;
-  const Mesh mesh = mesh_scene(scene, mo);
+  Mesh mesh = mesh_scene(scene, mo);
   SolveOptions so;
   so.rays = set.rays;
   so.quadrature.max_level = set.quad_level;
-  const Solution sol = solve_matrix(scene, mesh, so);
+  Solution sol;
+  long long links = 0;
+  if (set.epsilon > 0.0) {
+    HierarchicalOptions ho;
+    ho.epsilon = set.epsilon;
+    const HierarchicalSolution h = solve_hierarchical(scene, mesh, so, ho);
+    std::tie(mesh, sol) = leaves_only(h);
+    links = h.stats.links;
+    sol.stats.form_factors = links;
+  } else {
+    sol = solve_matrix(scene, mesh, so);
+  }
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   const std::vector<Rgb> values = interpolate_nodal(scene, mesh, sol.nodal, samples);
   const std::vector<Rgb> flat = element_values(scene, mesh, sol.element, samples);
   const auto ref = reflected_part(scene, samples, reference);
-  return {sc.name, std::string("matrix/") + to_string(set.discontinuity), set, mesh.triangle_count(), sol.stats.form_factors, sol.stats.rays_cast, seconds,
+  const std::string method = set.epsilon > 0.0 ? "hierarchical" : "matrix";
+  return {sc.name, method + "/" + to_string(set.discontinuity), set, mesh.triangle_count(), sol.stats.form_factors, sol.stats.rays_cast, seconds,
           field_error(samples, reflected_part(scene, samples, values), ref),
           field_error(samples, reflected_part(scene, samples, flat), ref)};
 }
@@ -296,7 +332,8 @@ int main(int argc, char** argv) {
   app.add_flag("--quick", quick, "two settings per scene");
   std::vector<std::string> custom;
   app.add_option("--settings", custom,
-                 "run these settings instead of the sweep: EDGE:RAYS:QUAD_LEVEL:off|contacts|full (repeatable)");
+                 "run these settings instead of the sweep: EDGE:RAYS:QUAD_LEVEL:off|contacts|full[:EPSILON] "
+                 "(repeatable; an EPSILON > 0 solves with hierarchical radiosity from a mesh of that EDGE)");
   app.add_flag("--make-reference", reference, "compute data/cornell_box/reference.csv and exit");
   app.add_flag("--direct", direct,
                "meshing study instead: direct light only, exact at the triangle corners, for discontinuity "
@@ -323,8 +360,9 @@ int main(int argc, char** argv) {
         for (const std::string& c : custom) {
           Settings set{};
           char mode[16] = "contacts";
-          if (std::sscanf(c.c_str(), "%lf:%d:%d:%15s", &set.max_edge, &set.rays, &set.quad_level, mode) < 3)
-            throw InputError("--settings '" + c + "': expected EDGE:RAYS:QUAD_LEVEL[:off|contacts|full]");
+          if (std::sscanf(c.c_str(), "%lf:%d:%d:%15[a-z]:%lf", &set.max_edge, &set.rays, &set.quad_level, mode,
+                          &set.epsilon) < 3)
+            throw InputError("--settings '" + c + "': expected EDGE:RAYS:QUAD_LEVEL[:off|contacts|full[:EPSILON]]");
           set.discontinuity = parse_discontinuity_mode(mode);
           sweep.push_back(set);
         }
@@ -355,7 +393,7 @@ int main(int argc, char** argv) {
       out << "scene,method,discontinuity,max_edge,rays,quad_level,elements,form_factors,rays_cast,wall_s,l2,linf,patch_mean,"
              "element_l2,element_patch_mean\n";
       for (const Row& r : rows)
-        out << r.scene << ',' << "matrix" << ',' << to_string(r.set.discontinuity) << ',' << r.set.max_edge << ',' << r.set.rays << ',' << r.set.quad_level
+        out << r.scene << ',' << (r.set.epsilon > 0.0 ? "hierarchical" : "matrix") << ',' << to_string(r.set.discontinuity) << ',' << r.set.max_edge << ',' << r.set.rays << ',' << r.set.quad_level
             << ',' << r.elements << ',' << r.form_factors << ',' << r.rays << ',' << r.seconds << ',' << r.err.l2
             << ',' << r.err.linf << ',' << r.err.patch_mean << ',' << r.element.l2 << ',' << r.element.patch_mean
             << '\n';

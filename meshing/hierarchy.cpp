@@ -7,7 +7,7 @@
 
 namespace radmesh {
 
-ElementTree::ElementTree(const Mesh& mesh) : mesh_(&mesh) {
+ElementTree::ElementTree(const Mesh& mesh) : features_(mesh.feature_edges) {
   positions_ = mesh.positions;
   initial_vertices_ = static_cast<int>(mesh.positions.size());
   for (int t = 0; t < mesh.triangle_count(); ++t) {
@@ -192,15 +192,14 @@ Mesh ElementTree::conforming_mesh(std::vector<int>* leaf_of) const {
     }
   }
   // Feature edges of the initial mesh, cut at the vertices splits put on them.
-  if (mesh_)
-    for (const auto& e : mesh_->feature_edges) {
-      int prev = e[0];
-      for (int m : edge_points(e[0], e[1])) {
-        out.feature_edges.push_back({std::min(prev, m), std::max(prev, m)});
-        prev = m;
-      }
-      out.feature_edges.push_back({std::min(prev, e[1]), std::max(prev, e[1])});
+  for (const auto& e : features_) {
+    int prev = e[0];
+    for (int m : edge_points(e[0], e[1])) {
+      out.feature_edges.push_back({std::min(prev, m), std::max(prev, m)});
+      prev = m;
     }
+    out.feature_edges.push_back({std::min(prev, e[1]), std::max(prev, e[1])});
+  }
   return out;
 }
 

@@ -81,7 +81,7 @@ private:
     double u = 0.0, v = 0.0;
   };
   int make_midpoint(int root, int a, int b);
-  const Mesh* mesh_ = nullptr;
+  std::vector<std::array<int, 2>> features_;  // the initial mesh's feature edges
   std::vector<Node> nodes_;
   int roots_ = 0;
   int initial_vertices_ = 0;

@@ -1,0 +1,449 @@
+// Hierarchical radiosity: links, oracle, gather and push-pull.
+
+#include "radiosity/hierarchical.h"
+
+#include "meshing/errors.h"
+#include "radiosity/form_factor.h"
+#include "radiosity/occlusion.h"
+#include "radiosity/sampling.h"
+#include "radiosity/visibility.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <map>
+
+namespace radmesh {
+
+namespace {
+
+double seconds_since(std::chrono::steady_clock::time_point t) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+}
+double max3(const Rgb& c) { return std::max({c.x, c.y, c.z}); }
+
+struct Link {
+  int source = -1;
+  double f = 0.0;         // F(receiver -> source) x visibility
+  double f_free = 0.0;    // F(receiver -> source) without occlusion
+  double spread = 0.0;    // how much the point form factor varies over the receiver (oracle)
+  bool partial = false;   // some shadow rays blocked, some not
+};
+
+class Solver {
+public:
+  Solver(const Scene& scene, const Mesh& initial, const SolveOptions& opt, const HierarchicalOptions& hopt,
+         HierarchicalSolution& out)
+      : scene_(scene), opt_(opt), hopt_(hopt), out_(out), visibility_(scene), occlusion_(scene) {
+    out_.tree = ElementTree(initial);
+    min_area_ = hopt.min_area > 0.0 ? hopt.min_area : 0.5 * std::pow(scene.diagonal() / 150.0, 2);
+    for (const Material& m : scene.materials) max_emission_ = std::max(max_emission_, max3(m.emission));
+    scale_ = max_emission_;
+    side_ = strata_side(opt.rays);
+    quadrature_ = opt.quadrature;
+    quadrature_.max_level = std::max(quadrature_.max_level, 3);  // links of near elements: one link, many points
+    grow();
+  }
+
+  void run(const std::function<void(const HierarchicalSolution&, int)>& on_round) {
+    auto& st = out_.stats;
+    const ElementTree& tree = out_.tree;
+    // First linking: every pair of roots whose patches can see each other.
+    auto t0 = std::chrono::steady_clock::now();
+    for (int p = 0; p < tree.root_count(); ++p)
+      for (int q = 0; q < tree.root_count(); ++q)
+        if (p != q && occlusion_.facing(node_patch(p), node_patch(q))) link(p, q);
+    st.seconds_link += seconds_since(t0);
+    std::vector<Rgb> previous;
+    for (int round = 0;; ++round) {
+      const auto t1 = std::chrono::steady_clock::now();
+      solve();
+      st.seconds_solve += seconds_since(t1);
+      double reflected = 0.0;
+      for (size_t n = 0; n < B_.size(); ++n) reflected = std::max(reflected, max3(B_[n] - emit_[n]));
+      if (reflected > 0.0) scale_ = reflected;
+      ++st.rounds;
+      publish();
+      st.links_per_round.push_back(count_links());
+      st.leaves_per_round.push_back(st.leaves);
+      if (on_round) on_round(out_, round);
+      // Change of the leaf field since the last round (compared at the
+      // current leaves through their ancestors' old values).
+      const std::vector<Rgb> now = leaf_values();
+      if (!previous.empty()) {
+        double change = 0.0, top = 0.0;
+        for (size_t n = 0; n < now.size(); ++n) {
+          const int old = nearest_old(static_cast<int>(n), previous.size());
+          if (old < 0) continue;
+          change = std::max(change, max3(glm::abs(now[n] - previous[static_cast<size_t>(old)])));
+          top = std::max(top, max3(now[n]));
+        }
+        st.last_change = top > 0.0 ? change / top : 0.0;
+      }
+      if (round >= hopt_.max_rounds) break;
+      if (round > 0 && st.last_change < opt_.tolerance) break;
+      previous = now;
+      const auto t2 = std::chrono::steady_clock::now();
+      const long long refined = refine_links();
+      st.seconds_link += seconds_since(t2);
+      if (refined == 0) break;
+    }
+    st.links = count_links();
+  }
+
+private:
+  int node_patch(int n) const { return out_.tree.node(n).patch; }
+  // Keeps the per-node arrays as long as the tree.
+  void grow() {
+    const size_t n = out_.tree.nodes().size();
+    while (tri_.size() < n) {
+      const int k = static_cast<int>(tri_.size());
+      const auto& node = out_.tree.node(k);
+      const auto& pos = out_.tree.positions();
+      tri_.push_back(make_triangle(pos[static_cast<size_t>(node.v[0])], pos[static_cast<size_t>(node.v[1])],
+                                   pos[static_cast<size_t>(node.v[2])],
+                                   scene_.patches[static_cast<size_t>(node.patch)].normal));
+      const Material& m = scene_.materials[static_cast<size_t>(scene_.patches[static_cast<size_t>(node.patch)].material)];
+      rho_.push_back(m.reflectance);
+      emit_.push_back(m.emission);
+      // A new node starts from its parent's radiosity (or its emission).
+      B_.push_back(node.parent >= 0 ? B_[static_cast<size_t>(node.parent)] : m.emission);
+      links_.emplace_back();
+    }
+  }
+
+  bool splittable(int n) const { return tri_[static_cast<size_t>(n)].area > 4.0 * min_area_; }
+
+  // Visible fraction of the segments between stratified points of p and q.
+  double visible_fraction(int p, int q) {
+    const Triangle& a = tri_[static_cast<size_t>(p)];
+    const Triangle& b = tri_[static_cast<size_t>(q)];
+    if (occlusion_.convex_enclosure() || !occlusion_.may_occlude(node_patch(p), node_patch(q), a, b)) return 1.0;
+    SplitMix rng(pair_seed(static_cast<uint64_t>(std::min(p, q)), static_cast<uint64_t>(std::max(p, q))));
+    int open = 0, total = 0;
+    for (int i = 0; i < side_; ++i)
+      for (int j = 0; j < side_; ++j) {
+        const double u = (i + rng.uniform()) / side_, v = (j + rng.uniform()) / side_;
+        const Vec3 x = triangle_point(a.v[0], a.v[1], a.v[2], u, v);
+        const Vec3 y = triangle_point(b.v[0], b.v[1], b.v[2], rng.uniform(), rng.uniform());
+        open += visibility_.visible(x, y, node_patch(p), node_patch(q)) ? 1 : 0;
+        ++total;
+      }
+    out_.stats.rays_cast += total;
+    return static_cast<double>(open) / total;
+  }
+
+  // F(p -> q) without occlusion, from points on p graded toward q.
+  double form_factor_to(int p, int q) const {
+    const Triangle& a = tri_[static_cast<size_t>(p)];
+    const Triangle& b = tri_[static_cast<size_t>(q)];
+    if (facing_away(a, b)) return 0.0;
+    const ReceiverPoints pts =
+        receiver_points(a, [&](const Vec3& x) { return distance_to_triangle(x, b); }, quadrature_);
+    return form_factor(pts, b);
+  }
+
+  // Links receiver p to source q, refining first where the oracle asks.
+  void link(int p, int q) {
+    ++out_.stats.links_examined;
+    const double f = form_factor_to(p, q);
+    if (f <= 0.0) return;
+    const double v = visible_fraction(p, q);
+    const Link l{q, f * v, f, spread(p, q, f), v > 0.0 && v < 1.0};
+    if (wants_refinement(p, l) && split_one(p, q, spread_dominates(l))) return;
+    links_[static_cast<size_t>(p)].push_back(l);
+  }
+
+  // Largest difference between the point form factors to q at p's corners
+  // and centroid and the link's mean: what pushing the link's irradiance
+  // down to p's children, all alike, gets wrong.
+  double spread(int p, int q, double f) const {
+    const Triangle& a = tri_[static_cast<size_t>(p)];
+    const Triangle& b = tri_[static_cast<size_t>(q)];
+    double s = 0.0;
+    for (const Vec3& x : {a.v[0], a.v[1], a.v[2], a.centroid()}) {
+      const Vec3 inside = x + 1e-6 * (a.centroid() - x);  // a corner on q's edge sees q edge-on
+      s = std::max(s, std::abs(point_polygon_form_factor(inside, a.normal, b.v.data(), 3, b.normal) - f));
+    }
+    return s;
+  }
+
+  static bool spread_dominates(const Link& l) { return l.spread > 0.5 * l.f; }
+
+  // The oracle: the error of gathering over this link at this level, as
+  // rho_p * B_q * (spread of F over p), plus the whole transport rho_p B_q F
+  // when the link is partly visible (where a shadow boundary crosses it).
+  bool wants_refinement(int p, const Link& l) const {
+    const double rb = max3(rho_[static_cast<size_t>(p)]) * max3(B_[static_cast<size_t>(l.source)]);
+    const double unseen = l.partial ? l.f : 0.0;
+    return rb * (l.spread + unseen) > hopt_.epsilon * scale_;
+  }
+
+  // Splits the receiver p when the form factor varies over it (the spread
+  // is what pushing down gets wrong) or it is the larger, else the source q,
+  // and links the children instead. Returns false when neither may be split.
+  bool split_one(int p, int q, bool receiver_first = false) {
+    const bool sp = splittable(p), sq = splittable(q);
+    if (!sp && !sq) return false;
+    const bool split_p =
+        sp && (receiver_first || !sq || tri_[static_cast<size_t>(p)].area >= tri_[static_cast<size_t>(q)].area);
+    const int n = split_p ? p : q;
+    int first = out_.tree.node(n).child;
+    if (first < 0) {
+      first = out_.tree.split(n);
+      grow();
+    }
+    for (int c = first; c < first + 4; ++c) {
+      if (split_p)
+        link(c, q);
+      else
+        link(p, c);
+    }
+    return true;
+  }
+
+  // Refines every link the oracle now flags (with the current radiosity).
+  long long refine_links() {
+    long long refined = 0;
+    const size_t n = links_.size();
+    for (size_t p = 0; p < n; ++p) {
+      std::vector<Link> keep, redo;
+      for (const Link& l : links_[p])
+        (wants_refinement(static_cast<int>(p), l) &&
+                 (splittable(static_cast<int>(p)) || splittable(l.source))
+             ? redo
+             : keep)
+            .push_back(l);
+      if (redo.empty()) continue;
+      links_[p] = keep;
+      for (const Link& l : redo) {
+        ++refined;
+        if (!split_one(static_cast<int>(p), l.source, spread_dominates(l))) links_[p].push_back(l);
+      }
+    }
+    return refined;
+  }
+
+  long long count_links() const {
+    long long c = 0;
+    for (const auto& l : links_) c += static_cast<long long>(l.size());
+    return c;
+  }
+
+  // The receiver side at leaf resolution: every leaf gathers over its own
+  // links and its ancestors' (instead of having their irradiance pushed down
+  // as one average), with the form factors to all those sources taken at the
+  // same points of the leaf. The sources of a leaf's path cover what it sees
+  // exactly once, so in a closed scene a leaf's row sums to 1 up to
+  // rounding, as in the matrix method; visibility stays the link's.
+  void leaf_terms() {
+    const ElementTree& tree = out_.tree;
+    const size_t n = tree.nodes().size();
+    terms_.assign(n, {});
+    F_sum_.assign(n, 0.0);
+    for (size_t x = 0; x < n; ++x) {
+      if (!tree.is_leaf(static_cast<int>(x))) continue;
+      std::vector<const Link*> path;
+      for (int a = static_cast<int>(x); a >= 0; a = tree.node(a).parent)
+        for (const Link& l : links_[static_cast<size_t>(a)]) path.push_back(&l);
+      if (path.empty()) continue;
+      const Triangle& t = tri_[x];
+      // One lower bound of the distance to the nearest source for the whole
+      // leaf: leaves next to a source get the finer points everywhere.
+      double near = std::numeric_limits<double>::infinity();
+      const Vec3 c = t.centroid();
+      for (const Link* l : path)
+        near = std::min(near, distance_to_triangle(c, tri_[static_cast<size_t>(l->source)]) - t.radius);
+      near = std::max(near, 0.0);
+      const ReceiverPoints pts = receiver_points(t, [near](const Vec3&) { return near; }, opt_.quadrature);
+      for (const Link* l : path) {
+        const double v = l->f_free > 0.0 ? l->f / l->f_free : 0.0;  // the link's visible fraction
+        const double c = form_factor(pts, tri_[static_cast<size_t>(l->source)]) * v;
+        if (c <= 0.0) continue;
+        terms_[x].push_back({l->source, c});
+        F_sum_[x] += c;
+      }
+      out_.stats.leaf_terms += static_cast<long long>(terms_[x].size());
+    }
+  }
+
+  // Gauss-Seidel sweeps in tree order: leaves gather (see leaf_terms),
+  // inner nodes take the area-weighted mean of their children (pull), until
+  // the largest change is below the tolerance times the largest radiosity.
+  void solve() {
+    const ElementTree& tree = out_.tree;
+    const size_t n = tree.nodes().size();
+    out_.stats.leaf_terms = 0;
+    leaf_terms();
+    for (int sweep = 0;; ++sweep) {
+      if (sweep >= opt_.max_iterations)
+        throw NumericalError(scene_.source + ": hierarchical solve did not converge to tolerance " +
+                             std::to_string(opt_.tolerance) + " in " + std::to_string(opt_.max_iterations) +
+                             " sweeps");
+      double change = 0.0, top = 0.0;
+      for (int r = 0; r < tree.root_count(); ++r) pull(r, change, top);
+      ++out_.stats.sweeps;
+      if (!std::isfinite(change))
+        throw NumericalError(scene_.source + ": hierarchical solve produced a non-finite radiosity");
+      if (change <= opt_.tolerance * top) break;
+    }
+    H_.assign(n, Rgb(0.0));
+    for (size_t x = 0; x < n; ++x)
+      for (const auto& [q, c] : terms_[x]) H_[x] += c * B_[static_cast<size_t>(q)];
+  }
+
+  Rgb pull(int p, double& change, double& top) {
+    const auto& node = out_.tree.node(p);
+    Rgb b(0.0);
+    if (node.child < 0) {
+      Rgb g(0.0);
+      for (const auto& [q, c] : terms_[static_cast<size_t>(p)]) g += c * B_[static_cast<size_t>(q)];
+      b = emit_[static_cast<size_t>(p)] + rho_[static_cast<size_t>(p)] * g;
+    } else {
+      double area = 0.0;
+      for (int c = node.child; c < node.child + 4; ++c) {
+        const double a = tri_[static_cast<size_t>(c)].area;
+        b += a * pull(c, change, top);
+        area += a;
+      }
+      b /= area;
+    }
+    Rgb& old = B_[static_cast<size_t>(p)];
+    change = std::max(change, max3(glm::abs(b - old)));
+    top = std::max(top, max3(b));
+    old = b;
+    return b;
+  }
+
+  std::vector<Rgb> leaf_values() const {
+    std::vector<Rgb> v(B_.size());
+    for (size_t n = 0; n < B_.size(); ++n) v[n] = B_[n];
+    return v;
+  }
+  // The deepest node that existed in the previous round on the path to n.
+  int nearest_old(int n, size_t old_count) const {
+    while (n >= 0 && static_cast<size_t>(n) >= old_count) n = out_.tree.node(n).parent;
+    return n;
+  }
+
+  // Fills the output: conforming mesh, per-triangle values, vertex values,
+  // counts and the energy balance.
+  void publish() {
+    HierarchicalSolution& o = out_;
+    o.node_radiosity = B_;
+    o.node_links.assign(links_.size(), 0);
+    o.links.assign(links_.size(), {});
+    for (size_t p = 0; p < links_.size(); ++p) {
+      o.node_links[p] = static_cast<int>(links_[p].size());
+      for (const Link& l : links_[p]) o.links[p].push_back({l.source, l.f});
+    }
+    o.mesh = o.tree.conforming_mesh(&o.leaf_of);
+    Solution& s = o.solution;
+    s = Solution{};
+    s.element.resize(o.leaf_of.size());
+    // A zero-area triangle takes the value of the leaf whose edge it closes:
+    // the leaf emitted just before its fan.
+    int owner = -1;
+    Mesh leaves;
+    leaves.positions = o.mesh.positions;
+    leaves.feature_edges = o.mesh.feature_edges;
+    std::vector<Rgb> leaf_b;
+    o.stats.leaves = 0;
+    o.stats.zero_area_triangles = 0;
+    for (size_t t = 0; t < o.leaf_of.size(); ++t) {
+      if (o.leaf_of[t] >= 0) {
+        owner = o.leaf_of[t];
+        ++o.stats.leaves;
+        leaves.triangles.push_back(o.mesh.triangles[t]);
+        leaves.patch.push_back(o.mesh.patch[t]);
+        leaf_b.push_back(B_[static_cast<size_t>(owner)]);
+      } else {
+        ++o.stats.zero_area_triangles;
+      }
+      s.element[t] = B_[static_cast<size_t>(owner)];
+    }
+    // Vertex values from the leaves (zero-area triangles take no part); a
+    // T-vertex gets the value the finer side gives it.
+    const NodalField leaf_nodal = compute_nodal(scene_, leaves, leaf_b, opt_.crease_angle, opt_.nodal);
+    s.nodal = leaf_nodal;
+    // Corners for the zero-area triangles: the display vertex of the same
+    // point used by any leaf of the same patch.
+    std::map<std::pair<int, int>, int> display;  // (patch, mesh vertex) -> display vertex
+    for (size_t t = 0; t < leaves.triangles.size(); ++t)
+      for (int k = 0; k < 3; ++k)
+        display[{leaves.patch[t], leaves.triangles[t][static_cast<size_t>(k)]}] =
+            leaf_nodal.corners[t][static_cast<size_t>(k)];
+    s.nodal.corners.clear();
+    size_t li = 0;
+    for (size_t t = 0; t < o.leaf_of.size(); ++t) {
+      if (o.leaf_of[t] >= 0) {
+        s.nodal.corners.push_back(leaf_nodal.corners[li++]);
+        continue;
+      }
+      std::array<int, 3> c{};
+      for (int k = 0; k < 3; ++k) {
+        const auto it = display.find({o.mesh.patch[t], o.mesh.triangles[t][static_cast<size_t>(k)]});
+        c[static_cast<size_t>(k)] = it != display.end() ? it->second : 0;
+      }
+      s.nodal.corners.push_back(c);
+    }
+    // Energy balance over the leaves.
+    SolveStats& st = s.stats;
+    st.elements = o.stats.leaves;
+    o.stats.row_sum_min = 1e300;
+    o.stats.row_sum_max = -1e300;
+    for (size_t p = 0; p < B_.size(); ++p)
+      if (o.tree.is_leaf(static_cast<int>(p))) {
+        o.stats.row_sum_min = std::min(o.stats.row_sum_min, F_sum_[p]);
+        o.stats.row_sum_max = std::max(o.stats.row_sum_max, F_sum_[p]);
+      }
+    for (size_t p = 0; p < B_.size(); ++p) {
+      if (!o.tree.is_leaf(static_cast<int>(p))) continue;
+      const double a = tri_[p].area;
+      for (int c = 0; c < 3; ++c) {
+        st.power_emitted[c] += emit_[p][c] * a;
+        st.power_absorbed[c] += (1.0 - rho_[p][c]) * H_[p][c] * a;
+        st.power_escaped[c] += B_[p][c] * a * (1.0 - F_sum_[p]);
+      }
+    }
+    st.rays_cast = o.stats.rays_cast;
+    st.form_factors = count_links();
+  }
+
+  const Scene& scene_;
+  const SolveOptions& opt_;
+  HierarchicalOptions hopt_;
+  HierarchicalSolution& out_;
+  Visibility visibility_;
+  Occlusion occlusion_;
+  double min_area_ = 0.0, max_emission_ = 0.0;
+  // The radiosity the oracle's epsilon is relative to: the largest emission
+  // for the first linking, then the largest reflected radiosity (B - E) of
+  // the last solve, so that a small bright lamp does not set the scale.
+  double scale_ = 0.0;
+  QuadratureOptions quadrature_;
+  int side_ = 4;
+  std::vector<Triangle> tri_;
+  std::vector<Rgb> rho_, emit_, B_, H_;
+  std::vector<double> F_sum_;
+  std::vector<std::vector<std::pair<int, double>>> terms_;  // per leaf: (source node, F x visibility at the leaf)
+  std::vector<std::vector<Link>> links_;  // per receiver node
+};
+
+}  // namespace
+
+HierarchicalSolution solve_hierarchical(const Scene& scene, const Mesh& initial, const SolveOptions& options,
+                                        const HierarchicalOptions& hopt,
+                                        const std::function<void(const HierarchicalSolution&, int)>& on_round) {
+  check_solve_options(options);
+  if (!(hopt.epsilon > 0.0) || !(hopt.min_area >= 0.0) || hopt.max_rounds < 0)
+    throw InputError("hierarchical options out of range: epsilon " + std::to_string(hopt.epsilon) + ", min area " +
+                     std::to_string(hopt.min_area) + ", rounds " + std::to_string(hopt.max_rounds));
+  HierarchicalSolution out{ElementTree(initial), {}, {}, {}, {}, {}, {}};
+  Solver solver(scene, initial, options, hopt, out);
+  solver.run(on_round);
+  return out;
+}
+
+}  // namespace radmesh

@@ -1,0 +1,71 @@
+// Hierarchical radiosity (Hanrahan, Salzman & Aupperle 1991) on the element
+// hierarchy of meshing/hierarchy.h: links between nodes at any level, made
+// by recursive refinement with an oracle on the transported light, solved by
+// gathering over links and pulling radiosity up through the hierarchy. The
+// receiver side gathers at leaf resolution (each leaf over its own and its
+// ancestors' links, at its own points) rather than pushing one average down:
+// rows then sum to 1 in a closed scene, which keeps reflectance near 1 stable.
+#pragma once
+
+#include "meshing/hierarchy.h"
+#include "radiosity/solve.h"
+
+#include <functional>
+#include <vector>
+
+namespace radmesh {
+
+struct HierarchicalOptions {
+  // Oracle: the link receiver p <- source q is refined while its error
+  // estimate exceeds epsilon x the largest emission and one of the two may
+  // still be split (epsilon is relative to the largest emission for the first
+  // linking, then to the largest reflected radiosity B - E of the last
+  // solve). The estimate is rho_p * B_q * (the largest difference
+  // between the point form factor to q at p's corners and centroid and the
+  // link's form factor), plus rho_p * B_q * F when the link is partly visible
+  // (some shadow rays blocked): links across shadow boundaries go first.
+  double epsilon = 2e-3;
+  // Elements are not split below this area; 0 = (scene diagonal / 150)^2 / 2.
+  double min_area = 0.0;
+  // Refinement rounds after the first solve (each: refine links where the
+  // current radiosity says it matters, then solve again). Stops earlier when
+  // no link is refined or the leaf radiosity changes less than the tolerance.
+  int max_rounds = 6;
+};
+
+struct HierarchicalStats {
+  int rounds = 0;                 // solves done (the first one included)
+  long long links = 0;            // links at the end
+  long long links_examined = 0;   // oracle calls
+  long long rays_cast = 0;
+  int leaves = 0;
+  int zero_area_triangles = 0;    // in the conforming output mesh
+  int sweeps = 0;                 // gather + push-pull sweeps, all rounds
+  double seconds_link = 0.0, seconds_solve = 0.0;
+  std::vector<long long> links_per_round;
+  std::vector<int> leaves_per_round;
+  double last_change = 0.0;       // largest relative change of a leaf between the last two rounds
+  // Per leaf, the sum of F x visibility over the links of its path to the
+  // root: about 1 in a closed scene. Smallest and largest.
+  double row_sum_min = 0.0, row_sum_max = 0.0;
+  long long leaf_terms = 0;       // (leaf, source) terms gathered per sweep, last round
+};
+
+struct HierarchicalSolution {
+  ElementTree tree;
+  std::vector<Rgb> node_radiosity;  // per tree node (inner nodes: area-weighted mean of children)
+  std::vector<int> node_links;      // per tree node: links it gathers over
+  std::vector<std::vector<std::pair<int, double>>> links;  // per receiver node: (source node, F x visibility)
+  Mesh mesh;                        // conforming mesh: leaves, then zero-area fans
+  std::vector<int> leaf_of;         // per mesh triangle: its leaf, or -1 (zero-area)
+  Solution solution;                // per mesh triangle (zero-area: the leaf owning the edge) and per vertex
+  HierarchicalStats stats;
+};
+
+// `on_round(solution, round)` is called after every solve (for a series of
+// files); the solution passed has mesh, leaf_of and solution filled.
+HierarchicalSolution solve_hierarchical(
+    const Scene& scene, const Mesh& initial, const SolveOptions& options, const HierarchicalOptions& hopt,
+    const std::function<void(const HierarchicalSolution&, int round)>& on_round = {});
+
+}  // namespace radmesh

@@ -1,0 +1,115 @@
+// Hierarchical radiosity: closed forms, energy balance, agreement with the
+// full-matrix solve, determinism and stress.
+
+#include "io/obj_reader.h"
+#include "io/summary.h"
+#include "meshing/mesh.h"
+#include "radiosity/hierarchical.h"
+#include "radiosity/solve.h"
+
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cstdio>
+#include <map>
+
+using namespace radmesh;
+
+namespace {
+const std::string kData = RADMESH_TEST_DATA;
+
+Mesh coarse_mesh(const Scene& s, double edge, DiscontinuityMode mode = DiscontinuityMode::contacts) {
+  MeshingOptions o;
+  o.max_edge = edge;
+  o.discontinuity = mode;
+  return mesh_scene(s, o);
+}
+
+double relative_imbalance(const SolveStats& st) {
+  return (st.power_emitted.x - st.power_absorbed.x - st.power_escaped.x) / st.power_emitted.x;
+}
+}  // namespace
+
+TEST(Hierarchical, FurnaceIsUniform) {
+  const Scene s = read_obj_scene(kData + "/furnace_cube/furnace_cube.obj");
+  const Mesh m = coarse_mesh(s, 0.5);
+  HierarchicalOptions ho;
+  ho.epsilon = 0.02;
+  ho.min_area = 2e-3;  // a few thousand leaves: the property does not depend on depth
+  const HierarchicalSolution h = solve_hierarchical(s, m, {}, ho);
+  const Material& mat = s.materials[static_cast<size_t>(s.patches[0].material)];
+  const double expected = mat.emission.x / (1.0 - mat.reflectance.x);
+  double lo = 1e300, hi = 0.0, area = 0.0, mean = 0.0;
+  for (size_t t = 0; t < h.solution.element.size(); ++t) {
+    const double b = h.solution.element[t].x, a = h.mesh.area(static_cast<int>(t));
+    lo = std::min(lo, b);
+    hi = std::max(hi, b);
+    mean += a * b;
+    area += a;
+  }
+  mean /= area;
+  std::printf("[hierarchical] furnace: %d leaves, %lld links, %d rounds; B in [%.4f, %.4f], area mean %.5f (exact %.1f); rows [%.4f, %.4f]\n",
+              h.stats.leaves, h.stats.links, h.stats.rounds, lo, hi, mean, expected, h.stats.row_sum_min, h.stats.row_sum_max);
+  // Each leaf gathers at its own points from sources that cover the closed
+  // cube once: every row sums to 1, so B = E / (1 - rho) at every leaf.
+  EXPECT_NEAR(lo, expected, 1e-5 * expected);
+  EXPECT_NEAR(hi, expected, 1e-5 * expected);
+  EXPECT_NEAR(h.stats.row_sum_min, 1.0, 1e-9);
+  EXPECT_NEAR(h.stats.row_sum_max, 1.0, 1e-9);
+  EXPECT_GT(h.stats.links, 0);
+  EXPECT_GT(h.stats.rounds, 1);
+}
+
+TEST(Hierarchical, CornellBoxAgreesWithTheMatrixSolveAndBalancesEnergy) {
+  const Scene s = read_obj_scene(kData + "/cornell_box/cornell_box.obj");
+  const Mesh coarse = coarse_mesh(s, 200.0);
+  const auto t0 = std::chrono::steady_clock::now();
+  const HierarchicalSolution h = solve_hierarchical(s, coarse, {}, {});
+  const double th = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const Mesh fine = coarse_mesh(s, 45.0);
+  const auto t1 = std::chrono::steady_clock::now();
+  const Solution ref = solve_matrix(s, fine, {});
+  const double tm = std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
+  std::printf("[hierarchical] %d leaves, %lld links, %d rounds, %d sweeps, %lld rays, %.2f s; matrix %d elements %.2f s\n",
+              h.stats.leaves, h.stats.links, h.stats.rounds, h.stats.sweeps, h.stats.rays_cast, th,
+              fine.triangle_count(), tm);
+  const auto mh = patch_mean_radiosity(s, h.mesh, h.solution.element);
+  const auto mm = patch_mean_radiosity(s, fine, ref.element);
+  for (size_t p = 0; p < s.patches.size(); ++p) {
+    const double scale = std::max(mm[p].x, 0.05 * mm[0].x);
+    EXPECT_NEAR(mh[p].x, mm[p].x, 0.05 * scale) << s.patches[p].name;
+  }
+  EXPECT_LT(std::abs(relative_imbalance(h.solution.stats)), 0.01);
+  EXPECT_GT(h.stats.zero_area_triangles, 0);
+}
+
+TEST(Hierarchical, SameResultWithOneAndTwoThreads) {
+  const Scene s = read_obj_scene(kData + "/box_on_floor/box_on_floor.obj");
+  const Mesh m = coarse_mesh(s, 1.0);
+  SolveOptions one, two;
+  one.threads = 1;
+  two.threads = 2;
+  const HierarchicalSolution a = solve_hierarchical(s, m, one, {}), b = solve_hierarchical(s, m, two, {});
+  ASSERT_EQ(a.solution.element.size(), b.solution.element.size());
+  for (size_t t = 0; t < a.solution.element.size(); ++t) EXPECT_EQ(a.solution.element[t], b.solution.element[t]);
+  EXPECT_EQ(a.stats.links, b.stats.links);
+}
+
+TEST(HierarchicalStress, ReflectanceNearOneConverges) {
+  for (double rho : {0.99, 0.999}) {
+    Scene s = read_obj_scene(kData + "/furnace_cube/furnace_cube.obj");
+    for (Material& m : s.materials) m.reflectance = Rgb(rho);
+    SolveOptions o;
+    o.tolerance = 1e-7;
+    HierarchicalOptions ho;
+    ho.epsilon = 0.05;
+    ho.min_area = 1e-2;
+    const HierarchicalSolution h = solve_hierarchical(s, coarse_mesh(s, 0.5), o, ho);
+    const double e = s.materials[0].emission.x;
+    std::printf("[hierarchical] rho %.3f: %d sweeps, B %.6g (closed form %.6g)\n", rho, h.stats.sweeps,
+                h.solution.element[0].x, e / (1.0 - rho));
+    // Rows sum to 1, so the closed form holds to the solver tolerance
+    // amplified by 1 / (1 - rho).
+    for (const Rgb& b : h.solution.element) EXPECT_NEAR(b.x, e / (1.0 - rho), 1e-7 / (1.0 - rho) / (1.0 - rho) * e);
+  }
+}
