@@ -10,6 +10,7 @@
 #include "io/vtk_writer.h"
 #include "meshing/errors.h"
 #include "meshing/mesh.h"
+#include "radiosity/hierarchical.h"
 #include "radiosity/probe.h"
 #include "radiosity/solve.h"
 
@@ -35,8 +36,10 @@ struct Params {
   std::string probe_file;
   bool quiet = false;
   bool png = true;
-  std::string discontinuity = "full";
+  std::string discontinuity;  // empty: full for matrix, contacts for hierarchical
   std::string nodal = "fit";
+  std::string method = "matrix";
+  HierarchicalOptions hierarchical;
 };
 
 // Progress on stderr for phases longer than a second: phase, percent, elapsed.
@@ -81,6 +84,7 @@ private:
 
 // Options that can be checked without reading anything: done before any work.
 void check_params(Params& p, bool solving) {
+  if (p.discontinuity.empty()) p.discontinuity = p.method == "hierarchical" ? "contacts" : "full";
   p.meshing.discontinuity = parse_discontinuity_mode(p.discontinuity);
   p.solve.nodal = p.nodal == "mean" ? NodalMethod::mean : NodalMethod::linear_fit;
   if (p.meshing.max_edge < 0.0 || !std::isfinite(p.meshing.max_edge))
@@ -107,7 +111,10 @@ int run(Params& p, bool solving) {
   std::vector<Probe> probes;
   if (!p.probe_file.empty()) probes = read_probes(p.probe_file);
 
+  // Hierarchical radiosity refines by itself: its roots start coarser.
+  if (solving && p.method == "hierarchical" && p.meshing.max_edge == 0.0) p.meshing.max_edge = scene.diagonal() / 5.0;
   info.meshing = resolve_meshing_options(scene, p.meshing);
+  info.method = solving ? p.method : "none";
   rep.begin("mesh");
   const Mesh mesh = mesh_scene(scene, info.meshing, &info.mesh_report);
   const TriangleQuality quality = compute_quality(mesh);
@@ -118,17 +125,80 @@ int run(Params& p, bool solving) {
 
   std::optional<Solution> sol;
   std::vector<ProbeResult> probe_results;
-  if (solving) {
+  // Hierarchical: the conforming mesh (leaves and zero-area fans) replaces
+  // the initial one, with per-cell level, zero_area and links; one snapshot
+  // per refinement round for the .pvd series.
+  std::optional<Mesh> solved_mesh;
+  std::vector<std::pair<std::string, std::vector<int>>> cell_fields;
+  struct Snapshot {
+    Mesh mesh;
+    Solution solution;
+    std::vector<std::pair<std::string, std::vector<int>>> fields;
+  };
+  std::vector<Snapshot> rounds;
+  auto fields_of = [](const HierarchicalSolution& h) {
+    std::vector<int> level, zero, links;
+    for (int leaf : h.leaf_of) {
+      level.push_back(leaf >= 0 ? h.tree.node(leaf).level : -1);
+      zero.push_back(leaf < 0 ? 1 : 0);
+      links.push_back(leaf >= 0 ? h.node_links[static_cast<size_t>(leaf)] : 0);
+    }
+    return std::vector<std::pair<std::string, std::vector<int>>>{{"level", level}, {"zero_area", zero}, {"links", links}};
+  };
+  if (solving && p.method == "hierarchical") {
+    rep.begin("hierarchical");
+    const HierarchicalSolution h = solve_hierarchical(scene, mesh, p.solve, p.hierarchical,
+                                                      [&](const HierarchicalSolution& r, int) {
+                                                        rounds.push_back({r.mesh, r.solution, fields_of(r)});
+                                                      });
+    sol = h.solution;
+    solved_mesh = h.mesh;
+    cell_fields = fields_of(h);
+    info.seconds.push_back({"link", h.stats.seconds_link});
+    info.seconds.push_back({"solve", h.stats.seconds_solve});
+    rep.end();
+    const HierarchicalStats& hs = h.stats;
+    info.solver_extra = {{"epsilon", p.hierarchical.epsilon},
+                         {"rounds", hs.rounds},
+                         {"links", hs.links},
+                         {"links_per_round", hs.links_per_round},
+                         {"leaves_per_round", hs.leaves_per_round},
+                         {"leaves", hs.leaves},
+                         {"zero_area_triangles", hs.zero_area_triangles},
+                         {"leaf_terms", hs.leaf_terms},
+                         {"sweeps", hs.sweeps},
+                         {"rays_cast", hs.rays_cast},
+                         {"last_change", hs.last_change},
+                         {"row_sum_min", hs.row_sum_min},
+                         {"row_sum_max", hs.row_sum_max}};
+    rep.note(std::to_string(hs.leaves) + " leaves, " + std::to_string(hs.links) + " links, " +
+             std::to_string(hs.zero_area_triangles) + " zero-area triangles, " + std::to_string(hs.rounds) +
+             " rounds");
+  } else if (solving) {
     rep.begin("form factors");
     sol = solve_matrix(scene, mesh, p.solve, [&](const std::string& ph, double f) { rep.update(ph, f); });
     info.seconds.push_back({"form_factors", sol->stats.seconds_form_factors});
     info.seconds.push_back({"solve", sol->stats.seconds_solve});
     rep.end();
-    if (!probes.empty()) {
-      rep.begin("probes");
-      probe_results = evaluate_probes(scene, mesh, sol->element, probes, p.solve);
-      info.seconds.push_back({"probes", rep.end()});
+  }
+  const Mesh& out_mesh = solved_mesh ? *solved_mesh : mesh;
+  // Zero-area triangles have no angles worth the name: 0 and 180 degrees,
+  // aspect ratio 0 (they are flagged zero_area), never inf or NaN in a file.
+  auto sanitized = [](const Mesh& m, TriangleQuality q) {
+    for (int t = 0; t < m.triangle_count(); ++t) {
+      const size_t u = static_cast<size_t>(t);
+      if (m.area(t) > 0.0 && std::isfinite(q.aspect_ratio[u]) && std::isfinite(q.min_angle[u])) continue;
+      q.min_angle[u] = 0.0;
+      q.max_angle[u] = 180.0;
+      q.aspect_ratio[u] = 0.0;
     }
+    return q;
+  };
+  const TriangleQuality out_quality = solved_mesh ? sanitized(out_mesh, compute_quality(out_mesh)) : quality;
+  if (solving && !probes.empty()) {
+    rep.begin("probes");
+    probe_results = evaluate_probes(scene, out_mesh, sol->element, probes, p.solve);
+    info.seconds.push_back({"probes", rep.end()});
   }
 
   // Everything is computed: only now is the output directory touched.
@@ -137,10 +207,24 @@ int run(Params& p, bool solving) {
   std::vector<std::string> written;
   const std::string vtu = (fs::path(p.out_dir) / (solving ? "radiosity.vtu" : "mesh.vtu")).string();
   if (solving)
-    write_vtu(vtu, scene, mesh, quality, *sol);
+    write_vtu(vtu, scene, out_mesh, out_quality, *sol, cell_fields);
   else
     write_mesh_vtu(vtu, scene, mesh, quality);
   written.push_back(vtu);
+  if (!rounds.empty()) {
+    // One file per refinement round and a .pvd collection to step through them.
+    std::vector<std::string> names;
+    for (size_t r = 0; r < rounds.size(); ++r) {
+      const std::string name = "radiosity_round_" + std::to_string(r) + ".vtu";
+      const Snapshot& snap = rounds[r];
+      write_vtu((fs::path(p.out_dir) / name).string(), scene, snap.mesh,
+                sanitized(snap.mesh, compute_quality(snap.mesh)), snap.solution, snap.fields);
+      names.push_back(name);
+    }
+    const std::string pvd = (fs::path(p.out_dir) / "radiosity.pvd").string();
+    write_pvd(pvd, names);
+    written.push_back(pvd);
+  }
   if (!info.mesh_report.discontinuities.empty()) {
     const std::string lines = (fs::path(p.out_dir) / "discontinuities.vtu").string();
     write_discontinuities_vtu(lines, info.mesh_report.discontinuities);
@@ -154,14 +238,14 @@ int run(Params& p, bool solving) {
   if (solving && p.png) {
     const std::string png = (fs::path(p.out_dir) / "radiosity.png").string();
     std::string why;
-    if (render_png(png, scene, mesh, *sol, RenderOptions{}, &why))
+    if (render_png(png, scene, out_mesh, *sol, RenderOptions{}, &why))
       written.push_back(png);
     else
       rep.note("PNG skipped: " + why);
   }
   info.seconds.push_back({"write", rep.end()});
   const std::string summary = (fs::path(p.out_dir) / "summary.json").string();
-  write_json(summary, make_summary(info, scene, mesh, quality, sol ? &*sol : nullptr));
+  write_json(summary, make_summary(info, scene, out_mesh, out_quality, sol ? &*sol : nullptr));
   written.push_back(summary);
 
   if (!p.quiet) {
@@ -240,7 +324,8 @@ void add_common(CLI::App* cmd, Params& p, const char* scene_help = "scene file (
       ->check(CLI::Range(0.0, 30.0));
   cmd->add_option("--discontinuity", p.discontinuity,
                   "discontinuity lines built into the initial mesh: off, contacts (where patches meet) or "
-                  "full (contacts and the D1/D2 shadow boundaries of every emitter; the default)")
+                  "full (contacts and the D1/D2 shadow boundaries of every emitter; the default, but contacts "
+                  "with --method hierarchical)")
       ->check(CLI::IsMember({"off", "contacts", "full"}));
   cmd->add_option("--max-shadow-lines", p.meshing.shadow.max_lines_per_receiver,
                   "with --discontinuity full: shadow-line segments kept per receiving patch (default 400)")
@@ -274,6 +359,15 @@ int main(int argc, char** argv) {
                       "probe file: lines 'label x y z nx ny nz'; writes probes.csv")
       ->check(CLI::ExistingFile);
   run_cmd->add_flag("!--no-png", run_p.png, "do not render radiosity.png");
+  run_cmd->add_option("--method", run_p.method,
+                      "solver: matrix (every element pair, the default) or hierarchical (Hanrahan's "
+                      "hierarchical radiosity on an element hierarchy closed by zero-area triangles; "
+                      "experimental); hierarchical also writes radiosity.pvd, one file per refinement round")
+      ->check(CLI::IsMember({"matrix", "hierarchical"}));
+  run_cmd->add_option("--epsilon", run_p.hierarchical.epsilon,
+                      "with --method hierarchical: link refinement threshold, relative to the largest "
+                      "reflected radiosity (default 0.002)")
+      ->check(CLI::Range(1e-9, 1.0));
   run_cmd->add_option("--nodal", run_p.nodal,
                       "vertex values from element values: fit (least-squares plane through the elements "
                       "around the vertex, default) or mean (their area-weighted mean)")

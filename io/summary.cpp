@@ -112,11 +112,12 @@ nlohmann::json make_summary(const RunInfo& info, const Scene& scene, const Mesh&
     doc["counts"]["rays_cast"] = st.rays_cast;
     doc["counts"]["rays_skipped"] = st.rays_skipped;
     doc["counts"]["pairs_unoccludable"] = st.pairs_unoccludable;
-    doc["solver"] = {{"method", "matrix"},
+    doc["solver"] = {{"method", info.method},
                      {"channels_solved", st.channels_solved},
                      {"iterations", st.iterations},
                      {"residual", st.residual},
                      {"convex_enclosure", st.convex_enclosure}};
+    for (const auto& [k, v] : info.solver_extra.items()) doc["solver"][k] = v;
     const Rgb imbalance = st.power_emitted - st.power_absorbed - st.power_escaped;
     Rgb rel(0.0);
     for (int c = 0; c < 3; ++c)

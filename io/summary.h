@@ -21,6 +21,8 @@ struct RunInfo {
   SolveOptions solve;
   MeshReport mesh_report;
   std::vector<std::pair<std::string, double>> seconds;  // phase -> wall seconds, in order
+  std::string method = "matrix";  // the solver
+  nlohmann::json solver_extra = nlohmann::json::object();  // merged into "solver"
 };
 
 // Per patch: area-weighted mean of the element radiosity.

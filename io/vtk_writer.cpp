@@ -151,8 +151,18 @@ void write_grid(const std::string& path, vtkUnstructuredGrid* grid) {
 
 }  // namespace
 
+void write_pvd(const std::string& path, const std::vector<std::string>& files) {
+  write_file_atomically(path, [&](std::ostream& out) {
+    out << "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n  <Collection>\n";
+    for (size_t i = 0; i < files.size(); ++i)
+      out << "    <DataSet timestep=\"" << i << "\" part=\"0\" file=\"" << files[i] << "\"/>\n";
+    out << "  </Collection>\n</VTKFile>\n";
+  });
+}
+
 void write_vtu(const std::string& path, const Scene& scene, const Mesh& mesh,
-               const TriangleQuality& quality, const Solution& solution) {
+               const TriangleQuality& quality, const Solution& solution,
+               const std::vector<std::pair<std::string, std::vector<int>>>& int_cell_fields) {
   const NodalField& nodal = solution.nodal;
   const auto n = static_cast<std::size_t>(mesh.triangle_count());
   check_count(path, "Solution::element", solution.element.size(), n);
@@ -165,6 +175,13 @@ void write_vtu(const std::string& path, const Scene& scene, const Mesh& mesh,
   grid->GetPointData()->AddArray(rgb_array("radiosity", nodal.radiosity));
   grid->GetCellData()->AddArray(rgb_array("radiosity", solution.element));
   add_mesh_cell_data(path, grid->GetCellData(), scene, mesh, quality);
+  for (const auto& [name, values] : int_cell_fields) {
+    check_count(path, name.c_str(), values.size(), n);
+    vtkNew<vtkIntArray> a;
+    a->SetName(name.c_str());
+    for (int v : values) a->InsertNextValue(v);
+    grid->GetCellData()->AddArray(a);
+  }
   write_grid(path, grid);
 }
 

@@ -20,7 +20,12 @@ namespace radmesh {
 // half-written file and an existing file at `path` untouched. Throws IoError
 // naming `path` when writing fails or the inputs disagree in size or indices.
 void write_vtu(const std::string& path, const Scene& scene, const Mesh& mesh,
-               const TriangleQuality& quality, const Solution& solution);
+               const TriangleQuality& quality, const Solution& solution,
+               const std::vector<std::pair<std::string, std::vector<int>>>& int_cell_fields = {});
+
+// A ParaView collection (.pvd) of `files` (names relative to the .pvd), one
+// time step each (0, 1, ...), so ParaView steps through them. Atomic; throws IoError.
+void write_pvd(const std::string& path, const std::vector<std::string>& files);
 
 // The discontinuity lines as a line dataset (VTK_LINE cells) with cell data
 // kind (0 = D0 contact, 1 = D1, 2 = D2), event (0 = contact, 1 = emitter

@@ -2,6 +2,14 @@
 // output on bad input.
 
 #include <gtest/gtest.h>
+
+#include <vtkCellData.h>
+#include <vtkDataArray.h>
+#include <vtkNew.h>
+#include <vtkUnstructuredGrid.h>
+#include <vtkXMLUnstructuredGridReader.h>
+
+#include <iterator>
 #include <nlohmann/json.hpp>
 
 #include <cctype>
@@ -114,6 +122,45 @@ TEST(Cli, RunWithShadowLinesReportsThemAndWhatWasSkipped) {
   fs::remove_all(out);
 }
 
+TEST(Cli, HierarchicalRunWritesTheRefinementSeriesWithZeroAreaFlags) {
+  const fs::path out = fresh_dir("run_hier");
+  const Result r = radmesh("run " + kData + "/box_on_floor/box_on_floor.obj --method hierarchical --epsilon 0.01 "
+                           "--no-png -q -o " + out.string());
+  ASSERT_EQ(r.status, 0) << r.err;
+  std::ifstream in(out / "summary.json");
+  const nlohmann::json s = nlohmann::json::parse(in);
+  EXPECT_EQ(s["solver"]["method"], "hierarchical");
+  EXPECT_EQ(s["options"]["discontinuity"], "contacts");  // the hierarchical default
+  const int rounds = s["solver"]["rounds"].get<int>();
+  EXPECT_GE(rounds, 2);
+  EXPECT_EQ(s["solver"]["links_per_round"].size(), static_cast<size_t>(rounds));
+  EXPECT_LT(std::abs(s["energy"]["relative_imbalance"][0].get<double>()), 0.02);
+  // The series: one file per round, each present.
+  std::ifstream pvd(out / "radiosity.pvd");
+  const std::string text((std::istreambuf_iterator<char>(pvd)), std::istreambuf_iterator<char>());
+  for (int k = 0; k < rounds; ++k) {
+    const std::string name = "radiosity_round_" + std::to_string(k) + ".vtu";
+    EXPECT_NE(text.find(name), std::string::npos) << name;
+    EXPECT_TRUE(fs::exists(out / name)) << name;
+  }
+  // The final file flags its zero-area triangles, as many as the summary says.
+  vtkNew<vtkXMLUnstructuredGridReader> reader;
+  reader->SetFileName((out / "radiosity.vtu").string().c_str());
+  reader->Update();
+  vtkDataArray* zero = reader->GetOutput()->GetCellData()->GetArray("zero_area");
+  vtkDataArray* level = reader->GetOutput()->GetCellData()->GetArray("level");
+  vtkDataArray* links = reader->GetOutput()->GetCellData()->GetArray("links");
+  ASSERT_NE(zero, nullptr);
+  ASSERT_NE(level, nullptr);
+  ASSERT_NE(links, nullptr);
+  int flagged = 0;
+  for (vtkIdType c = 0; c < zero->GetNumberOfTuples(); ++c) flagged += zero->GetTuple1(c) != 0.0 ? 1 : 0;
+  EXPECT_EQ(flagged, s["solver"]["zero_area_triangles"].get<int>());
+  EXPECT_EQ(reader->GetOutput()->GetNumberOfCells(),
+            s["solver"]["leaves"].get<int>() + s["solver"]["zero_area_triangles"].get<int>());
+  fs::remove_all(out);
+}
+
 struct BadRun {
   const char* args;
   const char* must_contain;
@@ -145,7 +192,11 @@ INSTANTIATE_TEST_SUITE_P(
                       BadRun{"run DATA/cornell_box/cornell_box.obj --bogus-flag", "bogus"},
                       BadRun{"run DATA/cornell_box/cornell_box.obj --min-angle 45", "min-angle"},
                       BadRun{"run DATA/cornell_box/cornell_box.obj --tolerance 0", "tolerance"},
-                      BadRun{"run DATA/cornell_box/cornell_box.obj --max-memory 0.000001", "GiB"}),
+                      BadRun{"run DATA/cornell_box/cornell_box.obj --max-memory 0.000001", "GiB"},
+                      BadRun{"run DATA/cornell_box/cornell_box.obj --method fastest", "--method"},
+                      BadRun{"run DATA/cornell_box/cornell_box.obj --method hierarchical --epsilon 0", "--epsilon"},
+                      BadRun{"run DATA/cornell_box/cornell_box.obj --discontinuity some", "--discontinuity"},
+                      BadRun{"mesh DATA/cornell_box/cornell_box.obj --max-shadow-lines -1", "--max-shadow-lines"}),
     [](const auto& info) {
       std::string name = std::to_string(info.index) + "_";
       for (char ch : std::string(info.param.must_contain))
