@@ -280,18 +280,8 @@ int direct_study(const std::string& data, const std::string& out_dir, bool quick
         const auto t0 = std::chrono::steady_clock::now();
         const Mesh mesh = mesh_scene(scene, mo, &rep);
         const double mesh_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-        const auto corners = direct_corner_values(direct, scene, mesh);
-        NodalField f;
-        for (int t = 0; t < mesh.triangle_count(); ++t) {
-          std::array<int, 3> c{};
-          for (int k = 0; k < 3; ++k) {
-            c[static_cast<size_t>(k)] = static_cast<int>(f.points.size());
-            f.points.push_back(mesh.positions[static_cast<size_t>(mesh.triangles[static_cast<size_t>(t)][static_cast<size_t>(k)])]);
-            f.radiosity.push_back(corners[static_cast<size_t>(t)][static_cast<size_t>(k)]);
-          }
-          f.corners.push_back(c);
-        }
-        const FieldError e = field_error(samples, interpolate_nodal(scene, mesh, f, samples), exact);
+        const FieldError e =
+            field_error(samples, interpolate_nodal(scene, mesh, direct_field(direct, scene, mesh), samples), exact);
         const size_t lines = rep.discontinuities.size();
         std::fprintf(stderr, "%-13s %-9s edge %-6g %7d triangles %5zu lines  mesh %7.3f s  L2 %.3e  max %.3e  patch %.3e\n",
                      st.name.c_str(), to_string(mode), edge, mesh.triangle_count(), lines, mesh_s, e.l2, e.linf,

@@ -5,6 +5,7 @@
 #include "meshing/geometry.h"
 #include "meshing/mesh.h"
 #include "meshing/scene.h"
+#include "radiosity/solution.h"
 
 #include <memory>
 #include <vector>
@@ -52,5 +53,9 @@ private:
 // side). Per triangle, three corners. Runs in parallel.
 std::vector<std::array<Rgb, 3>> direct_corner_values(const DirectIllumination& direct, const Scene& scene,
                                                      const Mesh& mesh);
+
+// The same as a field over the mesh: one display vertex per triangle corner
+// (so a value may jump across any edge), for interpolate_nodal.
+NodalField direct_field(const DirectIllumination& direct, const Scene& scene, const Mesh& mesh);
 
 }  // namespace radmesh

@@ -299,4 +299,21 @@ std::vector<std::array<Rgb, 3>> direct_corner_values(const DirectIllumination& d
   return out;
 }
 
+NodalField direct_field(const DirectIllumination& direct, const Scene& scene, const Mesh& mesh) {
+  const auto corners = direct_corner_values(direct, scene, mesh);
+  NodalField f;
+  for (int t = 0; t < mesh.triangle_count(); ++t) {
+    std::array<int, 3> c{};
+    for (int k = 0; k < 3; ++k) {
+      const int v = mesh.triangles[static_cast<size_t>(t)][static_cast<size_t>(k)];
+      c[static_cast<size_t>(k)] = static_cast<int>(f.points.size());
+      f.points.push_back(mesh.positions[static_cast<size_t>(v)]);
+      f.source_vertex.push_back(v);
+      f.radiosity.push_back(corners[static_cast<size_t>(t)][static_cast<size_t>(k)]);
+    }
+    f.corners.push_back(c);
+  }
+  return f;
+}
+
 }  // namespace radmesh

@@ -100,18 +100,7 @@ TEST_F(BoxOnFloor, LinearInterpolantErrorFallsWithTheMesh) {
     o.max_edge = edge;
     o.discontinuity = mode;
     const Mesh m = mesh_scene(s, o);
-    const auto corners = direct_corner_values(direct, s, m);
-    NodalField f;
-    for (int t = 0; t < m.triangle_count(); ++t) {
-      std::array<int, 3> c{};
-      for (int k = 0; k < 3; ++k) {
-        c[static_cast<size_t>(k)] = static_cast<int>(f.points.size());
-        f.points.push_back(m.positions[static_cast<size_t>(m.triangles[static_cast<size_t>(t)][static_cast<size_t>(k)])]);
-        f.radiosity.push_back(corners[static_cast<size_t>(t)][static_cast<size_t>(k)]);
-      }
-      f.corners.push_back(c);
-    }
-    return field_error(samples, interpolate_nodal(s, m, f, samples), exact).l2;
+    return field_error(samples, interpolate_nodal(s, m, direct_field(direct, s, m), samples), exact).l2;
   };
   const double coarse = error(0.5, DiscontinuityMode::contacts), fine = error(0.25, DiscontinuityMode::contacts);
   const double full = error(0.5, DiscontinuityMode::full);
