@@ -39,6 +39,7 @@ struct Params {
   std::string discontinuity;  // empty: full for matrix, contacts for hierarchical
   std::string nodal = "fit";
   std::string method = "matrix";
+  std::string tvertex = "anchor";
   HierarchicalOptions hierarchical;
 };
 
@@ -87,6 +88,9 @@ void check_params(Params& p, bool solving) {
   if (p.discontinuity.empty()) p.discontinuity = p.method == "hierarchical" ? "contacts" : "full";
   p.meshing.discontinuity = parse_discontinuity_mode(p.discontinuity);
   p.solve.nodal = p.nodal == "mean" ? NodalMethod::mean : NodalMethod::linear_fit;
+  p.hierarchical.tvertex = p.tvertex == "free"    ? TVertexMode::free
+                           : p.tvertex == "split" ? TVertexMode::split
+                                                  : TVertexMode::anchor;
   if (p.meshing.max_edge < 0.0 || !std::isfinite(p.meshing.max_edge))
     throw InputError("--max-edge " + std::to_string(p.meshing.max_edge) + " must be > 0 (or 0 for auto)");
   if (solving) check_solve_options(p.solve);
@@ -170,7 +174,10 @@ int run(Params& p, bool solving) {
                          {"rays_cast", hs.rays_cast},
                          {"last_change", hs.last_change},
                          {"row_sum_min", hs.row_sum_min},
-                         {"row_sum_max", hs.row_sum_max}};
+                         {"row_sum_max", hs.row_sum_max},
+                         {"tvertex", p.tvertex},
+                         {"conforming_splits", hs.conforming_splits},
+                         {"max_tvertex_jump", hs.max_tvertex_jump}};
     rep.note(std::to_string(hs.leaves) + " leaves, " + std::to_string(hs.links) + " links, " +
              std::to_string(hs.zero_area_triangles) + " zero-area triangles, " + std::to_string(hs.rounds) +
              " rounds");
@@ -368,6 +375,11 @@ int main(int argc, char** argv) {
                       "with --method hierarchical: link refinement threshold, relative to the largest "
                       "reflected radiosity (default 0.002)")
       ->check(CLI::Range(1e-9, 1.0));
+  run_cmd->add_option("--tvertex", run_p.tvertex,
+                      "with --method hierarchical: vertex values on a neighbour's unsplit edge: anchor (the "
+                      "edge's interpolant, no shading jump; default), free (from the finer side), or split "
+                      "(split neighbours until no T-vertex is left, no zero-area triangles)")
+      ->check(CLI::IsMember({"anchor", "free", "split"}));
   run_cmd->add_option("--nodal", run_p.nodal,
                       "vertex values from element values: fit (least-squares plane through the elements "
                       "around the vertex, default) or mean (their area-weighted mean)")

@@ -54,6 +54,7 @@ public:
     for (int p = 0; p < tree.root_count(); ++p)
       for (int q = 0; q < tree.root_count(); ++q)
         if (p != q && occlusion_.facing(node_patch(p), node_patch(q))) link(p, q);
+    close_t_vertices();
     st.seconds_link += seconds_since(t0);
     std::vector<Rgb> previous;
     for (int round = 0;; ++round) {
@@ -86,6 +87,7 @@ public:
       previous = now;
       const auto t2 = std::chrono::steady_clock::now();
       const long long refined = refine_links();
+      close_t_vertices();
       st.seconds_link += seconds_since(t2);
       if (refined == 0) break;
     }
@@ -111,6 +113,14 @@ private:
       B_.push_back(node.parent >= 0 ? B_[static_cast<size_t>(node.parent)] : m.emission);
       links_.emplace_back();
     }
+  }
+
+  // TVertexMode::split: split leaves until no T-vertex is left. The new
+  // leaves gather over their ancestors' links, so nothing needs relinking.
+  void close_t_vertices() {
+    if (hopt_.tvertex != TVertexMode::split) return;
+    out_.stats.conforming_splits += out_.tree.split_until_conforming();
+    grow();
   }
 
   bool splittable(int n) const { return tri_[static_cast<size_t>(n)].area > 4.0 * min_area_; }
@@ -374,17 +384,66 @@ private:
       for (int k = 0; k < 3; ++k)
         display[{leaves.patch[t], leaves.triangles[t][static_cast<size_t>(k)]}] =
             leaf_nodal.corners[t][static_cast<size_t>(k)];
+    // T-vertices: the jump `free` leaves, and anchoring to the unsplit edge.
+    // Coarser leaves first, so that an edge whose end is itself a T-vertex
+    // of a longer edge interpolates the end's anchored value.
+    o.stats.max_tvertex_jump = 0.0;
+    double top = 0.0;
+    for (const Rgb& b : s.nodal.radiosity) top = std::max(top, max3(b));
+    const std::vector<Rgb> free_values = s.nodal.radiosity;
+    std::vector<size_t> order(leaves.triangles.size());
+    for (size_t t = 0; t < order.size(); ++t) order[t] = t;
+    std::vector<int> leaf_node;
+    for (int l : o.leaf_of)
+      if (l >= 0) leaf_node.push_back(l);
+    std::stable_sort(order.begin(), order.end(), [&](size_t x, size_t y) {
+      return o.tree.node(leaf_node[x]).level < o.tree.node(leaf_node[y]).level;
+    });
+    for (size_t t : order) {
+      const auto& tri = leaves.triangles[t];
+      for (int k = 0; k < 3; ++k) {
+        const int a = tri[static_cast<size_t>(k)], b = tri[static_cast<size_t>((k + 1) % 3)];
+        const std::vector<int> ms = o.tree.edge_points(a, b);
+        if (ms.empty()) continue;
+        const int da = leaf_nodal.corners[t][static_cast<size_t>(k)], db = leaf_nodal.corners[t][static_cast<size_t>((k + 1) % 3)];
+        const Vec3 A = o.mesh.positions[static_cast<size_t>(a)], B = o.mesh.positions[static_cast<size_t>(b)];
+        for (int m : ms) {
+          const auto it = display.find({leaves.patch[t], m});
+          if (it == display.end()) continue;  // the finer side is another patch: a crease anyway
+          const double u = glm::dot(o.mesh.positions[static_cast<size_t>(m)] - A, B - A) / glm::dot(B - A, B - A);
+          const Rgb free_interp = (1.0 - u) * free_values[static_cast<size_t>(da)] + u * free_values[static_cast<size_t>(db)];
+          if (top > 0.0)
+            o.stats.max_tvertex_jump = std::max(
+                o.stats.max_tvertex_jump, max3(glm::abs(free_values[static_cast<size_t>(it->second)] - free_interp)) / top);
+          if (hopt_.tvertex == TVertexMode::anchor)
+            s.nodal.radiosity[static_cast<size_t>(it->second)] =
+                (1.0 - u) * s.nodal.radiosity[static_cast<size_t>(da)] + u * s.nodal.radiosity[static_cast<size_t>(db)];
+        }
+      }
+    }
+    // Corners of the zero-area triangles: the owner leaf's display vertices
+    // for its own corners, the finer side's for the T-vertices.
     s.nodal.corners.clear();
     size_t li = 0;
+    int owner_leaf = -1;  // index among the leaves of the last leaf seen
     for (size_t t = 0; t < o.leaf_of.size(); ++t) {
       if (o.leaf_of[t] >= 0) {
+        owner_leaf = static_cast<int>(li);
         s.nodal.corners.push_back(leaf_nodal.corners[li++]);
         continue;
       }
       std::array<int, 3> c{};
       for (int k = 0; k < 3; ++k) {
-        const auto it = display.find({o.mesh.patch[t], o.mesh.triangles[t][static_cast<size_t>(k)]});
-        c[static_cast<size_t>(k)] = it != display.end() ? it->second : 0;
+        const int v = o.mesh.triangles[t][static_cast<size_t>(k)];
+        int d = -1;
+        for (int j = 0; j < 3 && owner_leaf >= 0; ++j)
+          if (leaves.triangles[static_cast<size_t>(owner_leaf)][static_cast<size_t>(j)] == v)
+            d = leaf_nodal.corners[static_cast<size_t>(owner_leaf)][static_cast<size_t>(j)];
+        if (d < 0) {
+          const auto it = display.find({o.mesh.patch[t], v});
+          d = it != display.end() ? it->second : leaf_nodal.corners[static_cast<size_t>(std::max(owner_leaf, 0))][0];
+        }
+        c[static_cast<size_t>(k)] = d;
       }
       s.nodal.corners.push_back(c);
     }

@@ -15,6 +15,13 @@
 
 namespace radmesh {
 
+// Vertex values where a leaf's vertex lies on a neighbour's unsplit edge.
+enum class TVertexMode {
+  anchor,  // the unsplit edge's linear interpolant: Gouraud shading has no jump there
+  free,    // what the finer side's elements give it (shading may jump along the edge)
+  split,   // no T-vertices: neighbours are split until none is left (the conventional way)
+};
+
 struct HierarchicalOptions {
   // Oracle: the link receiver p <- source q is refined while its error
   // estimate exceeds epsilon x the largest emission and one of the two may
@@ -31,6 +38,7 @@ struct HierarchicalOptions {
   // current radiosity says it matters, then solve again). Stops earlier when
   // no link is refined or the leaf radiosity changes less than the tolerance.
   int max_rounds = 6;
+  TVertexMode tvertex = TVertexMode::anchor;
 };
 
 struct HierarchicalStats {
@@ -49,6 +57,11 @@ struct HierarchicalStats {
   // root: about 1 in a closed scene. Smallest and largest.
   double row_sum_min = 0.0, row_sum_max = 0.0;
   long long leaf_terms = 0;       // (leaf, source) terms gathered per sweep, last round
+  int conforming_splits = 0;      // splits made to remove T-vertices (TVertexMode::split)
+  // Largest difference, relative to the largest radiosity, between a
+  // T-vertex's value from its finer side and the unsplit edge's
+  // interpolant: the shading jump `free` leaves (anchor removes it).
+  double max_tvertex_jump = 0.0;
 };
 
 struct HierarchicalSolution {

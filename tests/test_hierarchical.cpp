@@ -113,3 +113,49 @@ TEST(HierarchicalStress, ReflectanceNearOneConverges) {
     for (const Rgb& b : h.solution.element) EXPECT_NEAR(b.x, e / (1.0 - rho), 1e-7 / (1.0 - rho) / (1.0 - rho) * e);
   }
 }
+
+TEST(Hierarchical, TVertexModes) {
+  const Scene s = read_obj_scene(kData + "/box_on_floor/box_on_floor.obj");
+  const Mesh m = coarse_mesh(s, 1.0);
+  HierarchicalOptions ho;
+  ho.epsilon = 0.01;
+  ho.tvertex = TVertexMode::free;
+  const HierarchicalSolution free = solve_hierarchical(s, m, {}, ho);
+  ho.tvertex = TVertexMode::anchor;
+  const HierarchicalSolution anchor = solve_hierarchical(s, m, {}, ho);
+  ho.tvertex = TVertexMode::split;
+  const HierarchicalSolution split = solve_hierarchical(s, m, {}, ho);
+  std::printf("[hierarchical] free: %d leaves + %d zero-area, jump %.3g; split: %d leaves, %d splits to conform\n",
+              free.stats.leaves, free.stats.zero_area_triangles, free.stats.max_tvertex_jump, split.stats.leaves,
+              split.stats.conforming_splits);
+  // Same elements and radiosity for free and anchor; only vertex values differ.
+  EXPECT_EQ(free.solution.element, anchor.solution.element);
+  EXPECT_GT(free.stats.zero_area_triangles, 0);
+  EXPECT_GT(free.stats.max_tvertex_jump, 0.0);
+  // Anchored: along every fan's unsplit edge (b, a, m) the value at m is the
+  // interpolant of a and b, so shading has no jump there.
+  double top = 0.0;
+  for (const Rgb& b : anchor.solution.nodal.radiosity) top = std::max(top, b.x);
+  double worst = 0.0;
+  int fans = 0;
+  for (size_t t = 0; t < anchor.leaf_of.size(); ++t) {
+    if (anchor.leaf_of[t] >= 0 || (t > 0 && anchor.leaf_of[t - 1] < 0)) continue;  // first triangle of a fan
+    const auto& tri = anchor.mesh.triangles[t];     // (b, a, m_k)
+    const auto& c = anchor.solution.nodal.corners[t];
+    const Vec3 B = anchor.mesh.positions[static_cast<size_t>(tri[0])], A = anchor.mesh.positions[static_cast<size_t>(tri[1])];
+    const double u = glm::dot(anchor.mesh.positions[static_cast<size_t>(tri[2])] - A, B - A) / glm::dot(B - A, B - A);
+    const auto& r = anchor.solution.nodal.radiosity;
+    const double interp = (1.0 - u) * r[static_cast<size_t>(c[1])].x + u * r[static_cast<size_t>(c[0])].x;
+    worst = std::max(worst, std::abs(r[static_cast<size_t>(c[2])].x - interp) / top);
+    ++fans;
+  }
+  EXPECT_GT(fans, 0);
+  // Where a vertex has several display vertices (a contact line splits
+  // them), only one is anchored: the jump shrinks, it does not vanish.
+  EXPECT_LT(worst, 0.25 * free.stats.max_tvertex_jump);
+  // Split: no T-vertex, no zero-area triangle, and more leaves.
+  EXPECT_EQ(split.stats.zero_area_triangles, 0);
+  EXPECT_GT(split.stats.conforming_splits, 0);
+  EXPECT_GT(split.stats.leaves, free.stats.leaves);
+  for (int l : split.leaf_of) EXPECT_GE(l, 0);
+}
