@@ -41,6 +41,7 @@ struct Settings {
   int quad_level;
   DiscontinuityMode discontinuity = DiscontinuityMode::contacts;
   double epsilon = 0.0;  // > 0: hierarchical radiosity with this oracle epsilon
+  TVertexMode tvertex = TVertexMode::free;
 };
 
 struct Scenario {
@@ -193,6 +194,7 @@ Row run_one(const Scenario& sc, const Scene& scene, const std::vector<SurfaceSam
   if (set.epsilon > 0.0) {
     HierarchicalOptions ho;
     ho.epsilon = set.epsilon;
+    ho.tvertex = set.tvertex;
     const HierarchicalSolution h = solve_hierarchical(scene, mesh, so, ho);
     std::tie(mesh, sol) = leaves_only(h);
     links = h.stats.links;
@@ -204,7 +206,9 @@ Row run_one(const Scenario& sc, const Scene& scene, const std::vector<SurfaceSam
   const std::vector<Rgb> values = interpolate_nodal(scene, mesh, sol.nodal, samples);
   const std::vector<Rgb> flat = element_values(scene, mesh, sol.element, samples);
   const auto ref = reflected_part(scene, samples, reference);
-  const std::string method = set.epsilon > 0.0 ? "hierarchical" : "matrix";
+  const std::string method = set.epsilon > 0.0
+                                 ? std::string(set.tvertex == TVertexMode::split ? "hier-split" : "hierarchical")
+                                 : std::string("matrix");
   return {sc.name, method + "/" + to_string(set.discontinuity), set, mesh.triangle_count(), sol.stats.form_factors, sol.stats.rays_cast, seconds,
           field_error(samples, reflected_part(scene, samples, values), ref),
           field_error(samples, reflected_part(scene, samples, flat), ref)};
@@ -349,11 +353,14 @@ int main(int argc, char** argv) {
         sweep.clear();
         for (const std::string& c : custom) {
           Settings set{};
-          char mode[16] = "contacts";
-          if (std::sscanf(c.c_str(), "%lf:%d:%d:%15[a-z]:%lf", &set.max_edge, &set.rays, &set.quad_level, mode,
-                          &set.epsilon) < 3)
-            throw InputError("--settings '" + c + "': expected EDGE:RAYS:QUAD_LEVEL[:off|contacts|full[:EPSILON]]");
+          char mode[16] = "contacts", tv[16] = "free";
+          if (std::sscanf(c.c_str(), "%lf:%d:%d:%15[a-z]:%lf:%15[a-z]", &set.max_edge, &set.rays, &set.quad_level,
+                          mode, &set.epsilon, tv) < 3)
+            throw InputError("--settings '" + c +
+                             "': expected EDGE:RAYS:QUAD_LEVEL[:off|contacts|full[:EPSILON[:anchor|free|split]]]");
           set.discontinuity = parse_discontinuity_mode(mode);
+          const std::string tvs = tv;
+          set.tvertex = tvs == "split" ? TVertexMode::split : tvs == "anchor" ? TVertexMode::anchor : TVertexMode::free;
           sweep.push_back(set);
         }
       }

@@ -39,7 +39,7 @@ struct Params {
   std::string discontinuity;  // empty: full for matrix, contacts for hierarchical
   std::string nodal = "fit";
   std::string method = "matrix";
-  std::string tvertex = "anchor";
+  std::string tvertex = "free";
   HierarchicalOptions hierarchical;
 };
 
@@ -377,7 +377,7 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(1e-9, 1.0));
   run_cmd->add_option("--tvertex", run_p.tvertex,
                       "with --method hierarchical: vertex values on a neighbour's unsplit edge: anchor (the "
-                      "edge's interpolant, no shading jump; default), free (from the finer side), or split "
+                      "edge's interpolant, no shading jump), free (from the finer side; default), or split "
                       "(split neighbours until no T-vertex is left, no zero-area triangles)")
       ->check(CLI::IsMember({"anchor", "free", "split"}));
   run_cmd->add_option("--nodal", run_p.nodal,

@@ -38,7 +38,10 @@ struct HierarchicalOptions {
   // current radiosity says it matters, then solve again). Stops earlier when
   // no link is refined or the leaf radiosity changes less than the tolerance.
   int max_rounds = 6;
-  TVertexMode tvertex = TVertexMode::anchor;
+  // free by default: on the Cornell box benchmark (epsilon 0.003) the vertex
+  // field's L2 error is 2.67% free against 3.36% anchored, and the largest
+  // jump free leaves is a few 1e-4 of the largest radiosity.
+  TVertexMode tvertex = TVertexMode::free;
 };
 
 struct HierarchicalStats {
