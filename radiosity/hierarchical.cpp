@@ -468,6 +468,20 @@ private:
     }
     st.rays_cast = o.stats.rays_cast;
     st.form_factors = count_links();
+    // Residual of the leaf equations B = E + rho * sum(c B), per channel.
+    for (int c = 0; c < 3; ++c) {
+      double worst = 0.0, top = 0.0;
+      for (size_t x = 0; x < B_.size(); ++x) {
+        if (!o.tree.is_leaf(static_cast<int>(x))) continue;
+        double g = 0.0;
+        for (const auto& [q, k] : terms_[x]) g += k * B_[static_cast<size_t>(q)][c];
+        worst = std::max(worst, std::abs(emit_[x][c] + rho_[x][c] * g - B_[x][c]));
+        top = std::max(top, std::abs(B_[x][c]));
+      }
+      st.residual[static_cast<size_t>(c)] = top > 0.0 ? worst / top : 0.0;
+      st.iterations[static_cast<size_t>(c)] = o.stats.sweeps;
+    }
+    st.channels_solved = 3;
   }
 
   const Scene& scene_;
@@ -499,7 +513,7 @@ HierarchicalSolution solve_hierarchical(const Scene& scene, const Mesh& initial,
   if (!(hopt.epsilon > 0.0) || !(hopt.min_area >= 0.0) || hopt.max_rounds < 0)
     throw InputError("hierarchical options out of range: epsilon " + std::to_string(hopt.epsilon) + ", min area " +
                      std::to_string(hopt.min_area) + ", rounds " + std::to_string(hopt.max_rounds));
-  HierarchicalSolution out{ElementTree(initial), {}, {}, {}, {}, {}, {}};
+  HierarchicalSolution out{ElementTree(initial), {}, {}, {}, {}, {}, {}, {}};
   Solver solver(scene, initial, options, hopt, out);
   solver.run(on_round);
   return out;

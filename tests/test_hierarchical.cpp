@@ -3,6 +3,7 @@
 
 #include "io/obj_reader.h"
 #include "io/summary.h"
+#include "meshing/scene.h"
 #include "meshing/mesh.h"
 #include "radiosity/hierarchical.h"
 #include "radiosity/solve.h"
@@ -158,4 +159,45 @@ TEST(Hierarchical, TVertexModes) {
   EXPECT_GT(split.stats.conforming_splits, 0);
   EXPECT_GT(split.stats.leaves, free.stats.leaves);
   for (int l : split.leaf_of) EXPECT_GE(l, 0);
+}
+
+TEST(HierarchicalStress, ThinPolygonsAndRefinementAtContactLines) {
+  // A floor lit from above with a strip 1000 times longer than wide lying
+  // across it at half height, and a box standing on it: links refine down to
+  // the minimum area next to the box's contact lines and along the strip.
+  std::vector<RawFace> faces;
+  auto quad = [&](const std::string& name, int material, std::vector<Vec3> pts) {
+    RawFace f;
+    f.name = name;
+    f.material = material;
+    f.points = std::move(pts);
+    faces.push_back(f);
+  };
+  quad("floor", 0, {{0, 0, 0}, {0, 0, 4}, {4, 0, 4}, {4, 0, 0}});
+  quad("strip", 0, {{0.5, 1.5, 2.0}, {0.5, 1.5, 2.004}, {3.5, 1.5, 2.004}, {3.5, 1.5, 2.0}});  // 3 x 0.003 (aspect 1000), faces up
+  quad("strip_under", 0, {{0.5, 1.5, 2.0}, {3.5, 1.5, 2.0}, {3.5, 1.5, 2.004}, {0.5, 1.5, 2.004}});
+  quad("box", 0, {{1, 0, 1}, {1, 0.5, 1}, {1.5, 0.5, 1}, {1.5, 0, 1}});
+  quad("box", 0, {{1.5, 0, 1.5}, {1.5, 0.5, 1.5}, {1, 0.5, 1.5}, {1, 0, 1.5}});
+  quad("box", 0, {{1, 0, 1.5}, {1, 0.5, 1.5}, {1, 0.5, 1}, {1, 0, 1}});
+  quad("box", 0, {{1.5, 0, 1}, {1.5, 0.5, 1}, {1.5, 0.5, 1.5}, {1.5, 0, 1.5}});
+  quad("box", 0, {{1, 0.5, 1}, {1, 0.5, 1.5}, {1.5, 0.5, 1.5}, {1.5, 0.5, 1}});
+  quad("light", 1, {{1.8, 3, 1.8}, {2.2, 3, 1.8}, {2.2, 3, 2.2}, {1.8, 3, 2.2}});
+  Material white, lamp;
+  white.name = "white";
+  white.reflectance = Rgb(0.6);
+  lamp.name = "light";
+  lamp.emission = Rgb(20.0);
+  const Scene s = build_scene(faces, {white, lamp}, "thin");
+  HierarchicalOptions ho;
+  ho.epsilon = 0.005;
+  const HierarchicalSolution h = solve_hierarchical(s, coarse_mesh(s, 1.0), {}, ho);
+  const double min_area = 0.5 * std::pow(s.diagonal() / 150.0, 2);
+  double smallest = 1e300;
+  for (int leaf : h.tree.leaves()) smallest = std::min(smallest, h.tree.area(leaf));
+  std::printf("[hierarchical] thin strip + box: %d leaves, %lld links, smallest leaf %.3g (floor %.3g)\n",
+              h.stats.leaves, h.stats.links, smallest, min_area);
+  for (const Rgb& b : h.solution.element) ASSERT_TRUE(std::isfinite(b.x) && b.x >= 0.0);
+  EXPECT_GE(smallest, min_area * (1.0 - 1e-12));  // never below the minimum area
+  EXPECT_LT(smallest, 4.0 * 4.0 * min_area);      // but refined down close to it
+  EXPECT_LT(std::abs(relative_imbalance(h.solution.stats)), 0.02);
 }
