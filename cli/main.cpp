@@ -177,7 +177,9 @@ int run(Params& p, bool solving) {
                          {"row_sum_max", hs.row_sum_max},
                          {"tvertex", p.tvertex},
                          {"conforming_splits", hs.conforming_splits},
-                         {"max_tvertex_jump", hs.max_tvertex_jump}};
+                         {"max_tvertex_jump", hs.max_tvertex_jump},
+                         {"baum", p.hierarchical.baum_relative},
+                         {"baum_splits", hs.baum_splits}};
     rep.note(std::to_string(hs.leaves) + " leaves, " + std::to_string(hs.links) + " links, " +
              std::to_string(hs.zero_area_triangles) + " zero-area triangles, " + std::to_string(hs.rounds) +
              " rounds");
@@ -380,6 +382,10 @@ int main(int argc, char** argv) {
                       "edge's interpolant, no shading jump), free (from the finer side; default), or split "
                       "(split neighbours until no T-vertex is left, no zero-area triangles)")
       ->check(CLI::IsMember({"anchor", "free", "split"}));
+  run_cmd->add_option("--baum", run_p.hierarchical.baum_relative,
+                      "with --method hierarchical: also split a leaf whose vertex values differ by more than "
+                      "this fraction of the largest reflected radiosity (Baum's criterion; default 0 = off)")
+      ->check(CLI::Range(0.0, 1.0));
   run_cmd->add_option("--nodal", run_p.nodal,
                       "vertex values from element values: fit (least-squares plane through the elements "
                       "around the vertex, default) or mean (their area-weighted mean)")

@@ -87,9 +87,10 @@ public:
       previous = now;
       const auto t2 = std::chrono::steady_clock::now();
       const long long refined = refine_links();
+      const int baum = split_by_variation();
       close_t_vertices();
       st.seconds_link += seconds_since(t2);
-      if (refined == 0) break;
+      if (refined == 0 && baum == 0) break;
     }
     st.links = count_links();
   }
@@ -113,6 +114,37 @@ private:
       B_.push_back(node.parent >= 0 ? B_[static_cast<size_t>(node.parent)] : m.emission);
       links_.emplace_back();
     }
+  }
+
+  // Baum's a-posteriori criterion: a leaf whose vertex values (as last
+  // published) differ by more than baum_relative x the largest reflected radiosity
+  // and more than baum_absolute is split, down to the minimum area. Its
+  // children gather over its links, so nothing needs relinking.
+  int split_by_variation() {
+    if (!(hopt_.baum_relative > 0.0)) return 0;
+    const HierarchicalSolution& o = out_;
+    const double top = scale_;  // the largest reflected radiosity
+    std::vector<int> todo;
+    for (size_t t = 0; t < o.leaf_of.size(); ++t) {
+      const int n = o.leaf_of[t];
+      if (n < 0 || !splittable(n)) continue;
+      Rgb lo(1e300), hi(-1e300);
+      for (int c : o.solution.nodal.corners[t]) {
+        lo = glm::min(lo, o.solution.nodal.radiosity[static_cast<size_t>(c)]);
+        hi = glm::max(hi, o.solution.nodal.radiosity[static_cast<size_t>(c)]);
+      }
+      const double spread = max3(hi - lo);
+      if (spread > hopt_.baum_relative * top && spread > hopt_.baum_absolute) todo.push_back(n);
+    }
+    int splits = 0;
+    for (int n : todo)
+      if (out_.tree.is_leaf(n)) {  // the link refinement just before may have split it already
+        out_.tree.split(n);
+        ++splits;
+      }
+    grow();
+    out_.stats.baum_splits += splits;
+    return splits;
   }
 
   // TVertexMode::split: split leaves until no T-vertex is left. The new
@@ -510,7 +542,8 @@ HierarchicalSolution solve_hierarchical(const Scene& scene, const Mesh& initial,
                                         const HierarchicalOptions& hopt,
                                         const std::function<void(const HierarchicalSolution&, int)>& on_round) {
   check_solve_options(options);
-  if (!(hopt.epsilon > 0.0) || !(hopt.min_area >= 0.0) || hopt.max_rounds < 0)
+  if (!(hopt.epsilon > 0.0) || !(hopt.min_area >= 0.0) || hopt.max_rounds < 0 || !(hopt.baum_relative >= 0.0) ||
+      !(hopt.baum_absolute >= 0.0))
     throw InputError("hierarchical options out of range: epsilon " + std::to_string(hopt.epsilon) + ", min area " +
                      std::to_string(hopt.min_area) + ", rounds " + std::to_string(hopt.max_rounds));
   HierarchicalSolution out{ElementTree(initial), {}, {}, {}, {}, {}, {}, {}};

@@ -42,6 +42,12 @@ struct HierarchicalOptions {
   // field's L2 error is 2.67% free against 3.36% anchored, and the largest
   // jump free leaves is a few 1e-4 of the largest radiosity.
   TVertexMode tvertex = TVertexMode::free;
+  // Baum's a-posteriori criterion, after each solve: split a leaf whose
+  // vertex values differ by more than baum_relative x the largest reflected
+  // radiosity (B - E)
+  // and by more than baum_absolute (down to min_area). 0 = off.
+  double baum_relative = 0.0;
+  double baum_absolute = 0.0;
 };
 
 struct HierarchicalStats {
@@ -61,6 +67,7 @@ struct HierarchicalStats {
   double row_sum_min = 0.0, row_sum_max = 0.0;
   long long leaf_terms = 0;       // (leaf, source) terms gathered per sweep, last round
   int conforming_splits = 0;      // splits made to remove T-vertices (TVertexMode::split)
+  int baum_splits = 0;            // splits made by Baum's criterion
   // Largest difference, relative to the largest radiosity, between a
   // T-vertex's value from its finer side and the unsplit edge's
   // interpolant: the shading jump `free` leaves (anchor removes it).

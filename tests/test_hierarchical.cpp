@@ -201,3 +201,37 @@ TEST(HierarchicalStress, ThinPolygonsAndRefinementAtContactLines) {
   EXPECT_LT(smallest, 4.0 * 4.0 * min_area);      // but refined down close to it
   EXPECT_LT(std::abs(relative_imbalance(h.solution.stats)), 0.02);
 }
+
+TEST(Hierarchical, BaumCriterionSplitsWhereVertexValuesDiffer) {
+  const Scene s = read_obj_scene(kData + "/box_on_floor/box_on_floor.obj");
+  const Mesh m = coarse_mesh(s, 1.0);
+  HierarchicalOptions ho;
+  ho.epsilon = 0.05;
+  ho.max_rounds = 30;
+  const HierarchicalSolution plain = solve_hierarchical(s, m, {}, ho);
+  ho.baum_relative = 0.05;
+  const HierarchicalSolution baum = solve_hierarchical(s, m, {}, ho);
+  std::printf("[hierarchical] Baum 5%%: %d leaves (%d Baum splits, %d rounds) against %d without\n", baum.stats.leaves,
+              baum.stats.baum_splits, baum.stats.rounds, plain.stats.leaves);
+  EXPECT_GT(baum.stats.baum_splits, 0);
+  EXPECT_GT(baum.stats.leaves, plain.stats.leaves);
+  ASSERT_LT(baum.stats.rounds, ho.max_rounds + 1);  // stopped because nothing more was split
+  // When it stops, every leaf that may still be split is within the tolerance
+  // (the criterion is checked on the values of the last solve).
+  const double min_area = 0.5 * std::pow(s.diagonal() / 150.0, 2);
+  double top = 0.0;  // the largest reflected radiosity
+  for (size_t n = 0; n < baum.node_radiosity.size(); ++n) {
+    const Patch& patch = s.patches[static_cast<size_t>(baum.tree.node(static_cast<int>(n)).patch)];
+    top = std::max(top, baum.node_radiosity[n].x - s.materials[static_cast<size_t>(patch.material)].emission.x);
+  }
+  for (size_t t = 0; t < baum.leaf_of.size(); ++t) {
+    const int n = baum.leaf_of[t];
+    if (n < 0 || baum.tree.area(n) <= 4.0 * min_area) continue;
+    double lo = 1e300, hi = -1e300;
+    for (int c : baum.solution.nodal.corners[t]) {
+      lo = std::min(lo, baum.solution.nodal.radiosity[static_cast<size_t>(c)].x);
+      hi = std::max(hi, baum.solution.nodal.radiosity[static_cast<size_t>(c)].x);
+    }
+    EXPECT_LE(hi - lo, 0.05 * top * (1.0 + 1e-9)) << "leaf " << n;
+  }
+}
