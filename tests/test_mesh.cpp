@@ -82,30 +82,30 @@ TEST(Mesh, ClosedCubeIsClosedAndConsistentlyOriented) {
 TEST(Mesh, CornellBoxPatchesShareEdgeVerticesAndKeepTheirArea) {
   const Scene s = read_obj_scene(kData + "/cornell_box/cornell_box.obj");
   for (DiscontinuityMode mode : {DiscontinuityMode::contacts, DiscontinuityMode::full}) {
-  SCOPED_TRACE(to_string(mode));
-  MeshingOptions o;
-  o.max_edge = 60.0;
-  o.discontinuity = mode;
-  MeshReport rep;
-  const Mesh m = mesh_scene(s, o, &rep);
-  std::vector<double> area(s.patches.size(), 0.0);
-  for (int t = 0; t < m.triangle_count(); ++t) area[static_cast<size_t>(m.patch[static_cast<size_t>(t)])] += m.area(t);
-  for (size_t p = 0; p < s.patches.size(); ++p)
-    EXPECT_NEAR(area[p] / s.patch_area(static_cast<int>(p)), 1.0, 1e-12) << s.patches[p].name;
-  // The room (everything but the blocks) is a closed surface: every edge has
-  // exactly two triangles, T-junctions at the ceiling hole included.
-  auto room = [&](int t) {
-    return s.patches[static_cast<size_t>(m.patch[static_cast<size_t>(t)])].name.find("block") == std::string::npos;
-  };
-  for (const auto& [e, n] : edge_use(m, room)) EXPECT_EQ(n, 2) << e.first << "-" << e.second;
-  EXPECT_LE(longest_edge(m), 60.0 * (1 + 1e-12));
-  const TriangleQuality q = compute_quality(m);
-  // The angle bound holds where the input allows it: with contact lines
-  // only. Shadow lines cross at angles of their own, which no mesh removes.
-  if (mode == DiscontinuityMode::contacts)
-    EXPECT_GE(*std::min_element(q.min_angle.begin(), q.min_angle.end()), 20.0 - 1e-6);
-  else
-    EXPECT_GT(*std::min_element(q.min_angle.begin(), q.min_angle.end()), 1.0);
+    SCOPED_TRACE(to_string(mode));
+    MeshingOptions o;
+    o.max_edge = 60.0;
+    o.discontinuity = mode;
+    MeshReport rep;
+    const Mesh m = mesh_scene(s, o, &rep);
+    std::vector<double> area(s.patches.size(), 0.0);
+    for (int t = 0; t < m.triangle_count(); ++t) area[static_cast<size_t>(m.patch[static_cast<size_t>(t)])] += m.area(t);
+    for (size_t p = 0; p < s.patches.size(); ++p)
+      EXPECT_NEAR(area[p] / s.patch_area(static_cast<int>(p)), 1.0, 1e-12) << s.patches[p].name;
+    // The room (everything but the blocks) is a closed surface: every edge has
+    // exactly two triangles, T-junctions at the ceiling hole included.
+    auto room = [&](int t) {
+      return s.patches[static_cast<size_t>(m.patch[static_cast<size_t>(t)])].name.find("block") == std::string::npos;
+    };
+    for (const auto& [e, n] : edge_use(m, room)) EXPECT_EQ(n, 2) << e.first << "-" << e.second;
+    EXPECT_LE(longest_edge(m), 60.0 * (1 + 1e-12));
+    const TriangleQuality q = compute_quality(m);
+    // The angle bound holds where the input allows it: with contact lines
+    // only. Shadow lines cross at angles of their own, which no mesh removes.
+    if (mode == DiscontinuityMode::contacts)
+      EXPECT_GE(*std::min_element(q.min_angle.begin(), q.min_angle.end()), 20.0 - 1e-6);
+    else
+      EXPECT_GT(*std::min_element(q.min_angle.begin(), q.min_angle.end()), 1.0);
   }
 }
 
