@@ -479,7 +479,8 @@ private:
     // The last round (no refinement) keeps the patch's interior points from
     // its last refined mesh; those the mesher put on a line are chained into
     // it, so the line is not crossed by a sliver.
-    const std::vector<Steiner>& kept = refine ? std::vector<Steiner>{} : steiner_[p];
+    static const std::vector<Steiner> none;
+    const std::vector<Steiner>& kept = refine ? none : steiner_[p];
     const double on_tol = 100.0 * eps_;
     for (const auto& [a, b, kind] : constraints_[static_cast<size_t>(p)]) {
       CDT::Vertex_handle va = insert_vertex(a), vb = insert_vertex(b);

@@ -1,4 +1,4 @@
-// Hierarchical radiosity: links, oracle, gather and push-pull.
+// Hierarchical radiosity: links, oracle, leaf gathering and pull.
 
 #include "radiosity/hierarchical.h"
 
@@ -25,18 +25,17 @@ double max3(const Rgb& c) { return std::max({c.x, c.y, c.z}); }
 
 struct Link {
   int source = -1;
-  double f = 0.0;         // F(receiver -> source) x visibility
-  double f_free = 0.0;    // F(receiver -> source) without occlusion
+  double f = 0.0;         // F(receiver -> source) without occlusion
+  double visible = 1.0;   // fraction of the shadow rays that got through
   double spread = 0.0;    // how much the point form factor varies over the receiver (oracle)
-  bool partial = false;   // some shadow rays blocked, some not
+  bool partial() const { return visible > 0.0 && visible < 1.0; }
 };
 
 class Solver {
 public:
-  Solver(const Scene& scene, const Mesh& initial, const SolveOptions& opt, const HierarchicalOptions& hopt,
-         HierarchicalSolution& out)
+  // `out.tree` holds the roots (the initial mesh) on entry.
+  Solver(const Scene& scene, const SolveOptions& opt, const HierarchicalOptions& hopt, HierarchicalSolution& out)
       : scene_(scene), opt_(opt), hopt_(hopt), out_(out), visibility_(scene), occlusion_(scene) {
-    out_.tree = ElementTree(initial);
     min_area_ = hopt.min_area > 0.0 ? hopt.min_area : 0.5 * std::pow(scene.diagonal() / 150.0, 2);
     for (const Material& m : scene.materials) max_emission_ = std::max(max_emission_, max3(m.emission));
     scale_ = max_emission_;
@@ -69,22 +68,20 @@ public:
       st.links_per_round.push_back(count_links());
       st.leaves_per_round.push_back(st.leaves);
       if (on_round) on_round(out_, round);
-      // Change of the leaf field since the last round (compared at the
-      // current leaves through their ancestors' old values).
-      const std::vector<Rgb> now = leaf_values();
+      // Change of the node field since the last round (a node made since is
+      // compared with its deepest ancestor that existed then).
       if (!previous.empty()) {
         double change = 0.0, top = 0.0;
-        for (size_t n = 0; n < now.size(); ++n) {
+        for (size_t n = 0; n < B_.size(); ++n) {
           const int old = nearest_old(static_cast<int>(n), previous.size());
-          if (old < 0) continue;
-          change = std::max(change, max3(glm::abs(now[n] - previous[static_cast<size_t>(old)])));
-          top = std::max(top, max3(now[n]));
+          change = std::max(change, max3(glm::abs(B_[n] - previous[static_cast<size_t>(old)])));
+          top = std::max(top, max3(B_[n]));
         }
         st.last_change = top > 0.0 ? change / top : 0.0;
       }
       if (round >= hopt_.max_rounds) break;
       if (round > 0 && st.last_change < opt_.tolerance) break;
-      previous = now;
+      previous = B_;
       const auto t2 = std::chrono::steady_clock::now();
       const long long refined = refine_links();
       const int baum = split_by_variation();
@@ -191,8 +188,7 @@ private:
     ++out_.stats.links_examined;
     const double f = form_factor_to(p, q);
     if (f <= 0.0) return;
-    const double v = visible_fraction(p, q);
-    const Link l{q, f * v, f, spread(p, q, f), v > 0.0 && v < 1.0};
+    const Link l{q, f, visible_fraction(p, q), spread(p, q, f)};
     if (wants_refinement(p, l) && split_one(p, q, spread_dominates(l))) return;
     links_[static_cast<size_t>(p)].push_back(l);
   }
@@ -211,14 +207,14 @@ private:
     return s;
   }
 
-  static bool spread_dominates(const Link& l) { return l.spread > 0.5 * l.f; }
+  static bool spread_dominates(const Link& l) { return l.spread > 0.5 * l.f * l.visible; }
 
   // The oracle: the error of gathering over this link at this level, as
-  // rho_p * B_q * (spread of F over p), plus the whole transport rho_p B_q F
-  // when the link is partly visible (where a shadow boundary crosses it).
+  // rho_p * B_q * (spread of F over p), plus the whole transport
+  // rho_p B_q F V when the link is partly visible (a shadow boundary crosses it).
   bool wants_refinement(int p, const Link& l) const {
     const double rb = max3(rho_[static_cast<size_t>(p)]) * max3(B_[static_cast<size_t>(l.source)]);
-    const double unseen = l.partial ? l.f : 0.0;
+    const double unseen = l.partial() ? l.f * l.visible : 0.0;
     return rb * (l.spread + unseen) > hopt_.epsilon * scale_;
   }
 
@@ -300,8 +296,7 @@ private:
       near = std::max(near, 0.0);
       const ReceiverPoints pts = receiver_points(t, [near](const Vec3&) { return near; }, opt_.quadrature);
       for (const Link* l : path) {
-        const double v = l->f_free > 0.0 ? l->f / l->f_free : 0.0;  // the link's visible fraction
-        const double c = form_factor(pts, tri_[static_cast<size_t>(l->source)]) * v;
+        const double c = form_factor(pts, tri_[static_cast<size_t>(l->source)]) * l->visible;
         if (c <= 0.0) continue;
         terms_[x].push_back({l->source, c});
         F_sum_[x] += c;
@@ -358,11 +353,6 @@ private:
     return b;
   }
 
-  std::vector<Rgb> leaf_values() const {
-    std::vector<Rgb> v(B_.size());
-    for (size_t n = 0; n < B_.size(); ++n) v[n] = B_[n];
-    return v;
-  }
   // The deepest node that existed in the previous round on the path to n.
   int nearest_old(int n, size_t old_count) const {
     while (n >= 0 && static_cast<size_t>(n) >= old_count) n = out_.tree.node(n).parent;
@@ -378,7 +368,7 @@ private:
     o.links.assign(links_.size(), {});
     for (size_t p = 0; p < links_.size(); ++p) {
       o.node_links[p] = static_cast<int>(links_[p].size());
-      for (const Link& l : links_[p]) o.links[p].push_back({l.source, l.f});
+      for (const Link& l : links_[p]) o.links[p].push_back({l.source, l.f * l.visible});
     }
     o.mesh = o.tree.conforming_mesh(&o.leaf_of);
     Solution& s = o.solution;
@@ -479,40 +469,30 @@ private:
       }
       s.nodal.corners.push_back(c);
     }
-    // Energy balance over the leaves.
+    // Row sums, energy balance and the residual of the leaf equations
+    // B = E + rho H over the leaves (H gathered after the last sweep).
     SolveStats& st = s.stats;
     st.elements = o.stats.leaves;
     o.stats.row_sum_min = 1e300;
     o.stats.row_sum_max = -1e300;
-    for (size_t p = 0; p < B_.size(); ++p)
-      if (o.tree.is_leaf(static_cast<int>(p))) {
-        o.stats.row_sum_min = std::min(o.stats.row_sum_min, F_sum_[p]);
-        o.stats.row_sum_max = std::max(o.stats.row_sum_max, F_sum_[p]);
-      }
+    Rgb worst(0.0), largest(0.0);
     for (size_t p = 0; p < B_.size(); ++p) {
       if (!o.tree.is_leaf(static_cast<int>(p))) continue;
+      o.stats.row_sum_min = std::min(o.stats.row_sum_min, F_sum_[p]);
+      o.stats.row_sum_max = std::max(o.stats.row_sum_max, F_sum_[p]);
       const double a = tri_[p].area;
-      for (int c = 0; c < 3; ++c) {
-        st.power_emitted[c] += emit_[p][c] * a;
-        st.power_absorbed[c] += (1.0 - rho_[p][c]) * H_[p][c] * a;
-        st.power_escaped[c] += B_[p][c] * a * (1.0 - F_sum_[p]);
-      }
+      st.power_emitted += emit_[p] * a;
+      st.power_absorbed += (Rgb(1.0) - rho_[p]) * H_[p] * a;
+      st.power_escaped += B_[p] * a * (1.0 - F_sum_[p]);
+      worst = glm::max(worst, glm::abs(emit_[p] + rho_[p] * H_[p] - B_[p]));
+      largest = glm::max(largest, glm::abs(B_[p]));
+    }
+    for (int c = 0; c < 3; ++c) {
+      st.residual[static_cast<size_t>(c)] = largest[c] > 0.0 ? worst[c] / largest[c] : 0.0;
+      st.iterations[static_cast<size_t>(c)] = o.stats.sweeps;
     }
     st.rays_cast = o.stats.rays_cast;
     st.form_factors = count_links();
-    // Residual of the leaf equations B = E + rho * sum(c B), per channel.
-    for (int c = 0; c < 3; ++c) {
-      double worst = 0.0, top = 0.0;
-      for (size_t x = 0; x < B_.size(); ++x) {
-        if (!o.tree.is_leaf(static_cast<int>(x))) continue;
-        double g = 0.0;
-        for (const auto& [q, k] : terms_[x]) g += k * B_[static_cast<size_t>(q)][c];
-        worst = std::max(worst, std::abs(emit_[x][c] + rho_[x][c] * g - B_[x][c]));
-        top = std::max(top, std::abs(B_[x][c]));
-      }
-      st.residual[static_cast<size_t>(c)] = top > 0.0 ? worst / top : 0.0;
-      st.iterations[static_cast<size_t>(c)] = o.stats.sweeps;
-    }
     st.channels_solved = 3;
   }
 
@@ -545,9 +525,10 @@ HierarchicalSolution solve_hierarchical(const Scene& scene, const Mesh& initial,
   if (!(hopt.epsilon > 0.0) || !(hopt.min_area >= 0.0) || hopt.max_rounds < 0 || !(hopt.baum_relative >= 0.0) ||
       !(hopt.baum_absolute >= 0.0))
     throw InputError("hierarchical options out of range: epsilon " + std::to_string(hopt.epsilon) + ", min area " +
-                     std::to_string(hopt.min_area) + ", rounds " + std::to_string(hopt.max_rounds));
+                     std::to_string(hopt.min_area) + ", rounds " + std::to_string(hopt.max_rounds) + ", baum " +
+                     std::to_string(hopt.baum_relative) + " / " + std::to_string(hopt.baum_absolute));
   HierarchicalSolution out{ElementTree(initial), {}, {}, {}, {}, {}, {}, {}};
-  Solver solver(scene, initial, options, hopt, out);
+  Solver solver(scene, options, hopt, out);
   solver.run(on_round);
   return out;
 }

@@ -6,21 +6,19 @@
 #include "radiosity/direct.h"
 #include "radiosity/error_metric.h"
 
+#include "tests/test_util.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <numbers>
 
 using namespace radmesh;
+using radmesh::test::patch_areas;
+using radmesh::test::patch_named;
 
 namespace {
 const std::string kData = RADMESH_TEST_DATA;
-
-int patch_named(const Scene& s, const std::string& name) {
-  for (size_t p = 0; p < s.patches.size(); ++p)
-    if (s.patches[p].name == name) return static_cast<int>(p);
-  return -1;
-}
 
 // Form factor from a differential area to a parallel a x b rectangle at
 // distance c, the area lying under one of its corners (Howell's catalogue B-3).

@@ -9,6 +9,8 @@
 #include "radiosity/error_metric.h"
 #include "radiosity/solve.h"
 
+#include "tests/test_util.h"
+
 #include <gtest/gtest.h>
 
 #include <vtkCellData.h>
@@ -26,15 +28,11 @@
 #include <set>
 
 using namespace radmesh;
+using radmesh::test::patch_areas;
+using radmesh::test::patch_named;
 
 namespace {
 const std::string kData = RADMESH_TEST_DATA;
-
-int patch_named(const Scene& s, const std::string& name) {
-  for (size_t p = 0; p < s.patches.size(); ++p)
-    if (s.patches[p].name == name) return static_cast<int>(p);
-  return -1;
-}
 
 // Side of the footprint square |x| <= 0.5, |z| <= 0.5: -1 inside, +1 outside, 0 on it.
 int side(const Vec3& p) {
@@ -408,8 +406,7 @@ TEST(Shadows, CornellBoxFullMeshIsValidAndNeverCrossesALine) {
       EXPECT_EQ(s.patches[static_cast<size_t>(d.emitter)].name, "light");
       EXPECT_NE(d.patch, d.emitter);
     }
-  std::vector<double> area(s.patches.size(), 0.0);
-  for (int t = 0; t < m.triangle_count(); ++t) area[static_cast<size_t>(m.patch[static_cast<size_t>(t)])] += m.area(t);
+  const std::vector<double> area = patch_areas(s, m);
   for (size_t p = 0; p < s.patches.size(); ++p)
     EXPECT_NEAR(area[p], s.patch_area(static_cast<int>(p)), 1e-9 * s.patch_area(static_cast<int>(p)));
 }
@@ -473,12 +470,8 @@ void check_full_mesh(const Scene& s, const std::string& what, double seconds_bou
               rep.rounding_crossings, secs);
   EXPECT_LT(secs, seconds_bound) << what;
   for (const Vec3& p : m.positions) ASSERT_TRUE(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z)) << what;
-  std::vector<double> area(s.patches.size(), 0.0);
-  for (int t = 0; t < m.triangle_count(); ++t) {
-    const double a = m.area(t);
-    EXPECT_TRUE(std::isfinite(a)) << what;
-    area[static_cast<size_t>(m.patch[static_cast<size_t>(t)])] += a;
-  }
+  const std::vector<double> area = patch_areas(s, m);
+  for (size_t p = 0; p < s.patches.size(); ++p) EXPECT_TRUE(std::isfinite(area[p])) << what;  // no NaN triangle
   for (size_t p = 0; p < s.patches.size(); ++p)
     EXPECT_NEAR(area[p], s.patch_area(static_cast<int>(p)), 1e-9 * s.patch_area(static_cast<int>(p)) + 1e-300)
         << what << ": patch " << p;

@@ -3,6 +3,8 @@
 #include "io/obj_reader.h"
 #include "meshing/mesh.h"
 
+#include "tests/test_util.h"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -88,8 +90,7 @@ TEST(Mesh, CornellBoxPatchesShareEdgeVerticesAndKeepTheirArea) {
     o.discontinuity = mode;
     MeshReport rep;
     const Mesh m = mesh_scene(s, o, &rep);
-    std::vector<double> area(s.patches.size(), 0.0);
-    for (int t = 0; t < m.triangle_count(); ++t) area[static_cast<size_t>(m.patch[static_cast<size_t>(t)])] += m.area(t);
+    const std::vector<double> area = radmesh::test::patch_areas(s, m);
     for (size_t p = 0; p < s.patches.size(); ++p)
       EXPECT_NEAR(area[p] / s.patch_area(static_cast<int>(p)), 1.0, 1e-12) << s.patches[p].name;
     // The room (everything but the blocks) is a closed surface: every edge has

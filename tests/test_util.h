@@ -1,0 +1,26 @@
+// Small helpers several test files share.
+#pragma once
+
+#include "meshing/mesh.h"
+#include "meshing/scene.h"
+
+#include <string>
+#include <vector>
+
+namespace radmesh::test {
+
+// Index of the first patch named `name`, or -1.
+inline int patch_named(const Scene& s, const std::string& name) {
+  for (size_t p = 0; p < s.patches.size(); ++p)
+    if (s.patches[p].name == name) return static_cast<int>(p);
+  return -1;
+}
+
+// Sum of the mesh's triangle areas per patch.
+inline std::vector<double> patch_areas(const Scene& s, const Mesh& m) {
+  std::vector<double> area(s.patches.size(), 0.0);
+  for (int t = 0; t < m.triangle_count(); ++t) area[static_cast<size_t>(m.patch[static_cast<size_t>(t)])] += m.area(t);
+  return area;
+}
+
+}  // namespace radmesh::test
