@@ -16,6 +16,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -36,6 +37,7 @@ struct Params {
   std::string probe_file;
   bool quiet = false;
   bool png = true;
+  bool export_links = false;  // hierarchical: links.vtu
   std::string discontinuity;  // empty: full for matrix, contacts for hierarchical
   std::string nodal = "fit";
   std::string method = "matrix";
@@ -83,6 +85,40 @@ private:
   bool shown_ = false;
 };
 
+// The links of a hierarchical solution as lines from the receiver's centroid
+// to the source's, with the nodes' levels and patches, F x visibility, the
+// visible fraction, and the radiosity the link adds to its receiver
+// (rho_receiver x F x V x B_source, largest channel).
+LineSet link_line_set(const Scene& scene, const HierarchicalSolution& h) {
+  LineSet out;
+  std::vector<int> rl, sl, rp, sp;
+  std::vector<double> ff, vis, transport;
+  const auto& pos = h.tree.positions();
+  auto centroid = [&](int n) {
+    const auto& v = h.tree.node(n).v;
+    return (pos[static_cast<size_t>(v[0])] + pos[static_cast<size_t>(v[1])] + pos[static_cast<size_t>(v[2])]) / 3.0;
+  };
+  for (size_t r = 0; r < h.links.size(); ++r) {
+    const int rn = static_cast<int>(r);
+    const Patch& patch = scene.patches[static_cast<size_t>(h.tree.node(rn).patch)];
+    const Rgb& rho = scene.materials[static_cast<size_t>(patch.material)].reflectance;
+    for (const HierarchicalLink& l : h.links[r]) {
+      out.segments.push_back({centroid(rn), centroid(l.source)});
+      rl.push_back(h.tree.node(rn).level);
+      sl.push_back(h.tree.node(l.source).level);
+      rp.push_back(h.tree.node(rn).patch);
+      sp.push_back(h.tree.node(l.source).patch);
+      ff.push_back(l.form_factor);
+      vis.push_back(l.visible);
+      const Rgb t = rho * h.node_radiosity[static_cast<size_t>(l.source)] * l.form_factor;
+      transport.push_back(std::max({t.x, t.y, t.z}));
+    }
+  }
+  out.int_fields = {{"receiver_level", rl}, {"source_level", sl}, {"receiver_patch", rp}, {"source_patch", sp}};
+  out.real_fields = {{"form_factor", ff}, {"visible", vis}, {"transport", transport}};
+  return out;
+}
+
 // Options that can be checked without reading anything: done before any work.
 void check_params(Params& p, bool solving) {
   if (p.discontinuity.empty()) p.discontinuity = p.method == "hierarchical" ? "contacts" : "full";
@@ -96,6 +132,8 @@ void check_params(Params& p, bool solving) {
   if (solving) check_solve_options(p.solve);
   if (fs::exists(p.out_dir) && !fs::is_directory(p.out_dir))
     throw InputError("-o " + p.out_dir + ": exists and is not a directory");
+  if (p.export_links && p.method != "hierarchical")
+    throw InputError("--export-links needs --method hierarchical (the matrix method has no links)");
   if (!p.probe_file.empty() && !fs::exists(p.probe_file))
     throw InputError("--probe " + p.probe_file + ": no such file");
 }
@@ -140,6 +178,7 @@ int run(Params& p, bool solving) {
     std::vector<std::pair<std::string, std::vector<int>>> fields;
   };
   std::vector<Snapshot> rounds;
+  std::optional<LineSet> link_lines;
   auto fields_of = [](const HierarchicalSolution& h) {
     std::vector<int> level, zero, links;
     for (int leaf : h.leaf_of) {
@@ -157,6 +196,7 @@ int run(Params& p, bool solving) {
                                                       });
     sol = h.solution;
     solved_mesh = h.mesh;
+    if (p.export_links) link_lines = link_line_set(scene, h);
     cell_fields = fields_of(h);
     info.seconds.push_back({"link", h.stats.seconds_link});
     info.seconds.push_back({"solve", h.stats.seconds_solve});
@@ -233,6 +273,11 @@ int run(Params& p, bool solving) {
     const std::string pvd = (fs::path(p.out_dir) / "radiosity.pvd").string();
     write_pvd(pvd, names);
     written.push_back(pvd);
+  }
+  if (link_lines) {
+    const std::string path = (fs::path(p.out_dir) / "links.vtu").string();
+    write_lines_vtu(path, *link_lines);
+    written.push_back(path);
   }
   if (!info.mesh_report.discontinuities.empty()) {
     const std::string lines = (fs::path(p.out_dir) / "discontinuities.vtu").string();
@@ -382,6 +427,10 @@ int main(int argc, char** argv) {
                       "edge's interpolant, no shading jump), free (from the finer side; default), or split "
                       "(split neighbours until no T-vertex is left, no zero-area triangles)")
       ->check(CLI::IsMember({"anchor", "free", "split"}));
+  run_cmd->add_flag("--export-links", run_p.export_links,
+                    "with --method hierarchical: also write links.vtu, every link as a line from receiver to "
+                    "source (fields receiver_level, source_level, receiver_patch, source_patch, form_factor, "
+                    "visible, transport)");
   run_cmd->add_option("--baum", run_p.hierarchical.baum_relative,
                       "with --method hierarchical: also split a leaf whose vertex values differ by more than "
                       "this fraction of the largest reflected radiosity (Baum's criterion; default 0 = off)")

@@ -213,6 +213,42 @@ void write_discontinuities_vtu(const std::string& path, const std::vector<Discon
   write_grid(path, grid);
 }
 
+void write_lines_vtu(const std::string& path, const LineSet& lines) {
+  const size_t n = lines.segments.size();
+  vtkNew<vtkPoints> points;
+  points->SetDataTypeToDouble();
+  vtkNew<vtkCellArray> cells;
+  for (const auto& [a, b] : lines.segments) {
+    for (const Vec3& v : {a, b})
+      if (!std::isfinite(v.x) || !std::isfinite(v.y) || !std::isfinite(v.z))
+        throw IoError(path + ": line segment " + std::to_string(cells->GetNumberOfCells()) + " has a non-finite end");
+    const vtkIdType ids[2] = {points->InsertNextPoint(a.x, a.y, a.z), points->InsertNextPoint(b.x, b.y, b.z)};
+    cells->InsertNextCell(2, ids);
+  }
+  vtkNew<vtkUnstructuredGrid> grid;
+  grid->SetPoints(points);
+  grid->SetCells(VTK_LINE, cells);
+  for (const auto& [name, values] : lines.int_fields) {
+    check_count(path, name.c_str(), values.size(), n);
+    vtkNew<vtkIntArray> a;
+    a->SetName(name.c_str());
+    for (int v : values) a->InsertNextValue(v);
+    grid->GetCellData()->AddArray(a);
+  }
+  for (const auto& [name, values] : lines.real_fields) {
+    check_count(path, name.c_str(), values.size(), n);
+    vtkNew<vtkDoubleArray> a;
+    a->SetName(name.c_str());
+    for (size_t i = 0; i < n; ++i) {
+      if (!std::isfinite(values[i]))
+        throw IoError(path + ": field '" + name + "' of segment " + std::to_string(i) + " is " + std::to_string(values[i]));
+      a->InsertNextValue(values[i]);
+    }
+    grid->GetCellData()->AddArray(a);
+  }
+  write_grid(path, grid);
+}
+
 void write_mesh_vtu(const std::string& path, const Scene& scene, const Mesh& mesh,
                     const TriangleQuality& quality) {
   auto grid = triangle_grid(path, mesh.positions, mesh.triangles);

@@ -7,7 +7,10 @@
 #include "meshing/scene.h"
 #include "radiosity/solution.h"
 
+#include <array>
 #include <string>
+#include <utility>
+#include <vector>
 
 namespace radmesh {
 
@@ -33,6 +36,16 @@ void write_pvd(const std::string& path, const std::vector<std::string>& files);
 // for contacts), patch_id (the patch the line lies on) and other_patch (the
 // patch that causes it: the touching patch or the occluder).
 void write_discontinuities_vtu(const std::string& path, const std::vector<DiscontinuitySegment>& segments);
+
+// Line segments with per-segment integer and real fields (cell data), as
+// VTK_LINE cells: links of hierarchical radiosity. Every field must have one
+// value per segment; real values must be finite. Atomic; throws IoError.
+struct LineSet {
+  std::vector<std::array<Vec3, 2>> segments;
+  std::vector<std::pair<std::string, std::vector<int>>> int_fields;
+  std::vector<std::pair<std::string, std::vector<double>>> real_fields;
+};
+void write_lines_vtu(const std::string& path, const LineSet& lines);
 
 // Reads back a mesh written by write_mesh_vtu or write_vtu (points, triangles,
 // cell array patch_id) for `radmesh quality MESH.vtu`. Throws IoError naming

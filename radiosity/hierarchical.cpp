@@ -8,11 +8,17 @@
 #include "radiosity/sampling.h"
 #include "radiosity/visibility.h"
 
+#include <tbb/blocked_range.h>
+#include <tbb/global_control.h>
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <limits>
 #include <map>
+#include <optional>
+#include <unordered_map>
 
 namespace radmesh {
 
@@ -50,9 +56,11 @@ public:
     const ElementTree& tree = out_.tree;
     // First linking: every pair of roots whose patches can see each other.
     auto t0 = std::chrono::steady_clock::now();
+    std::vector<std::pair<int, int>> pairs;
     for (int p = 0; p < tree.root_count(); ++p)
       for (int q = 0; q < tree.root_count(); ++q)
-        if (p != q && occlusion_.facing(node_patch(p), node_patch(q))) link(p, q);
+        if (p != q && occlusion_.facing(node_patch(p), node_patch(q))) pairs.emplace_back(p, q);
+    link_pairs(std::move(pairs));
     close_t_vertices();
     st.seconds_link += seconds_since(t0);
     std::vector<Rgb> previous;
@@ -110,6 +118,7 @@ private:
       // A new node starts from its parent's radiosity (or its emission).
       B_.push_back(node.parent >= 0 ? B_[static_cast<size_t>(node.parent)] : m.emission);
       links_.emplace_back();
+      dirty_.push_back(1);
     }
   }
 
@@ -155,7 +164,8 @@ private:
   bool splittable(int n) const { return tri_[static_cast<size_t>(n)].area > 4.0 * min_area_; }
 
   // Visible fraction of the segments between stratified points of p and q.
-  double visible_fraction(int p, int q) {
+  // Thread-safe; counts the rays cast in `rays`.
+  double visible_fraction(int p, int q, long long& rays) const {
     const Triangle& a = tri_[static_cast<size_t>(p)];
     const Triangle& b = tri_[static_cast<size_t>(q)];
     if (occlusion_.convex_enclosure() || !occlusion_.may_occlude(node_patch(p), node_patch(q), a, b)) return 1.0;
@@ -169,7 +179,7 @@ private:
         open += visibility_.visible(x, y, node_patch(p), node_patch(q)) ? 1 : 0;
         ++total;
       }
-    out_.stats.rays_cast += total;
+    rays += total;
     return static_cast<double>(open) / total;
   }
 
@@ -183,14 +193,39 @@ private:
     return form_factor(pts, b);
   }
 
-  // Links receiver p to source q, refining first where the oracle asks.
-  void link(int p, int q) {
-    ++out_.stats.links_examined;
-    const double f = form_factor_to(p, q);
-    if (f <= 0.0) return;
-    const Link l{q, f, visible_fraction(p, q), spread(p, q, f)};
-    if (wants_refinement(p, l) && split_one(p, q, spread_dominates(l))) return;
-    links_[static_cast<size_t>(p)].push_back(l);
+  // Links every receiver p to its source q, refining first where the oracle
+  // asks: breadth first, one generation of pairs at a time. The form factor,
+  // visibility and spread of a generation are computed in parallel (each
+  // pair alone, with its own random stream, so the result does not depend on
+  // the threads); deciding, splitting and storing is sequential and in order.
+  void link_pairs(std::vector<std::pair<int, int>> todo) {
+    while (!todo.empty()) {
+      std::vector<Link> ev(todo.size());
+      std::vector<long long> rays(todo.size(), 0);
+      tbb::parallel_for(tbb::blocked_range<size_t>(0, todo.size(), 16), [&](const tbb::blocked_range<size_t>& r) {
+        for (size_t i = r.begin(); i != r.end(); ++i) {
+          const auto [p, q] = todo[i];
+          Link& l = ev[i];
+          l.source = q;
+          l.f = form_factor_to(p, q);
+          if (l.f <= 0.0) continue;
+          l.visible = visible_fraction(p, q, rays[i]);
+          l.spread = spread(p, q, l.f);
+        }
+      });
+      std::vector<std::pair<int, int>> next;
+      for (size_t i = 0; i < todo.size(); ++i) {
+        const int p = todo[i].first;
+        ++out_.stats.links_examined;
+        out_.stats.rays_cast += rays[i];
+        const Link& l = ev[i];
+        if (l.f <= 0.0) continue;
+        if (wants_refinement(p, l) && split_pair(p, l.source, spread_dominates(l), next)) continue;
+        links_[static_cast<size_t>(p)].push_back(l);
+        dirty_[static_cast<size_t>(p)] = 1;
+      }
+      todo.swap(next);
+    }
   }
 
   // Largest difference between the point form factors to q at p's corners
@@ -220,8 +255,9 @@ private:
 
   // Splits the receiver p when the form factor varies over it (the spread
   // is what pushing down gets wrong) or it is the larger, else the source q,
-  // and links the children instead. Returns false when neither may be split.
-  bool split_one(int p, int q, bool receiver_first = false) {
+  // and queues the children's pairs instead. Returns false when neither may
+  // be split.
+  bool split_pair(int p, int q, bool receiver_first, std::vector<std::pair<int, int>>& next) {
     const bool sp = splittable(p), sq = splittable(q);
     if (!sp && !sq) return false;
     const bool split_p =
@@ -232,18 +268,14 @@ private:
       first = out_.tree.split(n);
       grow();
     }
-    for (int c = first; c < first + 4; ++c) {
-      if (split_p)
-        link(c, q);
-      else
-        link(p, c);
-    }
+    for (int c = first; c < first + 4; ++c) next.emplace_back(split_p ? c : p, split_p ? q : c);
     return true;
   }
 
   // Refines every link the oracle now flags (with the current radiosity).
   long long refine_links() {
     long long refined = 0;
+    std::vector<std::pair<int, int>> next;
     const size_t n = links_.size();
     for (size_t p = 0; p < n; ++p) {
       std::vector<Link> keep, redo;
@@ -255,11 +287,13 @@ private:
             .push_back(l);
       if (redo.empty()) continue;
       links_[p] = keep;
+      dirty_[p] = 1;
       for (const Link& l : redo) {
         ++refined;
-        if (!split_one(static_cast<int>(p), l.source, spread_dominates(l))) links_[p].push_back(l);
+        if (!split_pair(static_cast<int>(p), l.source, spread_dominates(l), next)) links_[p].push_back(l);
       }
     }
+    link_pairs(std::move(next));
     return refined;
   }
 
@@ -275,33 +309,57 @@ private:
   // same points of the leaf. The sources of a leaf's path cover what it sees
   // exactly once, so in a closed scene a leaf's row sums to 1 up to
   // rounding, as in the matrix method; visibility stays the link's.
+  //
+  // Terms are kept between rounds for a leaf whose path has no changed link;
+  // the others are computed in parallel, each leaf alone.
   void leaf_terms() {
     const ElementTree& tree = out_.tree;
     const size_t n = tree.nodes().size();
-    terms_.assign(n, {});
-    F_sum_.assign(n, 0.0);
+    terms_.resize(n);
+    F_sum_.resize(n, 0.0);
+    std::vector<int> todo;
     for (size_t x = 0; x < n; ++x) {
-      if (!tree.is_leaf(static_cast<int>(x))) continue;
-      std::vector<const Link*> path;
-      for (int a = static_cast<int>(x); a >= 0; a = tree.node(a).parent)
-        for (const Link& l : links_[static_cast<size_t>(a)]) path.push_back(&l);
-      if (path.empty()) continue;
-      const Triangle& t = tri_[x];
-      // One lower bound of the distance to the nearest source for the whole
-      // leaf: leaves next to a source get the finer points everywhere.
-      double near = std::numeric_limits<double>::infinity();
-      const Vec3 c = t.centroid();
-      for (const Link* l : path)
-        near = std::min(near, distance_to_triangle(c, tri_[static_cast<size_t>(l->source)]) - t.radius);
-      near = std::max(near, 0.0);
-      const ReceiverPoints pts = receiver_points(t, [near](const Vec3&) { return near; }, opt_.quadrature);
-      for (const Link* l : path) {
-        const double c = form_factor(pts, tri_[static_cast<size_t>(l->source)]) * l->visible;
-        if (c <= 0.0) continue;
-        terms_[x].push_back({l->source, c});
-        F_sum_[x] += c;
+      if (!tree.is_leaf(static_cast<int>(x))) {
+        terms_[x] = {};
+        F_sum_[x] = 0.0;
+        continue;
       }
-      out_.stats.leaf_terms += static_cast<long long>(terms_[x].size());
+      bool changed = false;
+      for (int a = static_cast<int>(x); a >= 0 && !changed; a = tree.node(a).parent)
+        changed = dirty_[static_cast<size_t>(a)] != 0;
+      if (changed) todo.push_back(static_cast<int>(x));
+    }
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, todo.size(), 8), [&](const tbb::blocked_range<size_t>& r) {
+      for (size_t i = r.begin(); i != r.end(); ++i) gather_terms(static_cast<size_t>(todo[i]));
+    });
+    std::fill(dirty_.begin(), dirty_.end(), 0);
+    out_.stats.leaf_terms = 0;
+    for (size_t x = 0; x < n; ++x) out_.stats.leaf_terms += static_cast<long long>(terms_[x].size());
+  }
+
+  void gather_terms(size_t x) {
+    const ElementTree& tree = out_.tree;
+    terms_[x].clear();
+    F_sum_[x] = 0.0;
+    std::vector<const Link*> path;
+    for (int a = static_cast<int>(x); a >= 0; a = tree.node(a).parent)
+      for (const Link& l : links_[static_cast<size_t>(a)]) path.push_back(&l);
+    if (path.empty()) return;
+    const Triangle& t = tri_[x];
+    // One lower bound of the distance to the nearest source for the whole
+    // leaf: leaves next to a source get the finer points everywhere.
+    double near = std::numeric_limits<double>::infinity();
+    const Vec3 c = t.centroid();
+    for (const Link* l : path)
+      near = std::min(near, distance_to_triangle(c, tri_[static_cast<size_t>(l->source)]) - t.radius);
+    near = std::max(near, 0.0);
+    const ReceiverPoints pts = receiver_points(t, [near](const Vec3&) { return near; }, opt_.quadrature);
+    for (const Link* l : path) {
+      if (l->visible <= 0.0) continue;  // hidden: kept as a link, never gathered
+      const double f = form_factor(pts, tri_[static_cast<size_t>(l->source)]) * l->visible;
+      if (f <= 0.0) continue;
+      terms_[x].push_back({l->source, f});
+      F_sum_[x] += f;
     }
   }
 
@@ -311,7 +369,6 @@ private:
   void solve() {
     const ElementTree& tree = out_.tree;
     const size_t n = tree.nodes().size();
-    out_.stats.leaf_terms = 0;
     leaf_terms();
     for (int sweep = 0;; ++sweep) {
       if (sweep >= opt_.max_iterations)
@@ -368,7 +425,7 @@ private:
     o.links.assign(links_.size(), {});
     for (size_t p = 0; p < links_.size(); ++p) {
       o.node_links[p] = static_cast<int>(links_[p].size());
-      for (const Link& l : links_[p]) o.links[p].push_back({l.source, l.f * l.visible});
+      for (const Link& l : links_[p]) o.links[p].push_back({l.source, l.f * l.visible, l.visible});
     }
     o.mesh = o.tree.conforming_mesh(&o.leaf_of);
     Solution& s = o.solution;
@@ -377,97 +434,89 @@ private:
     // A zero-area triangle takes the value of the leaf whose edge it closes:
     // the leaf emitted just before its fan.
     int owner = -1;
-    Mesh leaves;
-    leaves.positions = o.mesh.positions;
-    leaves.feature_edges = o.mesh.feature_edges;
-    std::vector<Rgb> leaf_b;
     o.stats.leaves = 0;
     o.stats.zero_area_triangles = 0;
     for (size_t t = 0; t < o.leaf_of.size(); ++t) {
       if (o.leaf_of[t] >= 0) {
         owner = o.leaf_of[t];
         ++o.stats.leaves;
-        leaves.triangles.push_back(o.mesh.triangles[t]);
-        leaves.patch.push_back(o.mesh.patch[t]);
-        leaf_b.push_back(B_[static_cast<size_t>(owner)]);
       } else {
         ++o.stats.zero_area_triangles;
       }
       s.element[t] = B_[static_cast<size_t>(owner)];
     }
-    // Vertex values from the leaves (zero-area triangles take no part); a
-    // T-vertex gets the value the finer side gives it.
-    const NodalField leaf_nodal = compute_nodal(scene_, leaves, leaf_b, opt_.crease_angle, opt_.nodal);
-    s.nodal = leaf_nodal;
-    // Corners for the zero-area triangles: the display vertex of the same
-    // point used by any leaf of the same patch.
-    std::map<std::pair<int, int>, int> display;  // (patch, mesh vertex) -> display vertex
-    for (size_t t = 0; t < leaves.triangles.size(); ++t)
-      for (int k = 0; k < 3; ++k)
-        display[{leaves.patch[t], leaves.triangles[t][static_cast<size_t>(k)]}] =
-            leaf_nodal.corners[t][static_cast<size_t>(k)];
+    // Vertex values on the conforming mesh: the zero-area fans join the two
+    // sides of every unsplit edge (so a vertex is not split into several
+    // display vertices there) and, having no area, add nothing to a fit or a
+    // mean. A T-vertex thus gets the value the finer side gives it.
+    s.nodal = compute_nodal(scene_, o.mesh, s.element, opt_.crease_angle, opt_.nodal);
+    // Leaf edges: directed edge (u, w) -> leaf triangle. The finer side of an
+    // unsplit edge (a, b) of leaf t holds its pieces reversed.
+    std::unordered_map<uint64_t, int> edge_of;
+    auto key = [](int u, int w) { return (static_cast<uint64_t>(static_cast<uint32_t>(u)) << 32) | static_cast<uint32_t>(w); };
+    for (size_t t = 0; t < o.leaf_of.size(); ++t)
+      if (o.leaf_of[t] >= 0)
+        for (int k = 0; k < 3; ++k)
+          edge_of[key(o.mesh.triangles[t][static_cast<size_t>(k)], o.mesh.triangles[t][static_cast<size_t>((k + 1) % 3)])] =
+              static_cast<int>(t);
+    auto display_in = [&](int t, int v) {  // display vertex of mesh vertex v in triangle t
+      for (int j = 0; j < 3; ++j)
+        if (o.mesh.triangles[static_cast<size_t>(t)][static_cast<size_t>(j)] == v)
+          return s.nodal.corners[static_cast<size_t>(t)][static_cast<size_t>(j)];
+      return -1;
+    };
     // T-vertices: the jump `free` leaves, and anchoring to the unsplit edge.
-    // Coarser leaves first, so that an edge whose end is itself a T-vertex
-    // of a longer edge interpolates the end's anchored value.
+    // Along the unsplit edge (a, b) of leaf t lie a, m_1 .. m_k, b; each
+    // piece between two of them is an edge of a finer leaf across. Where the
+    // edge is smooth (the leaves across share t's display vertices at a and
+    // b: no contact line or crease along it), the display vertices of the m_i
+    // take the edge's interpolant (anchor); the difference is the jump free
+    // leaves. Coarser leaves first, so that an edge whose end is itself a
+    // T-vertex of a longer edge interpolates the end's anchored value.
     o.stats.max_tvertex_jump = 0.0;
     double top = 0.0;
     for (const Rgb& b : s.nodal.radiosity) top = std::max(top, max3(b));
     const std::vector<Rgb> free_values = s.nodal.radiosity;
-    std::vector<size_t> order(leaves.triangles.size());
-    for (size_t t = 0; t < order.size(); ++t) order[t] = t;
-    std::vector<int> leaf_node;
-    for (int l : o.leaf_of)
-      if (l >= 0) leaf_node.push_back(l);
-    std::stable_sort(order.begin(), order.end(), [&](size_t x, size_t y) {
-      return o.tree.node(leaf_node[x]).level < o.tree.node(leaf_node[y]).level;
+    std::vector<int> order;
+    for (size_t t = 0; t < o.leaf_of.size(); ++t)
+      if (o.leaf_of[t] >= 0) order.push_back(static_cast<int>(t));
+    std::stable_sort(order.begin(), order.end(), [&](int x, int y) {
+      return o.tree.node(o.leaf_of[static_cast<size_t>(x)]).level < o.tree.node(o.leaf_of[static_cast<size_t>(y)]).level;
     });
-    for (size_t t : order) {
-      const auto& tri = leaves.triangles[t];
+    for (int t : order) {
+      const auto& tri = o.mesh.triangles[static_cast<size_t>(t)];
       for (int k = 0; k < 3; ++k) {
         const int a = tri[static_cast<size_t>(k)], b = tri[static_cast<size_t>((k + 1) % 3)];
-        const std::vector<int> ms = o.tree.edge_points(a, b);
-        if (ms.empty()) continue;
-        const int da = leaf_nodal.corners[t][static_cast<size_t>(k)], db = leaf_nodal.corners[t][static_cast<size_t>((k + 1) % 3)];
+        std::vector<int> chain = o.tree.edge_points(a, b);
+        if (chain.empty()) continue;
+        chain.insert(chain.begin(), a);
+        chain.push_back(b);
+        const int da = s.nodal.corners[static_cast<size_t>(t)][static_cast<size_t>(k)];
+        const int db = s.nodal.corners[static_cast<size_t>(t)][static_cast<size_t>((k + 1) % 3)];
+        std::vector<int> across;
+        for (size_t i = 0; i + 1 < chain.size(); ++i) {
+          const auto it = edge_of.find(key(chain[i + 1], chain[i]));
+          if (it == edge_of.end()) break;
+          across.push_back(it->second);
+        }
+        if (across.size() + 1 != chain.size() || display_in(across.front(), a) != da ||
+            display_in(across.back(), b) != db)
+          continue;
         const Vec3 A = o.mesh.positions[static_cast<size_t>(a)], B = o.mesh.positions[static_cast<size_t>(b)];
-        for (int m : ms) {
-          const auto it = display.find({leaves.patch[t], m});
-          if (it == display.end()) continue;  // the finer side is another patch: a crease anyway
-          const double u = glm::dot(o.mesh.positions[static_cast<size_t>(m)] - A, B - A) / glm::dot(B - A, B - A);
+        for (size_t i = 1; i + 1 < chain.size(); ++i) {
+          const double u =
+              glm::dot(o.mesh.positions[static_cast<size_t>(chain[i])] - A, B - A) / glm::dot(B - A, B - A);
           const Rgb free_interp = (1.0 - u) * free_values[static_cast<size_t>(da)] + u * free_values[static_cast<size_t>(db)];
-          if (top > 0.0)
-            o.stats.max_tvertex_jump = std::max(
-                o.stats.max_tvertex_jump, max3(glm::abs(free_values[static_cast<size_t>(it->second)] - free_interp)) / top);
-          if (hopt_.tvertex == TVertexMode::anchor)
-            s.nodal.radiosity[static_cast<size_t>(it->second)] =
-                (1.0 - u) * s.nodal.radiosity[static_cast<size_t>(da)] + u * s.nodal.radiosity[static_cast<size_t>(db)];
+          const Rgb anchored = (1.0 - u) * s.nodal.radiosity[static_cast<size_t>(da)] + u * s.nodal.radiosity[static_cast<size_t>(db)];
+          for (int f : {across[i - 1], across[i]}) {
+            const int dm = display_in(f, chain[i]);
+            if (top > 0.0)
+              o.stats.max_tvertex_jump = std::max(
+                  o.stats.max_tvertex_jump, max3(glm::abs(free_values[static_cast<size_t>(dm)] - free_interp)) / top);
+            if (hopt_.tvertex == TVertexMode::anchor) s.nodal.radiosity[static_cast<size_t>(dm)] = anchored;
+          }
         }
       }
-    }
-    // Corners of the zero-area triangles: the owner leaf's display vertices
-    // for its own corners, the finer side's for the T-vertices.
-    s.nodal.corners.clear();
-    size_t li = 0;
-    int owner_leaf = -1;  // index among the leaves of the last leaf seen
-    for (size_t t = 0; t < o.leaf_of.size(); ++t) {
-      if (o.leaf_of[t] >= 0) {
-        owner_leaf = static_cast<int>(li);
-        s.nodal.corners.push_back(leaf_nodal.corners[li++]);
-        continue;
-      }
-      std::array<int, 3> c{};
-      for (int k = 0; k < 3; ++k) {
-        const int v = o.mesh.triangles[t][static_cast<size_t>(k)];
-        int d = -1;
-        for (int j = 0; j < 3 && owner_leaf >= 0; ++j)
-          if (leaves.triangles[static_cast<size_t>(owner_leaf)][static_cast<size_t>(j)] == v)
-            d = leaf_nodal.corners[static_cast<size_t>(owner_leaf)][static_cast<size_t>(j)];
-        if (d < 0) {
-          const auto it = display.find({o.mesh.patch[t], v});
-          d = it != display.end() ? it->second : leaf_nodal.corners[static_cast<size_t>(std::max(owner_leaf, 0))][0];
-        }
-        c[static_cast<size_t>(k)] = d;
-      }
-      s.nodal.corners.push_back(c);
     }
     // Row sums, energy balance and the residual of the leaf equations
     // B = E + rho H over the leaves (H gathered after the last sweep).
@@ -514,6 +563,7 @@ private:
   std::vector<double> F_sum_;
   std::vector<std::vector<std::pair<int, double>>> terms_;  // per leaf: (source node, F x visibility at the leaf)
   std::vector<std::vector<Link>> links_;  // per receiver node
+  std::vector<char> dirty_;               // per node: links changed since the last leaf_terms (new nodes too)
 };
 
 }  // namespace
@@ -527,6 +577,9 @@ HierarchicalSolution solve_hierarchical(const Scene& scene, const Mesh& initial,
     throw InputError("hierarchical options out of range: epsilon " + std::to_string(hopt.epsilon) + ", min area " +
                      std::to_string(hopt.min_area) + ", rounds " + std::to_string(hopt.max_rounds) + ", baum " +
                      std::to_string(hopt.baum_relative) + " / " + std::to_string(hopt.baum_absolute));
+  std::optional<tbb::global_control> threads;
+  if (options.threads > 0)
+    threads.emplace(tbb::global_control::max_allowed_parallelism, static_cast<size_t>(options.threads));
   HierarchicalSolution out{ElementTree(initial), {}, {}, {}, {}, {}, {}, {}};
   Solver solver(scene, options, hopt, out);
   solver.run(on_round);

@@ -74,11 +74,20 @@ struct HierarchicalStats {
   double max_tvertex_jump = 0.0;
 };
 
+// A link as published: the receiver node gathers from `source` with form
+// factor F x visibility (the link's level; leaves re-evaluate F at their own
+// points), `visible` the fraction of its shadow rays that got through.
+struct HierarchicalLink {
+  int source = -1;
+  double form_factor = 0.0;
+  double visible = 1.0;
+};
+
 struct HierarchicalSolution {
   ElementTree tree;
   std::vector<Rgb> node_radiosity;  // per tree node (inner nodes: area-weighted mean of children)
   std::vector<int> node_links;      // per tree node: links it gathers over
-  std::vector<std::vector<std::pair<int, double>>> links;  // per receiver node: (source node, F x visibility)
+  std::vector<std::vector<HierarchicalLink>> links;  // per receiver node, as they stand at the end
   Mesh mesh;                        // conforming mesh: leaves, then zero-area fans
   std::vector<int> leaf_of;         // per mesh triangle: its leaf, or -1 (zero-area)
   Solution solution;                // per mesh triangle (zero-area: the leaf owning the edge) and per vertex

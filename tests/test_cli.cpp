@@ -6,6 +6,7 @@
 #include <vtkCellData.h>
 #include <vtkDataArray.h>
 #include <vtkNew.h>
+#include <vtkCellType.h>
 #include <vtkUnstructuredGrid.h>
 #include <vtkXMLUnstructuredGridReader.h>
 
@@ -125,7 +126,7 @@ TEST(Cli, RunWithShadowLinesReportsThemAndWhatWasSkipped) {
 TEST(Cli, HierarchicalRunWritesTheRefinementSeriesWithZeroAreaFlags) {
   const fs::path out = fresh_dir("run_hier");
   const Result r = radmesh("run " + kData + "/box_on_floor/box_on_floor.obj --method hierarchical --epsilon 0.01 "
-                           "--no-png -q -o " + out.string());
+                           "--export-links --no-png -q -o " + out.string());
   ASSERT_EQ(r.status, 0) << r.err;
   std::ifstream in(out / "summary.json");
   const nlohmann::json s = nlohmann::json::parse(in);
@@ -158,6 +159,32 @@ TEST(Cli, HierarchicalRunWritesTheRefinementSeriesWithZeroAreaFlags) {
   EXPECT_EQ(flagged, s["solver"]["zero_area_triangles"].get<int>());
   EXPECT_EQ(reader->GetOutput()->GetNumberOfCells(),
             s["solver"]["leaves"].get<int>() + s["solver"]["zero_area_triangles"].get<int>());
+  // --export-links: one line per link, as many as the summary counts, and
+  // per leaf as many as its `links` cell value says it gathers over.
+  vtkNew<vtkXMLUnstructuredGridReader> lr;
+  lr->SetFileName((out / "links.vtu").string().c_str());
+  lr->Update();
+  vtkUnstructuredGrid* lg = lr->GetOutput();
+  ASSERT_EQ(lg->GetNumberOfCells(), s["solver"]["links"].get<vtkIdType>());
+  vtkDataArray* ff = lg->GetCellData()->GetArray("form_factor");
+  vtkDataArray* vis = lg->GetCellData()->GetArray("visible");
+  vtkDataArray* rl = lg->GetCellData()->GetArray("receiver_level");
+  vtkDataArray* rp = lg->GetCellData()->GetArray("receiver_patch");
+  vtkDataArray* sp = lg->GetCellData()->GetArray("source_patch");
+  ASSERT_TRUE(ff && vis && rl && rp && sp && lg->GetCellData()->GetArray("transport"));
+  int partial = 0, hidden = 0;
+  for (vtkIdType c = 0; c < lg->GetNumberOfCells(); ++c) {
+    EXPECT_EQ(lg->GetCellType(c), VTK_LINE);
+    EXPECT_GE(vis->GetTuple1(c), 0.0);
+    EXPECT_LE(vis->GetTuple1(c), 1.0);
+    EXPECT_LE(ff->GetTuple1(c), 1.0);
+    EXPECT_EQ(ff->GetTuple1(c) > 0.0, vis->GetTuple1(c) > 0.0);  // only a hidden link carries nothing
+    EXPECT_NE(rp->GetTuple1(c), sp->GetTuple1(c));  // a patch is flat: it never sees itself
+    partial += vis->GetTuple1(c) > 0.0 && vis->GetTuple1(c) < 1.0 ? 1 : 0;
+    hidden += vis->GetTuple1(c) == 0.0 ? 1 : 0;
+  }
+  EXPECT_GT(partial, 0);  // the box shadows the floor: some links are partly visible, some hidden
+  EXPECT_GT(hidden, 0);
   fs::remove_all(out);
 }
 
@@ -196,6 +223,7 @@ INSTANTIATE_TEST_SUITE_P(
                       BadRun{"run DATA/cornell_box/cornell_box.obj --method fastest", "--method"},
                       BadRun{"run DATA/cornell_box/cornell_box.obj --method hierarchical --epsilon 0", "--epsilon"},
                       BadRun{"run DATA/cornell_box/cornell_box.obj --discontinuity some", "--discontinuity"},
+                      BadRun{"run DATA/cornell_box/cornell_box.obj --export-links", "--export-links"},
                       BadRun{"mesh DATA/cornell_box/cornell_box.obj --max-shadow-lines -1", "--max-shadow-lines"}),
     [](const auto& info) {
       std::string name = std::to_string(info.index) + "_";
