@@ -338,8 +338,8 @@ int main(int argc, char** argv) {
   CLI::App app{"radmesh time-versus-error benchmark"};
   std::string out_dir = "bench-out", data = RADMESH_DATA_DIR, only;
   bool quick = false, reference = false, direct = false;
-  double ref_edge = 27.0;
-  int ref_rays = 64;
+  double ref_edge = 28.0;
+  int ref_rays = 32;
   app.add_option("--out", out_dir, "output directory for bench.csv and bench.png");
   app.add_option("--data", data, "the data directory");
   app.add_option("--scenes", only, "comma-separated scene names (default: all)");

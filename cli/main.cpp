@@ -40,7 +40,7 @@ struct Params {
   bool export_links = false;  // hierarchical: links.vtu
   std::string discontinuity;  // empty: full for matrix, contacts for hierarchical
   std::string nodal = "fit";
-  std::string method = "matrix";
+  std::string method = "hierarchical";
   std::string tvertex = "free";
   HierarchicalOptions hierarchical;
 };
@@ -372,7 +372,8 @@ void add_common(CLI::App* cmd, Params& p, const char* scene_help = "scene file (
   cmd->add_option("SCENE", p.scene, scene_help)->required()->check(CLI::ExistingFile);
   cmd->add_option("-o,--output", p.out_dir, "output directory (created; default radmesh-out)");
   cmd->add_option("--max-edge", p.meshing.max_edge,
-                  "longest mesh edge, in scene units (default 0 = scene diagonal / 12)")
+                  "longest mesh edge, in scene units (default 0 = scene diagonal / 12; for run with the "
+                  "hierarchical method, the roots: scene diagonal / 5)")
       ->check(CLI::Range(0.0, 1e300));
   cmd->add_option("--min-angle", p.meshing.min_angle, "smallest triangle angle wanted, degrees (default 20)")
       ->check(CLI::Range(0.0, 30.0));
@@ -407,20 +408,20 @@ int main(int argc, char** argv) {
   run_cmd->add_option("--rays", run_p.solve.rays, "shadow rays per element pair (default 16)")
       ->check(CLI::Range(1, 4096));
   run_cmd->add_option("--max-memory", run_p.solve.max_memory_gb,
-                      "GiB the form-factor matrix may use (default 0 = half the memory)")
+                      "with --method matrix: GiB the form-factor matrix may use (default 0 = half the memory)")
       ->check(CLI::Range(0.0, 1e6));
   run_cmd->add_option("--probe", run_p.probe_file,
                       "probe file: lines 'label x y z nx ny nz'; writes probes.csv")
       ->check(CLI::ExistingFile);
   run_cmd->add_flag("!--no-png", run_p.png, "do not render radiosity.png");
   run_cmd->add_option("--method", run_p.method,
-                      "solver: matrix (every element pair, the default) or hierarchical (Hanrahan's "
-                      "hierarchical radiosity on an element hierarchy closed by zero-area triangles; "
-                      "experimental); hierarchical also writes radiosity.pvd, one file per refinement round")
+                      "solver: hierarchical (Hanrahan's hierarchical radiosity on an element hierarchy closed "
+                      "by zero-area triangles, the default; also writes radiosity.pvd, one file per refinement "
+                      "round) or matrix (every element pair of the initial mesh)")
       ->check(CLI::IsMember({"matrix", "hierarchical"}));
   run_cmd->add_option("--epsilon", run_p.hierarchical.epsilon,
                       "with --method hierarchical: link refinement threshold, relative to the largest "
-                      "reflected radiosity (default 0.002)")
+                      "reflected radiosity (default 0.001)")
       ->check(CLI::Range(1e-9, 1.0));
   run_cmd->add_option("--tvertex", run_p.tvertex,
                       "with --method hierarchical: vertex values on a neighbour's unsplit edge: anchor (the "

@@ -31,7 +31,7 @@ struct HierarchicalOptions {
   // between the point form factor to q at p's corners and centroid and the
   // link's form factor), plus rho_p * B_q * F when the link is partly visible
   // (some shadow rays blocked): links across shadow boundaries go first.
-  double epsilon = 2e-3;
+  double epsilon = 1e-3;
   // Elements are not split below this area; 0 = (scene diagonal / 150)^2 / 2.
   double min_area = 0.0;
   // Refinement rounds after the first solve (each: refine links where the

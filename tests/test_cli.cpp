@@ -58,7 +58,7 @@ TEST(Cli, RunWritesVtuSummaryAndProbes) {
     p << "# label x y z nx ny nz\ncentre 0.5 0.5 1 0 0 -1\n";
   }
   const Result r = radmesh("run " + kData + "/parallel_plates/parallel_plates.obj -o " + out.string() +
-                           " --max-edge 0.25 --probe " + probes.string());
+                           " --method matrix --max-edge 0.25 --probe " + probes.string());
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_TRUE(fs::exists(out / "radiosity.vtu"));
   EXPECT_TRUE(fs::exists(out / "probes.csv"));
@@ -87,6 +87,24 @@ TEST(Cli, RunWritesVtuSummaryAndProbes) {
   EXPECT_NE(r.err.find("PNG skipped"), std::string::npos) << r.err;  // no display here
   fs::remove_all(out);
   fs::remove(probes);
+}
+
+TEST(Cli, DefaultMethodIsHierarchicalAndMatchesHowellOnThePlates) {
+  const fs::path out = fresh_dir("plates_default");
+  const Result r = radmesh("run " + kData + "/parallel_plates/parallel_plates.obj --no-png -q -o " + out.string());
+  ASSERT_EQ(r.status, 0) << r.err;
+  std::ifstream in(out / "summary.json");
+  const nlohmann::json s = nlohmann::json::parse(in);
+  EXPECT_EQ(s["solver"]["method"], "hierarchical");
+  EXPECT_EQ(s["counts"]["rays_cast"], 0);  // nothing can occlude: no shadow ray
+  int receivers = 0;
+  for (const auto& p : s["patches"])
+    if (p["name"] == "receiver") {
+      EXPECT_NEAR(p["mean_radiosity"][0].get<double>(), 0.0999125, 1e-5);  // rho * F, Howell C-11
+      ++receivers;
+    }
+  EXPECT_EQ(receivers, 1);
+  fs::remove_all(out);
 }
 
 TEST(Cli, MeshWritesMeshAndSummary) {
@@ -219,11 +237,11 @@ INSTANTIATE_TEST_SUITE_P(
                       BadRun{"run DATA/cornell_box/cornell_box.obj --bogus-flag", "bogus"},
                       BadRun{"run DATA/cornell_box/cornell_box.obj --min-angle 45", "min-angle"},
                       BadRun{"run DATA/cornell_box/cornell_box.obj --tolerance 0", "tolerance"},
-                      BadRun{"run DATA/cornell_box/cornell_box.obj --max-memory 0.000001", "GiB"},
+                      BadRun{"run DATA/cornell_box/cornell_box.obj --method matrix --max-memory 0.000001", "GiB"},
                       BadRun{"run DATA/cornell_box/cornell_box.obj --method fastest", "--method"},
                       BadRun{"run DATA/cornell_box/cornell_box.obj --method hierarchical --epsilon 0", "--epsilon"},
                       BadRun{"run DATA/cornell_box/cornell_box.obj --discontinuity some", "--discontinuity"},
-                      BadRun{"run DATA/cornell_box/cornell_box.obj --export-links", "--export-links"},
+                      BadRun{"run DATA/cornell_box/cornell_box.obj --method matrix --export-links", "--export-links"},
                       BadRun{"mesh DATA/cornell_box/cornell_box.obj --max-shadow-lines -1", "--max-shadow-lines"}),
     [](const auto& info) {
       std::string name = std::to_string(info.index) + "_";
