@@ -26,6 +26,7 @@
 #include <fstream>
 #include <functional>
 #include <iomanip>
+#include <map>
 #include <sstream>
 #include <tuple>
 
@@ -145,8 +146,15 @@ std::vector<Scenario> scenes(const std::string& data) {
                   {70, 16, 2},
                   {70, 16, 3},
                   {45, 16, 0},
-                  {45, 16, 2}},
-                 {{160, 16, 1}, {120, 16, 1}}});
+                  {45, 16, 2},
+                  // Hierarchical radiosity from 200 mm roots (epsilon > 0).
+                  {200, 16, 1, DiscontinuityMode::contacts, 0.01},
+                  {200, 16, 1, DiscontinuityMode::contacts, 0.003},
+                  {200, 16, 1, DiscontinuityMode::contacts, 0.001},
+                  {200, 16, 1, DiscontinuityMode::contacts, 0.0005},
+                  {200, 16, 1, DiscontinuityMode::contacts, 0.0002},
+                  {200, 16, 1, DiscontinuityMode::contacts, 0.0001}},
+                 {{160, 16, 1}, {120, 16, 1}, {200, 16, 1, DiscontinuityMode::contacts, 0.003}}});
   return out;
 }
 
@@ -368,7 +376,10 @@ int main(int argc, char** argv) {
       const Scene scene = read_obj_scene(data + "/" + sc.obj);
       const auto samples = surface_samples(scene, kSamples);
       const auto ref = sc.reference(scene, samples);
-      bench::Series l2{sc.name + " L2", {}, {}}, pm{sc.name + " patch mean", {}, {}};
+      // One L2 and one patch-mean series per method and mode (rays 16,
+      // quadrature level 1), in the order first met.
+      std::vector<std::string> keys;
+      std::map<std::string, std::pair<bench::Series, bench::Series>> by_method;
       bench::Series l2_off{sc.name + " L2, no contacts", {}, {}};
       std::vector<Settings> sweep = quick ? sc.quick : sc.sweep;
       if (!custom.empty()) {
@@ -397,30 +408,43 @@ int main(int argc, char** argv) {
           l2_off.x.push_back(r.seconds);
           l2_off.y.push_back(r.err.l2);
         } else if (set.rays == 16 && set.quad_level == 1) {
+          if (!by_method.count(r.method)) {
+            keys.push_back(r.method);
+            by_method[r.method] = {bench::Series{sc.name + " " + r.method + " L2", {}, {}},
+                                   bench::Series{sc.name + " " + r.method + " patch mean", {}, {}}};
+          }
+          auto& [l2, pm] = by_method[r.method];
           l2.x.push_back(r.seconds);
           l2.y.push_back(r.err.l2);
           pm.x.push_back(r.seconds);
           pm.y.push_back(r.err.patch_mean);
         }
       }
-      series.push_back(l2);
-      series.push_back(pm);
+      for (const std::string& k : keys) {
+        series.push_back(by_method[k].first);
+        series.push_back(by_method[k].second);
+      }
       if (!l2_off.x.empty()) series.push_back(l2_off);
     }
     const std::string csv = (fs::path(out_dir) / "bench.csv").string();
     write_file_atomically(csv, [&](std::ostream& out) {
       out << "scene,method,discontinuity,max_edge,rays,quad_level,elements,form_factors,rays_cast,wall_s,l2,linf,patch_mean,"
-             "element_l2,element_patch_mean\n";
+             "element_l2,element_patch_mean,epsilon,tvertex\n";
       for (const Row& r : rows)
         out << r.scene << ',' << (r.set.epsilon > 0.0 ? "hierarchical" : "matrix") << ',' << to_string(r.set.discontinuity) << ',' << r.set.max_edge << ',' << r.set.rays << ',' << r.set.quad_level
             << ',' << r.elements << ',' << r.form_factors << ',' << r.rays << ',' << r.seconds << ',' << r.err.l2
             << ',' << r.err.linf << ',' << r.err.patch_mean << ',' << r.element.l2 << ',' << r.element.patch_mean
+            << ',' << r.set.epsilon << ','
+            << (r.set.epsilon > 0.0 ? (r.set.tvertex == TVertexMode::split    ? "split"
+                                       : r.set.tvertex == TVertexMode::anchor ? "anchor"
+                                                                              : "free")
+                                    : "")
             << '\n';
     });
     std::printf("%s\n", csv.c_str());
     std::string why;
     const std::string png = (fs::path(out_dir) / "bench.png").string();
-    if (bench::plot_error_vs_time(png, "radmesh: error vs time (matrix method)", "relative error", series, &why))
+    if (bench::plot_error_vs_time(png, "radmesh: error vs time", "relative error", series, &why))
       std::printf("%s\n", png.c_str());
     else
       std::fprintf(stderr, "plot skipped: %s\n", why.c_str());
