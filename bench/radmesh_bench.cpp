@@ -44,6 +44,7 @@ struct Settings {
   DiscontinuityMode discontinuity = DiscontinuityMode::contacts;
   double epsilon = 0.0;  // > 0: hierarchical radiosity with this oracle epsilon
   TVertexMode tvertex = TVertexMode::free;
+  double min_area = 0.0;  // hierarchical: smallest element area (0 = its default)
 };
 
 struct Scenario {
@@ -204,6 +205,7 @@ Row run_one(const Scenario& sc, const Scene& scene, const std::vector<SurfaceSam
     HierarchicalOptions ho;
     ho.epsilon = set.epsilon;
     ho.tvertex = set.tvertex;
+    ho.min_area = set.min_area;
     const HierarchicalSolution h = solve_hierarchical(scene, mesh, so, ho);
     std::tie(mesh, sol) = leaves_only(h);
     links = h.stats.links;
@@ -354,8 +356,10 @@ int main(int argc, char** argv) {
   app.add_flag("--quick", quick, "two settings per scene");
   std::vector<std::string> custom;
   app.add_option("--settings", custom,
-                 "run these settings instead of the sweep: EDGE:RAYS:QUAD_LEVEL:off|contacts|full[:EPSILON] "
-                 "(repeatable; an EPSILON > 0 solves with hierarchical radiosity from a mesh of that EDGE)");
+                 "run these settings instead of the sweep: "
+                 "EDGE:RAYS:QUAD_LEVEL[:off|contacts|full[:EPSILON[:free|anchor|split[:MIN_AREA]]]] (repeatable; an "
+                 "EPSILON > 0 solves with hierarchical radiosity from a mesh of that EDGE, with that T-vertex mode "
+                 "and smallest element area)");
   app.add_flag("--make-reference", reference, "compute data/cornell_box/reference.csv and exit");
   app.add_flag("--direct", direct,
                "meshing study instead: direct light only, exact at the triangle corners, for discontinuity "
@@ -387,10 +391,10 @@ int main(int argc, char** argv) {
         for (const std::string& c : custom) {
           Settings set{};
           char mode[16] = "contacts", tv[16] = "free";
-          if (std::sscanf(c.c_str(), "%lf:%d:%d:%15[a-z]:%lf:%15[a-z]", &set.max_edge, &set.rays, &set.quad_level,
-                          mode, &set.epsilon, tv) < 3)
+          if (std::sscanf(c.c_str(), "%lf:%d:%d:%15[a-z]:%lf:%15[a-z]:%lf", &set.max_edge, &set.rays, &set.quad_level,
+                          mode, &set.epsilon, tv, &set.min_area) < 3)
             throw InputError("--settings '" + c +
-                             "': expected EDGE:RAYS:QUAD_LEVEL[:off|contacts|full[:EPSILON[:anchor|free|split]]]");
+                             "': expected EDGE:RAYS:QUAD_LEVEL[:off|contacts|full[:EPSILON[:anchor|free|split[:MIN_AREA]]]]");
           set.discontinuity = parse_discontinuity_mode(mode);
           const std::string tvs = tv;
           set.tvertex = tvs == "split" ? TVertexMode::split : tvs == "anchor" ? TVertexMode::anchor : TVertexMode::free;

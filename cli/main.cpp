@@ -428,6 +428,10 @@ int main(int argc, char** argv) {
                       "edge's interpolant, no shading jump), free (from the finer side; default), or split "
                       "(split neighbours until no T-vertex is left, no zero-area triangles)")
       ->check(CLI::IsMember({"anchor", "free", "split"}));
+  run_cmd->add_option("--min-area", run_p.hierarchical.min_area,
+                      "with --method hierarchical: elements are not split below this area, in scene units "
+                      "squared (default 0 = (scene diagonal / 150)^2 / 2)")
+      ->check(CLI::Range(0.0, 1e300));
   run_cmd->add_flag("--export-links", run_p.export_links,
                     "with --method hierarchical: also write links.vtu, every link as a line from receiver to "
                     "source (fields receiver_level, source_level, receiver_patch, source_patch, form_factor, "

@@ -15,6 +15,8 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
+#include <string>
 #include <limits>
 #include <map>
 #include <optional>
@@ -28,6 +30,11 @@ double seconds_since(std::chrono::steady_clock::time_point t) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
 }
 double max3(const Rgb& c) { return std::max({c.x, c.y, c.z}); }
+std::string fmt(double v) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%g", v);
+  return b;
+}
 
 struct Link {
   int source = -1;
@@ -574,9 +581,13 @@ HierarchicalSolution solve_hierarchical(const Scene& scene, const Mesh& initial,
   check_solve_options(options);
   if (!(hopt.epsilon > 0.0) || !(hopt.min_area >= 0.0) || hopt.max_rounds < 0 || !(hopt.baum_relative >= 0.0) ||
       !(hopt.baum_absolute >= 0.0))
-    throw InputError("hierarchical options out of range: epsilon " + std::to_string(hopt.epsilon) + ", min area " +
-                     std::to_string(hopt.min_area) + ", rounds " + std::to_string(hopt.max_rounds) + ", baum " +
-                     std::to_string(hopt.baum_relative) + " / " + std::to_string(hopt.baum_absolute));
+    throw InputError("hierarchical options out of range: epsilon " + fmt(hopt.epsilon) + ", min area " +
+                     fmt(hopt.min_area) + ", rounds " + std::to_string(hopt.max_rounds) + ", baum " +
+                     fmt(hopt.baum_relative) + " / " + fmt(hopt.baum_absolute));
+  const double diag2 = scene.diagonal() * scene.diagonal();
+  if (hopt.min_area > 0.0 && hopt.min_area < 1e-10 * diag2)
+    throw InputError("--min-area " + fmt(hopt.min_area) + " is below 1e-10 of the scene diagonal squared (" +
+                     fmt(diag2) + "): refinement to it would not end in time or memory");
   std::optional<tbb::global_control> threads;
   if (options.threads > 0)
     threads.emplace(tbb::global_control::max_allowed_parallelism, static_cast<size_t>(options.threads));

@@ -242,6 +242,7 @@ INSTANTIATE_TEST_SUITE_P(
                       BadRun{"run DATA/cornell_box/cornell_box.obj --method hierarchical --epsilon 0", "--epsilon"},
                       BadRun{"run DATA/cornell_box/cornell_box.obj --discontinuity some", "--discontinuity"},
                       BadRun{"run DATA/cornell_box/cornell_box.obj --method matrix --export-links", "--export-links"},
+                      BadRun{"run DATA/cornell_box/cornell_box.obj --min-area 1e-20", "--min-area"},
                       BadRun{"mesh DATA/cornell_box/cornell_box.obj --max-shadow-lines -1", "--max-shadow-lines"}),
     [](const auto& info) {
       std::string name = std::to_string(info.index) + "_";
