@@ -45,6 +45,7 @@ struct Settings {
   double epsilon = 0.0;  // > 0: hierarchical radiosity with this oracle epsilon
   TVertexMode tvertex = TVertexMode::free;
   double min_area = 0.0;  // hierarchical: smallest element area (0 = its default)
+  double baum = 0.0;      // hierarchical: Baum's criterion, relative (0 = off)
 };
 
 struct Scenario {
@@ -206,6 +207,7 @@ Row run_one(const Scenario& sc, const Scene& scene, const std::vector<SurfaceSam
     ho.epsilon = set.epsilon;
     ho.tvertex = set.tvertex;
     ho.min_area = set.min_area;
+    ho.baum_relative = set.baum;
     const HierarchicalSolution h = solve_hierarchical(scene, mesh, so, ho);
     std::tie(mesh, sol) = leaves_only(h);
     links = h.stats.links;
@@ -357,9 +359,9 @@ int main(int argc, char** argv) {
   std::vector<std::string> custom;
   app.add_option("--settings", custom,
                  "run these settings instead of the sweep: "
-                 "EDGE:RAYS:QUAD_LEVEL[:off|contacts|full[:EPSILON[:free|anchor|split[:MIN_AREA]]]] (repeatable; an "
-                 "EPSILON > 0 solves with hierarchical radiosity from a mesh of that EDGE, with that T-vertex mode "
-                 "and smallest element area)");
+                 "EDGE:RAYS:QUAD_LEVEL[:off|contacts|full[:EPSILON[:free|anchor|split[:MIN_AREA[:BAUM]]]]] (repeatable; "
+                 "an EPSILON > 0 solves with hierarchical radiosity from a mesh of that EDGE, with that T-vertex "
+                 "mode, smallest element area (0 = default) and Baum tolerance (0 = off))");
   app.add_flag("--make-reference", reference, "compute data/cornell_box/reference.csv and exit");
   app.add_flag("--direct", direct,
                "meshing study instead: direct light only, exact at the triangle corners, for discontinuity "
@@ -391,10 +393,10 @@ int main(int argc, char** argv) {
         for (const std::string& c : custom) {
           Settings set{};
           char mode[16] = "contacts", tv[16] = "free";
-          if (std::sscanf(c.c_str(), "%lf:%d:%d:%15[a-z]:%lf:%15[a-z]:%lf", &set.max_edge, &set.rays, &set.quad_level,
-                          mode, &set.epsilon, tv, &set.min_area) < 3)
+          if (std::sscanf(c.c_str(), "%lf:%d:%d:%15[a-z]:%lf:%15[a-z]:%lf:%lf", &set.max_edge, &set.rays, &set.quad_level,
+                          mode, &set.epsilon, tv, &set.min_area, &set.baum) < 3)
             throw InputError("--settings '" + c +
-                             "': expected EDGE:RAYS:QUAD_LEVEL[:off|contacts|full[:EPSILON[:anchor|free|split[:MIN_AREA]]]]");
+                             "': expected EDGE:RAYS:QUAD_LEVEL[:off|contacts|full[:EPSILON[:anchor|free|split[:MIN_AREA[:BAUM]]]]]");
           set.discontinuity = parse_discontinuity_mode(mode);
           const std::string tvs = tv;
           set.tvertex = tvs == "split" ? TVertexMode::split : tvs == "anchor" ? TVertexMode::anchor : TVertexMode::free;
