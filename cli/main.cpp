@@ -38,6 +38,8 @@ struct Params {
   bool quiet = false;
   bool png = true;
   bool export_links = false;  // hierarchical: links.vtu
+  std::vector<std::string> hierarchical_flags_given;  // hierarchical-only options on the command line
+  bool max_memory_given = false;
   std::string discontinuity;  // empty: full for matrix, contacts for hierarchical
   std::string nodal = "fit";
   std::string method = "hierarchical";
@@ -112,6 +114,10 @@ LineSet link_line_set(const Scene& scene, const HierarchicalSolution& h) {
       vis.push_back(l.visible);
       const Rgb t = rho * h.node_radiosity[static_cast<size_t>(l.source)] * l.form_factor;
       transport.push_back(std::max({t.x, t.y, t.z}));
+      if (!std::isfinite(transport.back()) || !std::isfinite(l.form_factor))
+        throw NumericalError("link " + std::to_string(out.segments.size() - 1) + " (receiver node " +
+                             std::to_string(rn) + ", source node " + std::to_string(l.source) +
+                             ") has a non-finite form factor or transport");
     }
   }
   out.int_fields = {{"receiver_level", rl}, {"source_level", sl}, {"receiver_patch", rp}, {"source_patch", sp}};
@@ -121,7 +127,17 @@ LineSet link_line_set(const Scene& scene, const HierarchicalSolution& h) {
 
 // Options that can be checked without reading anything: done before any work.
 void check_params(Params& p, bool solving) {
-  if (p.discontinuity.empty()) p.discontinuity = p.method == "hierarchical" ? "contacts" : "full";
+  // mesh and quality have no method: full, like run --method matrix.
+  if (p.discontinuity.empty()) p.discontinuity = solving && p.method == "hierarchical" ? "contacts" : "full";
+  for (const auto& [flag, v] : {std::pair<const char*, double>{"--epsilon", p.hierarchical.epsilon},
+                                {"--min-area", p.hierarchical.min_area},
+                                {"--baum", p.hierarchical.baum_relative}})
+    if (!std::isfinite(v)) throw InputError(std::string(flag) + " " + std::to_string(v) + " is not a finite number");
+  if (solving && p.method != "hierarchical")
+    for (const std::string& flag : p.hierarchical_flags_given)
+      throw InputError(flag + " applies to --method hierarchical only (the method here is " + p.method + ")");
+  if (solving && p.method == "hierarchical" && p.max_memory_given)
+    throw InputError("--max-memory applies to --method matrix only (the hierarchical method keeps no matrix)");
   p.meshing.discontinuity = parse_discontinuity_mode(p.discontinuity);
   p.solve.nodal = p.nodal == "mean" ? NodalMethod::mean : NodalMethod::linear_fit;
   p.hierarchical.tvertex = p.tvertex == "free"    ? TVertexMode::free
@@ -132,8 +148,6 @@ void check_params(Params& p, bool solving) {
   if (solving) check_solve_options(p.solve);
   if (fs::exists(p.out_dir) && !fs::is_directory(p.out_dir))
     throw InputError("-o " + p.out_dir + ": exists and is not a directory");
-  if (p.export_links && p.method != "hierarchical")
-    throw InputError("--export-links needs --method hierarchical (the matrix method has no links)");
   if (!p.probe_file.empty() && !fs::exists(p.probe_file))
     throw InputError("--probe " + p.probe_file + ": no such file");
 }
@@ -219,6 +233,7 @@ int run(Params& p, bool solving) {
                          {"conforming_splits", hs.conforming_splits},
                          {"max_tvertex_jump", hs.max_tvertex_jump},
                          {"baum", p.hierarchical.baum_relative},
+                         {"min_area", hs.min_area},
                          {"baum_splits", hs.baum_splits}};
     rep.note(std::to_string(hs.leaves) + " leaves, " + std::to_string(hs.links) + " links, " +
              std::to_string(hs.zero_area_triangles) + " zero-area triangles, " + std::to_string(hs.rounds) +
@@ -456,6 +471,9 @@ int main(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     return app.exit(e);
   }
+  for (const char* flag : {"--epsilon", "--tvertex", "--baum", "--min-area", "--export-links"})
+    if (run_cmd->count(flag) > 0) run_p.hierarchical_flags_given.push_back(flag);
+  run_p.max_memory_given = run_cmd->count("--max-memory") > 0;
   try {
     if (*run_cmd) return run(run_p, true);
     if (*quality_cmd) return quality(quality_p);

@@ -20,6 +20,7 @@
 #include <limits>
 #include <map>
 #include <optional>
+#include <set>
 #include <unordered_map>
 
 namespace radmesh {
@@ -50,6 +51,7 @@ public:
   Solver(const Scene& scene, const SolveOptions& opt, const HierarchicalOptions& hopt, HierarchicalSolution& out)
       : scene_(scene), opt_(opt), hopt_(hopt), out_(out), visibility_(scene), occlusion_(scene) {
     min_area_ = hopt.min_area > 0.0 ? hopt.min_area : 0.5 * std::pow(scene.diagonal() / 150.0, 2);
+    out_.stats.min_area = min_area_;
     for (const Material& m : scene.materials) max_emission_ = std::max(max_emission_, max3(m.emission));
     scale_ = max_emission_;
     side_ = strata_side(opt.rays);
@@ -459,6 +461,8 @@ private:
     s.nodal = compute_nodal(scene_, o.mesh, s.element, opt_.crease_angle, opt_.nodal);
     // Leaf edges: directed edge (u, w) -> leaf triangle. The finer side of an
     // unsplit edge (a, b) of leaf t holds its pieces reversed.
+    std::set<std::pair<int, int>> features;
+    for (const auto& e : o.mesh.feature_edges) features.insert({std::min(e[0], e[1]), std::max(e[0], e[1])});
     std::unordered_map<uint64_t, int> edge_of;
     auto key = [](int u, int w) { return (static_cast<uint64_t>(static_cast<uint32_t>(u)) << 32) | static_cast<uint32_t>(w); };
     for (size_t t = 0; t < o.leaf_of.size(); ++t)
@@ -506,7 +510,10 @@ private:
           if (it == edge_of.end()) break;
           across.push_back(it->second);
         }
-        if (across.size() + 1 != chain.size() || display_in(across.front(), a) != da ||
+        bool feature = false;  // a contact line along the edge: the value may jump there
+        for (size_t i = 0; i + 1 < chain.size() && !feature; ++i)
+          feature = features.count({std::min(chain[i], chain[i + 1]), std::max(chain[i], chain[i + 1])}) > 0;
+        if (feature || across.size() + 1 != chain.size() || display_in(across.front(), a) != da ||
             display_in(across.back(), b) != db)
           continue;
         const Vec3 A = o.mesh.positions[static_cast<size_t>(a)], B = o.mesh.positions[static_cast<size_t>(b)];
@@ -585,9 +592,10 @@ HierarchicalSolution solve_hierarchical(const Scene& scene, const Mesh& initial,
                      fmt(hopt.min_area) + ", rounds " + std::to_string(hopt.max_rounds) + ", baum " +
                      fmt(hopt.baum_relative) + " / " + fmt(hopt.baum_absolute));
   const double diag2 = scene.diagonal() * scene.diagonal();
-  if (hopt.min_area > 0.0 && hopt.min_area < 1e-10 * diag2)
-    throw InputError("--min-area " + fmt(hopt.min_area) + " is below 1e-10 of the scene diagonal squared (" +
-                     fmt(diag2) + "): refinement to it would not end in time or memory");
+  if (hopt.min_area > 0.0 && hopt.min_area < 1e-8 * diag2)
+    throw InputError("minimum element area (--min-area) " + fmt(hopt.min_area) +
+                     " is below 1e-8 of the scene diagonal squared (" + fmt(diag2) +
+                     "): refinement to it would not end in time or memory");
   std::optional<tbb::global_control> threads;
   if (options.threads > 0)
     threads.emplace(tbb::global_control::max_allowed_parallelism, static_cast<size_t>(options.threads));

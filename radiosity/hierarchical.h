@@ -52,6 +52,7 @@ struct HierarchicalOptions {
 
 struct HierarchicalStats {
   int rounds = 0;                 // solves done (the first one included)
+  double min_area = 0.0;          // the smallest element area used (the option or its default)
   long long links = 0;            // links at the end
   long long links_examined = 0;   // oracle calls
   long long rays_cast = 0;

@@ -121,6 +121,18 @@ TEST(Cli, MeshWritesMeshAndSummary) {
   fs::remove_all(out);
 }
 
+TEST(Cli, MeshDefaultsToFullDiscontinuityLines) {
+  // mesh has no method: its default is full (shadow lines), as for run --method matrix.
+  const fs::path out = fresh_dir("mesh_default");
+  const Result r = radmesh("mesh " + kData + "/box_on_floor/box_on_floor.obj -q -o " + out.string());
+  ASSERT_EQ(r.status, 0) << r.err;
+  std::ifstream in(out / "summary.json");
+  const nlohmann::json s = nlohmann::json::parse(in);
+  EXPECT_EQ(s["options"]["discontinuity"], "full");
+  EXPECT_GT(s["counts"]["shadow_segments"].get<int>(), 0);
+  fs::remove_all(out);
+}
+
 TEST(Cli, RunWithShadowLinesReportsThemAndWhatWasSkipped) {
   const fs::path out = fresh_dir("run_full");
   const Result r = radmesh("run " + kData + "/box_on_floor/box_on_floor.obj --discontinuity full --max-edge 0.5 "
@@ -243,6 +255,9 @@ INSTANTIATE_TEST_SUITE_P(
                       BadRun{"run DATA/cornell_box/cornell_box.obj --discontinuity some", "--discontinuity"},
                       BadRun{"run DATA/cornell_box/cornell_box.obj --method matrix --export-links", "--export-links"},
                       BadRun{"run DATA/cornell_box/cornell_box.obj --min-area 1e-20", "--min-area"},
+                      BadRun{"run DATA/cornell_box/cornell_box.obj --epsilon nan", "--epsilon nan"},
+                      BadRun{"run DATA/cornell_box/cornell_box.obj --method matrix --epsilon 0.01", "--epsilon"},
+                      BadRun{"run DATA/cornell_box/cornell_box.obj --max-memory 1", "--max-memory"},
                       BadRun{"mesh DATA/cornell_box/cornell_box.obj --max-shadow-lines -1", "--max-shadow-lines"}),
     [](const auto& info) {
       std::string name = std::to_string(info.index) + "_";
