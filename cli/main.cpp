@@ -39,7 +39,6 @@ struct Params {
   bool png = true;
   bool export_links = false;  // hierarchical: links.vtu
   std::vector<std::string> hierarchical_flags_given;  // hierarchical-only options on the command line
-  bool max_memory_given = false;
   std::string discontinuity;  // empty: full for matrix, contacts for hierarchical
   std::string nodal = "fit";
   std::string method = "hierarchical";
@@ -136,8 +135,7 @@ void check_params(Params& p, bool solving) {
   if (solving && p.method != "hierarchical")
     for (const std::string& flag : p.hierarchical_flags_given)
       throw InputError(flag + " applies to --method hierarchical only (the method here is " + p.method + ")");
-  if (solving && p.method == "hierarchical" && p.max_memory_given)
-    throw InputError("--max-memory applies to --method matrix only (the hierarchical method keeps no matrix)");
+
   p.meshing.discontinuity = parse_discontinuity_mode(p.discontinuity);
   p.solve.nodal = p.nodal == "mean" ? NodalMethod::mean : NodalMethod::linear_fit;
   p.hierarchical.tvertex = p.tvertex == "free"    ? TVertexMode::free
@@ -423,7 +421,8 @@ int main(int argc, char** argv) {
   run_cmd->add_option("--rays", run_p.solve.rays, "shadow rays per element pair (default 16)")
       ->check(CLI::Range(1, 4096));
   run_cmd->add_option("--max-memory", run_p.solve.max_memory_gb,
-                      "with --method matrix: GiB the form-factor matrix may use (default 0 = half the memory)")
+                      "GiB the form-factor matrix (matrix) or the links and leaf terms (hierarchical) may use "
+                      "(default 0 = half the memory)")
       ->check(CLI::Range(0.0, 1e6));
   run_cmd->add_option("--probe", run_p.probe_file,
                       "probe file: lines 'label x y z nx ny nz'; writes probes.csv")
@@ -473,7 +472,6 @@ int main(int argc, char** argv) {
   }
   for (const char* flag : {"--epsilon", "--tvertex", "--baum", "--min-area", "--export-links"})
     if (run_cmd->count(flag) > 0) run_p.hierarchical_flags_given.push_back(flag);
-  run_p.max_memory_given = run_cmd->count("--max-memory") > 0;
   try {
     if (*run_cmd) return run(run_p, true);
     if (*quality_cmd) return quality(quality_p);

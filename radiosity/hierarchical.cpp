@@ -50,6 +50,7 @@ public:
   // `out.tree` holds the roots (the initial mesh) on entry.
   Solver(const Scene& scene, const SolveOptions& opt, const HierarchicalOptions& hopt, HierarchicalSolution& out)
       : scene_(scene), opt_(opt), hopt_(hopt), out_(out), visibility_(scene), occlusion_(scene) {
+    limit_ = memory_limit_bytes(opt);
     min_area_ = hopt.min_area > 0.0 ? hopt.min_area : 0.5 * std::pow(scene.diagonal() / 150.0, 2);
     out_.stats.min_area = min_area_;
     for (const Material& m : scene.materials) max_emission_ = std::max(max_emission_, max3(m.emission));
@@ -65,11 +66,31 @@ public:
     const ElementTree& tree = out_.tree;
     // First linking: every pair of roots whose patches can see each other.
     auto t0 = std::chrono::steady_clock::now();
+    // Every root pair whose patches face each other becomes at least one
+    // link: refuse at once when those alone would not fit the memory limit.
+    std::vector<long long> per_patch(scene_.patches.size(), 0);
+    for (int r = 0; r < tree.root_count(); ++r) ++per_patch[static_cast<size_t>(node_patch(r))];
+    double facing_pairs = 0.0;
+    for (size_t a = 0; a < per_patch.size(); ++a)
+      for (size_t b = 0; b < per_patch.size(); ++b)
+        if (a != b && occlusion_.facing(static_cast<int>(a), static_cast<int>(b)))
+          facing_pairs += static_cast<double>(per_patch[a]) * static_cast<double>(per_patch[b]);
+    if (facing_pairs * kLinkBytes > limit_)
+      throw NumericalError(scene_.source + ": " + std::to_string(tree.root_count()) + " initial elements make " +
+                           fmt(facing_pairs) + " pairs to link, " + fmt(facing_pairs * kLinkBytes / kGiB) +
+                           " GiB at least, more than the " + fmt(limit_ / kGiB) +
+                           " GiB allowed; use a larger --max-edge (hierarchical radiosity refines by itself) or "
+                           "raise --max-memory");
+    // In blocks of receivers, so that a generation's scratch stays small.
     std::vector<std::pair<int, int>> pairs;
-    for (int p = 0; p < tree.root_count(); ++p)
+    for (int p = 0; p < tree.root_count(); ++p) {
       for (int q = 0; q < tree.root_count(); ++q)
         if (p != q && occlusion_.facing(node_patch(p), node_patch(q))) pairs.emplace_back(p, q);
-    link_pairs(std::move(pairs));
+      if (pairs.size() >= (1u << 20) || p + 1 == tree.root_count()) {
+        link_pairs(std::move(pairs));
+        pairs.clear();
+      }
+    }
     close_t_vertices();
     st.seconds_link += seconds_since(t0);
     std::vector<Rgb> previous;
@@ -234,7 +255,20 @@ private:
         dirty_[static_cast<size_t>(p)] = 1;
       }
       todo.swap(next);
+      check_memory();
     }
+  }
+
+  // Links and leaf terms against the memory limit, after every generation.
+  void check_memory() {
+    links_total_ = 0;
+    for (const auto& l : links_) links_total_ += static_cast<long long>(l.size());
+    const double bytes = static_cast<double>(links_total_) * kLinkBytes +
+                         static_cast<double>(out_.stats.leaf_terms) * sizeof(std::pair<int, double>);
+    if (bytes > limit_)
+      throw NumericalError(scene_.source + ": hierarchical refinement reached " + std::to_string(links_total_) +
+                           " links (" + fmt(bytes / kGiB) + " GiB), more than the " + fmt(limit_ / kGiB) +
+                           " GiB allowed; raise --epsilon or --min-area, or raise --max-memory");
   }
 
   // Largest difference between the point form factors to q at p's corners
@@ -566,6 +600,11 @@ private:
   Visibility visibility_;
   Occlusion occlusion_;
   double min_area_ = 0.0, max_emission_ = 0.0;
+  double limit_ = 0.0;          // memory limit, bytes
+  long long links_total_ = 0;
+  // A link's memory: the Link in its receiver's list, with the vector's slack.
+  static constexpr double kLinkBytes = 1.5 * sizeof(Link);
+  static constexpr double kGiB = 1024.0 * 1024.0 * 1024.0;
   // The radiosity the oracle's epsilon is relative to: the largest emission
   // for the first linking, then the largest reflected radiosity (B - E) of
   // the last solve, so that a small bright lamp does not set the scale.

@@ -203,12 +203,16 @@ std::vector<double> form_factor_matrix(const Scene& scene, const Mesh& mesh, con
   return F;
 }
 
+double memory_limit_bytes(const SolveOptions& options) {
+  return options.max_memory_gb > 0.0 ? options.max_memory_gb * 1024.0 * 1024.0 * 1024.0
+                                     : 0.5 * physical_memory_bytes();
+}
+
 Solution solve_matrix(const Scene& scene, const Mesh& mesh, const SolveOptions& options,
                       const ProgressFn& progress) {
   check_solve_options(options);
   const long long n = mesh.triangle_count();
-  const double limit = options.max_memory_gb > 0.0 ? options.max_memory_gb * 1024.0 * 1024.0 * 1024.0
-                                                   : 0.5 * physical_memory_bytes();
+  const double limit = memory_limit_bytes(options);
   if (matrix_bytes(n) > limit) {
     std::ostringstream m;
     m.precision(3);

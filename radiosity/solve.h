@@ -25,7 +25,8 @@ struct SolveOptions {
   // error (mesh discretization dominates), level 1 in 0.70x the time of level
   // 2 while still giving adjacent elements more points (12 instead of 3).
   QuadratureOptions quadrature{1.0, 1};
-  // Memory the form-factor matrix may take, GiB (0 = half the physical memory).
+  // Memory the form-factor matrix (matrix method) or the links and leaf
+  // terms (hierarchical method) may take, GiB (0 = half the physical memory).
   double max_memory_gb = 0.0;
   // Vertex values are averaged only over triangles of one material whose
   // normals differ by less than this angle (degrees).
@@ -38,6 +39,9 @@ struct SolveOptions {
 
 // Checks option ranges; throws InputError naming the option and the value.
 void check_solve_options(const SolveOptions& options);
+
+// The memory limit in bytes: max_memory_gb, or half the physical memory.
+double memory_limit_bytes(const SolveOptions& options);
 
 // Classic radiosity: every element-to-element form factor, then Gauss-Seidel
 // per colour channel. Refuses (NumericalError) a mesh whose matrix would not

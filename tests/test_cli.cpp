@@ -257,7 +257,7 @@ INSTANTIATE_TEST_SUITE_P(
                       BadRun{"run DATA/cornell_box/cornell_box.obj --min-area 1e-20", "--min-area"},
                       BadRun{"run DATA/cornell_box/cornell_box.obj --epsilon nan", "--epsilon nan"},
                       BadRun{"run DATA/cornell_box/cornell_box.obj --method matrix --epsilon 0.01", "--epsilon"},
-                      BadRun{"run DATA/cornell_box/cornell_box.obj --max-memory 1", "--max-memory"},
+                      BadRun{"run DATA/cornell_box/cornell_box.obj --max-memory 0.000001", "GiB allowed"},
                       BadRun{"mesh DATA/cornell_box/cornell_box.obj --max-shadow-lines -1", "--max-shadow-lines"}),
     [](const auto& info) {
       std::string name = std::to_string(info.index) + "_";

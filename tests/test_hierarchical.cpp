@@ -3,6 +3,7 @@
 
 #include "io/obj_reader.h"
 #include "io/summary.h"
+#include "meshing/errors.h"
 #include "meshing/scene.h"
 #include "meshing/mesh.h"
 #include "radiosity/hierarchical.h"
@@ -268,4 +269,29 @@ TEST(Hierarchical, BaumCriterionSplitsWhereVertexValuesDiffer) {
     }
     EXPECT_LE(hi - lo, 0.05 * top * (1.0 + 1e-9)) << "leaf " << n;
   }
+}
+
+TEST(HierarchicalStress, MemoryLimitIsAClearErrorBeforeAnyCrash) {
+  // The Cornell box from 200 mm roots (311 of them, 78072 facing root
+  // pairs, about 3.5 MiB of first links) needs about 30 MiB of links at
+  // epsilon 0.001: a limit below the first links is refused before linking,
+  // one between them stops the refinement with the count it reached.
+  const Scene s = read_obj_scene(kData + "/cornell_box/cornell_box.obj");
+  const Mesh coarse = coarse_mesh(s, 200.0);
+  SolveOptions tiny, small;
+  tiny.max_memory_gb = 1e-6;
+  small.max_memory_gb = 8.0 / 1024.0;  // 8 MiB
+  auto message = [&](const SolveOptions& o) {
+    try {
+      solve_hierarchical(s, coarse, o, {});
+    } catch (const NumericalError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  const std::string first = message(tiny), later = message(small);
+  EXPECT_NE(first.find("pairs to link"), std::string::npos) << first;
+  EXPECT_NE(first.find("cornell_box.obj"), std::string::npos) << first;
+  EXPECT_NE(later.find("refinement reached"), std::string::npos) << later;
+  EXPECT_NE(later.find("--epsilon"), std::string::npos) << later;
 }
