@@ -198,7 +198,10 @@ private:
   double visible_fraction(int p, int q, long long& rays) const {
     const Triangle& a = tri_[static_cast<size_t>(p)];
     const Triangle& b = tri_[static_cast<size_t>(q)];
-    if (occlusion_.convex_enclosure() || !occlusion_.may_occlude(node_patch(p), node_patch(q), a, b)) return 1.0;
+    if (occlusion_.convex_enclosure() || !occlusion_.may_occlude(node_patch(p), node_patch(q), a, b)) {
+      rays -= static_cast<long long>(side_) * side_;  // negative: rays skipped, nothing can occlude
+      return 1.0;
+    }
     SplitMix rng(pair_seed(static_cast<uint64_t>(std::min(p, q)), static_cast<uint64_t>(std::max(p, q))));
     int open = 0, total = 0;
     for (int i = 0; i < side_; ++i)
@@ -247,7 +250,12 @@ private:
       for (size_t i = 0; i < todo.size(); ++i) {
         const int p = todo[i].first;
         ++out_.stats.links_examined;
-        out_.stats.rays_cast += rays[i];
+        if (rays[i] >= 0) {
+          out_.stats.rays_cast += rays[i];
+        } else {
+          out_.stats.rays_skipped -= rays[i];
+          ++out_.stats.pairs_unoccludable;
+        }
         const Link& l = ev[i];
         if (l.f <= 0.0) continue;
         if (wants_refinement(p, l) && split_pair(p, l.source, spread_dominates(l), next)) continue;
@@ -589,6 +597,8 @@ private:
       st.iterations[static_cast<size_t>(c)] = o.stats.sweeps;
     }
     st.rays_cast = o.stats.rays_cast;
+    st.rays_skipped = o.stats.rays_skipped;
+    st.pairs_unoccludable = o.stats.pairs_unoccludable;
     st.form_factors = count_links();
     st.channels_solved = 3;
   }

@@ -56,6 +56,8 @@ struct HierarchicalStats {
   long long links = 0;            // links at the end
   long long links_examined = 0;   // oracle calls
   long long rays_cast = 0;
+  long long rays_skipped = 0;        // not cast: no occluder can lie between the two nodes
+  long long pairs_unoccludable = 0;  // node pairs examined with nothing that can occlude them
   int leaves = 0;
   int zero_area_triangles = 0;    // in the conforming output mesh
   int sweeps = 0;                 // gather + push-pull sweeps, all rounds

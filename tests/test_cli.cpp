@@ -96,7 +96,9 @@ TEST(Cli, DefaultMethodIsHierarchicalAndMatchesHowellOnThePlates) {
   std::ifstream in(out / "summary.json");
   const nlohmann::json s = nlohmann::json::parse(in);
   EXPECT_EQ(s["solver"]["method"], "hierarchical");
-  EXPECT_EQ(s["counts"]["rays_cast"], 0);  // nothing can occlude: no shadow ray
+  EXPECT_EQ(s["counts"]["rays_cast"], 0);  // nothing can occlude: no shadow ray,
+  EXPECT_GT(s["counts"]["rays_skipped"].get<long long>(), 0);  // and the summary says so
+  EXPECT_GT(s["counts"]["pairs_unoccludable"].get<long long>(), 0);
   int receivers = 0;
   for (const auto& p : s["patches"])
     if (p["name"] == "receiver") {
