@@ -208,7 +208,10 @@ private:
       for (int j = 0; j < side_; ++j) {
         const double u = (i + rng.uniform()) / side_, v = (j + rng.uniform()) / side_;
         const Vec3 x = triangle_point(a.v[0], a.v[1], a.v[2], u, v);
-        const Vec3 y = triangle_point(b.v[0], b.v[1], b.v[2], rng.uniform(), rng.uniform());
+        // Drawn in a fixed order (the order of evaluating function arguments
+        // is unspecified): the same rays whatever the compiler.
+        const double sv = rng.uniform(), su = rng.uniform();
+        const Vec3 y = triangle_point(b.v[0], b.v[1], b.v[2], su, sv);
         open += visibility_.visible(x, y, node_patch(p), node_patch(q)) ? 1 : 0;
         ++total;
       }

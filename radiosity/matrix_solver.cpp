@@ -140,10 +140,15 @@ std::vector<double> form_factor_matrix(const Scene& scene, const Mesh& mesh, con
         int hits = 0;
         for (int k = 0; k < rays; ++k) {
           const int a = k, b = perm[static_cast<size_t>(k)];
-          const Vec3 x = triangle_point(ti.v[0], ti.v[1], ti.v[2], ((a % side) + rng.uniform()) / side,
-                                        ((a / side) + rng.uniform()) / side);
-          const Vec3 y = triangle_point(tj.v[0], tj.v[1], tj.v[2], ((b % side) + rng.uniform()) / side,
-                                        ((b / side) + rng.uniform()) / side);
+          // Each point's second coordinate is drawn first: the order GCC
+          // evaluated the arguments in when they were written inline (that
+          // order is unspecified), kept so that results do not change.
+          const double xv = ((a / side) + rng.uniform()) / side;
+          const double xu = ((a % side) + rng.uniform()) / side;
+          const Vec3 x = triangle_point(ti.v[0], ti.v[1], ti.v[2], xu, xv);
+          const double yv = ((b / side) + rng.uniform()) / side;
+          const double yu = ((b % side) + rng.uniform()) / side;
+          const Vec3 y = triangle_point(tj.v[0], tj.v[1], tj.v[2], yu, yv);
           if (vis->visible(x, y, pi, pj)) ++hits;
         }
         c.rays_cast += rays;

@@ -81,8 +81,11 @@ std::vector<ProbeResult> evaluate_probes(const Scene& scene, const Mesh& mesh,
         SplitMix rng(pair_seed(static_cast<uint64_t>(k) + (1ULL << 40), static_cast<uint64_t>(j)));
         int hits = 0;
         for (int r = 0; r < rays; ++r) {
-          const Vec3 y = triangle_point(v[0], v[1], v[2], ((r % side) + rng.uniform()) / side,
-                                        ((r / side) + rng.uniform()) / side);
+          // Second coordinate first: the order GCC evaluated the arguments in,
+          // fixed now that it is written out (argument order is unspecified).
+          const double sv = ((r / side) + rng.uniform()) / side;
+          const double su = ((r % side) + rng.uniform()) / side;
+          const Vec3 y = triangle_point(v[0], v[1], v[2], su, sv);
           if (vis.visible(pr.point, y, pp, pj)) ++hits;
         }
         visible = static_cast<double>(hits) / rays;
