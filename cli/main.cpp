@@ -244,19 +244,7 @@ int run(Params& p, bool solving) {
     rep.end();
   }
   const Mesh& out_mesh = solved_mesh ? *solved_mesh : mesh;
-  // Zero-area triangles have no angles worth the name: 0 and 180 degrees,
-  // aspect ratio 0 (they are flagged zero_area), never inf or NaN in a file.
-  auto sanitized = [](const Mesh& m, TriangleQuality q) {
-    for (int t = 0; t < m.triangle_count(); ++t) {
-      const size_t u = static_cast<size_t>(t);
-      if (m.area(t) > 0.0 && std::isfinite(q.aspect_ratio[u]) && std::isfinite(q.min_angle[u])) continue;
-      q.min_angle[u] = 0.0;
-      q.max_angle[u] = 180.0;
-      q.aspect_ratio[u] = 0.0;
-    }
-    return q;
-  };
-  const TriangleQuality out_quality = solved_mesh ? sanitized(out_mesh, compute_quality(out_mesh)) : quality;
+  const TriangleQuality out_quality = solved_mesh ? compute_quality(out_mesh) : quality;
   if (solving && !probes.empty()) {
     rep.begin("probes");
     probe_results = evaluate_probes(scene, out_mesh, sol->element, probes, p.solve);
@@ -280,7 +268,7 @@ int run(Params& p, bool solving) {
       const std::string name = "radiosity_round_" + std::to_string(r) + ".vtu";
       const Snapshot& snap = rounds[r];
       write_vtu((fs::path(p.out_dir) / name).string(), scene, snap.mesh,
-                sanitized(snap.mesh, compute_quality(snap.mesh)), snap.solution, snap.fields);
+                compute_quality(snap.mesh), snap.solution, snap.fields);
       names.push_back(name);
     }
     const std::string pvd = (fs::path(p.out_dir) / "radiosity.pvd").string();

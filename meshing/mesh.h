@@ -22,6 +22,10 @@ struct Mesh {
   int triangle_count() const { return static_cast<int>(triangles.size()); }
   double area(int t) const;
   Vec3 centroid(int t) const;
+  // Zero area up to rounding (area at most 1e-12 of the longest edge
+  // squared): the zero-area triangles that close T-vertices of a hierarchical
+  // mesh, whose middle vertex lies on the long edge only up to rounding.
+  bool zero_area(int t) const;
 };
 
 struct MeshingOptions {
@@ -73,6 +77,8 @@ struct TriangleQuality {
   std::vector<double> max_angle;     // degrees
   std::vector<double> aspect_ratio;  // longest edge / (2 sqrt(3) inradius): 1 for equilateral
 };
+// A zero-area triangle (Mesh::zero_area) gets 0 and 180 degrees and aspect
+// ratio 0: it has no shape worth the name, and never inf or NaN in a file.
 TriangleQuality compute_quality(const Mesh& mesh);
 
 // Nearest-rank percentile (q in [0, 1]) of the finite values; 0 when none.
@@ -87,7 +93,7 @@ struct PatchQuality {
   int contact_segments = 0;  // D0 constraint segments on the patch
   int d1_segments = 0;       // D1 shadow-boundary segments
   int d2_segments = 0;       // D2 shadow-boundary segments
-  int zero_area = 0;         // triangles of zero area
+  int zero_area = 0;         // triangles of zero area (Mesh::zero_area); angles and aspect ratios are over the others
 };
 // One row per patch (patch ids 0 .. patch_count - 1), then the total (patch = -1).
 std::vector<PatchQuality> patch_quality(int patch_count, const Mesh& mesh, const TriangleQuality& quality,

@@ -36,6 +36,11 @@ TriangleQuality compute_quality(const Mesh& mesh) {
       const double inradius = area / s;
       aspect = longest / (2.0 * std::sqrt(3.0) * inradius);
     }
+    if (mesh.zero_area(t)) {  // no shape worth the name: 0 and 180 degrees, aspect 0 (never inf in a file)
+      min_angle = 0.0;
+      max_angle = 180.0;
+      aspect = 0.0;
+    }
     q.min_angle[static_cast<size_t>(t)] = min_angle;
     q.max_angle[static_cast<size_t>(t)] = max_angle;
     q.aspect_ratio[static_cast<size_t>(t)] = aspect;
@@ -69,11 +74,15 @@ std::vector<PatchQuality> patch_quality(int patch_count, const Mesh& mesh, const
     r.min_angle = tris[p].empty() ? 0.0 : 180.0;
     for (int t : tris[p]) {
       const size_t u = static_cast<size_t>(t);
+      if (mesh.zero_area(t)) {  // counted apart: they have no shape to speak of
+        ++r.zero_area;
+        continue;
+      }
       r.min_angle = std::min(r.min_angle, quality.min_angle[u]);
       r.max_angle = std::max(r.max_angle, quality.max_angle[u]);
       aspect.push_back(quality.aspect_ratio[u]);
-      if (mesh.area(t) == 0.0) ++r.zero_area;
     }
+    if (aspect.empty()) r.min_angle = 0.0;
     r.aspect_p50 = percentile(aspect, 0.5);
     r.aspect_p95 = percentile(aspect, 0.95);
     r.aspect_max = percentile(aspect, 1.0);

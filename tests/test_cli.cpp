@@ -14,6 +14,7 @@
 #include <nlohmann/json.hpp>
 
 #include <cctype>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -120,6 +121,44 @@ TEST(Cli, MeshWritesMeshAndSummary) {
   const nlohmann::json s = nlohmann::json::parse(in);
   EXPECT_GE(s["mesh_quality"]["min_angle_min"].get<double>(), 20.0 - 1e-6);
   EXPECT_EQ(r.err, "");  // --quiet
+  fs::remove_all(out);
+}
+
+TEST(Cli, QualityOfAHierarchicalResultCountsZeroAreaTrianglesApart) {
+  const fs::path out = fresh_dir("quality_hier");
+  ASSERT_EQ(radmesh("run " + kData + "/box_on_floor/box_on_floor.obj --no-png -q -o " + out.string()).status, 0);
+  std::ifstream in(out / "summary.json");
+  const nlohmann::json s = nlohmann::json::parse(in);
+  const int zero = s["solver"]["zero_area_triangles"].get<int>();
+  ASSERT_GT(zero, 0);
+  const Result r = radmesh("quality " + (out / "radiosity.vtu").string() + " -q -o " + (out / "q").string());
+  ASSERT_EQ(r.status, 0) << r.err;
+  std::ifstream csv(out / "q" / "quality.csv");
+  std::string line, total;
+  while (std::getline(csv, line))
+    if (line.rfind("-1,", 0) == 0) total = line;
+  ASSERT_FALSE(total.empty());
+  std::vector<std::string> f;
+  std::stringstream ss(total);
+  for (std::string x; std::getline(ss, x, ',');) f.push_back(x);
+  ASSERT_EQ(f.size(), 12u) << total;
+  // patch_id,name,triangles,min_angle,max_angle,aspect_p50,aspect_p95,aspect_max,...,zero_area
+  EXPECT_EQ(std::stoi(f[11]), zero);  // every fan triangle found, from the geometry alone
+  EXPECT_EQ(std::stoi(f[2]), s["solver"]["leaves"].get<int>() + zero);
+  EXPECT_GT(std::stod(f[3]), 10.0);   // the leaves' angles: halving keeps the roots' shapes
+  EXPECT_LT(std::stod(f[4]), 170.0);
+  EXPECT_LT(std::stod(f[7]), 100.0);  // no near-degenerate fan triangle among the aspect ratios
+  // The radiosity.vtu cells: finite angles and aspect ratios, fans at 0, 180 and 0.
+  vtkNew<vtkXMLUnstructuredGridReader> reader;
+  reader->SetFileName((out / "radiosity.vtu").string().c_str());
+  reader->Update();
+  vtkDataArray* aspect = reader->GetOutput()->GetCellData()->GetArray("aspect_ratio");
+  vtkDataArray* flag = reader->GetOutput()->GetCellData()->GetArray("zero_area");
+  ASSERT_TRUE(aspect && flag);
+  for (vtkIdType c = 0; c < aspect->GetNumberOfTuples(); ++c) {
+    EXPECT_TRUE(std::isfinite(aspect->GetTuple1(c)));
+    EXPECT_EQ(aspect->GetTuple1(c) == 0.0, flag->GetTuple1(c) != 0.0) << "cell " << c;
+  }
   fs::remove_all(out);
 }
 
