@@ -70,7 +70,7 @@ std::vector<ProbeResult> evaluate_probes(const Scene& scene, const Mesh& mesh,
     for (int j = 0; j < n; ++j) {
       const auto& tri = mesh.triangles[static_cast<size_t>(j)];
       const int pj = mesh.patch[static_cast<size_t>(j)];
-      if (pj == pp) continue;
+      if (pj == pp || mesh.zero_area(j)) continue;  // zero-area triangles never enter a form factor
       const Vec3 v[3] = {mesh.positions[tri[0]], mesh.positions[tri[1]], mesh.positions[tri[2]]};
       const Vec3& nj = scene.patches[static_cast<size_t>(pj)].normal;
       const double f = point_polygon_form_factor(pr.point, pr.normal, v, 3, nj);
