@@ -201,7 +201,6 @@ Row run_one(const Scenario& sc, const Scene& scene, const std::vector<SurfaceSam
   so.rays = set.rays;
   so.quadrature.max_level = set.quad_level;
   Solution sol;
-  long long links = 0;
   if (set.epsilon > 0.0) {
     HierarchicalOptions ho;
     ho.epsilon = set.epsilon;
@@ -209,9 +208,7 @@ Row run_one(const Scenario& sc, const Scene& scene, const std::vector<SurfaceSam
     ho.min_area = set.min_area;
     ho.baum_relative = set.baum;
     const HierarchicalSolution h = solve_hierarchical(scene, mesh, so, ho);
-    std::tie(mesh, sol) = leaves_only(h);
-    links = h.stats.links;
-    sol.stats.form_factors = links;
+    std::tie(mesh, sol) = leaves_only(h);  // stats.form_factors: the links
   } else {
     sol = solve_matrix(scene, mesh, so);
   }
@@ -317,7 +314,7 @@ int direct_study(const std::string& data, const std::string& out_dir, bool quick
         const Mesh mesh = mesh_scene(scene, mo, &rep);
         const double mesh_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
         const FieldError e =
-            field_error(samples, interpolate_nodal(scene, mesh, direct_field(direct, scene, mesh), samples), exact);
+            field_error(samples, interpolate_nodal(scene, mesh, direct_field(direct, mesh), samples), exact);
         const size_t lines = rep.discontinuities.size();
         std::fprintf(stderr, "%-13s %-9s edge %-6g %7d triangles %5zu lines  mesh %7.3f s  L2 %.3e  max %.3e  patch %.3e\n",
                      st.name.c_str(), to_string(mode), edge, mesh.triangle_count(), lines, mesh_s, e.l2, e.linf,
@@ -398,8 +395,7 @@ int main(int argc, char** argv) {
             throw InputError("--settings '" + c +
                              "': expected EDGE:RAYS:QUAD_LEVEL[:off|contacts|full[:EPSILON[:anchor|free|split[:MIN_AREA[:BAUM]]]]]");
           set.discontinuity = parse_discontinuity_mode(mode);
-          const std::string tvs = tv;
-          set.tvertex = tvs == "split" ? TVertexMode::split : tvs == "anchor" ? TVertexMode::anchor : TVertexMode::free;
+          set.tvertex = parse_tvertex_mode(tv);
           sweep.push_back(set);
         }
       }
@@ -441,10 +437,7 @@ int main(int argc, char** argv) {
             << ',' << r.elements << ',' << r.form_factors << ',' << r.rays << ',' << r.seconds << ',' << r.err.l2
             << ',' << r.err.linf << ',' << r.err.patch_mean << ',' << r.element.l2 << ',' << r.element.patch_mean
             << ',' << r.set.epsilon << ','
-            << (r.set.epsilon > 0.0 ? (r.set.tvertex == TVertexMode::split    ? "split"
-                                       : r.set.tvertex == TVertexMode::anchor ? "anchor"
-                                                                              : "free")
-                                    : "")
+            << (r.set.epsilon > 0.0 ? to_string(r.set.tvertex) : "")
             << '\n';
     });
     std::printf("%s\n", csv.c_str());

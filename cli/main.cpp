@@ -94,17 +94,12 @@ LineSet link_line_set(const Scene& scene, const HierarchicalSolution& h) {
   LineSet out;
   std::vector<int> rl, sl, rp, sp;
   std::vector<double> ff, vis, transport;
-  const auto& pos = h.tree.positions();
-  auto centroid = [&](int n) {
-    const auto& v = h.tree.node(n).v;
-    return (pos[static_cast<size_t>(v[0])] + pos[static_cast<size_t>(v[1])] + pos[static_cast<size_t>(v[2])]) / 3.0;
-  };
   for (size_t r = 0; r < h.links.size(); ++r) {
     const int rn = static_cast<int>(r);
     const Patch& patch = scene.patches[static_cast<size_t>(h.tree.node(rn).patch)];
     const Rgb& rho = scene.materials[static_cast<size_t>(patch.material)].reflectance;
     for (const HierarchicalLink& l : h.links[r]) {
-      out.segments.push_back({centroid(rn), centroid(l.source)});
+      out.segments.push_back({h.tree.centroid(rn), h.tree.centroid(l.source)});
       rl.push_back(h.tree.node(rn).level);
       sl.push_back(h.tree.node(l.source).level);
       rp.push_back(h.tree.node(rn).patch);
@@ -113,10 +108,6 @@ LineSet link_line_set(const Scene& scene, const HierarchicalSolution& h) {
       vis.push_back(l.visible);
       const Rgb t = rho * h.node_radiosity[static_cast<size_t>(l.source)] * l.form_factor;
       transport.push_back(std::max({t.x, t.y, t.z}));
-      if (!std::isfinite(transport.back()) || !std::isfinite(l.form_factor))
-        throw NumericalError("link " + std::to_string(out.segments.size() - 1) + " (receiver node " +
-                             std::to_string(rn) + ", source node " + std::to_string(l.source) +
-                             ") has a non-finite form factor or transport");
     }
   }
   out.int_fields = {{"receiver_level", rl}, {"source_level", sl}, {"receiver_patch", rp}, {"source_patch", sp}};
@@ -138,9 +129,7 @@ void check_params(Params& p, bool solving) {
 
   p.meshing.discontinuity = parse_discontinuity_mode(p.discontinuity);
   p.solve.nodal = p.nodal == "mean" ? NodalMethod::mean : NodalMethod::linear_fit;
-  p.hierarchical.tvertex = p.tvertex == "free"    ? TVertexMode::free
-                           : p.tvertex == "split" ? TVertexMode::split
-                                                  : TVertexMode::anchor;
+  p.hierarchical.tvertex = parse_tvertex_mode(p.tvertex);
   if (p.meshing.max_edge < 0.0 || !std::isfinite(p.meshing.max_edge))
     throw InputError("--max-edge " + std::to_string(p.meshing.max_edge) + " must be > 0 (or 0 for auto)");
   if (solving) check_solve_options(p.solve);
@@ -380,8 +369,9 @@ void add_common(CLI::App* cmd, Params& p, const char* scene_help = "scene file (
       ->check(CLI::Range(0.0, 30.0));
   cmd->add_option("--discontinuity", p.discontinuity,
                   "discontinuity lines built into the initial mesh: off, contacts (where patches meet) or "
-                  "full (contacts and the D1/D2 shadow boundaries of every emitter; the default, but contacts "
-                  "with --method hierarchical)")
+                  "full (contacts and the D1/D2 shadow boundaries of every emitter). Default: contacts for "
+                  "run (hierarchical refines across shadows by itself), full for mesh, quality and run "
+                  "--method matrix")
       ->check(CLI::IsMember({"off", "contacts", "full"}));
   cmd->add_option("--max-shadow-lines", p.meshing.shadow.max_lines_per_receiver,
                   "with --discontinuity full: shadow-line segments kept per receiving patch (default 400)")

@@ -149,6 +149,18 @@ void write_grid(const std::string& path, vtkUnstructuredGrid* grid) {
   });
 }
 
+// Named integer cell arrays, one value per cell (n cells).
+void add_int_cell_fields(const std::string& path, vtkCellData* data,
+                         const std::vector<std::pair<std::string, std::vector<int>>>& fields, std::size_t n) {
+  for (const auto& [name, values] : fields) {
+    check_count(path, name.c_str(), values.size(), n);
+    vtkNew<vtkIntArray> a;
+    a->SetName(name.c_str());
+    for (int v : values) a->InsertNextValue(v);
+    data->AddArray(a);
+  }
+}
+
 }  // namespace
 
 void write_pvd(const std::string& path, const std::vector<std::string>& files) {
@@ -175,42 +187,23 @@ void write_vtu(const std::string& path, const Scene& scene, const Mesh& mesh,
   grid->GetPointData()->AddArray(rgb_array("radiosity", nodal.radiosity));
   grid->GetCellData()->AddArray(rgb_array("radiosity", solution.element));
   add_mesh_cell_data(path, grid->GetCellData(), scene, mesh, quality);
-  for (const auto& [name, values] : int_cell_fields) {
-    check_count(path, name.c_str(), values.size(), n);
-    vtkNew<vtkIntArray> a;
-    a->SetName(name.c_str());
-    for (int v : values) a->InsertNextValue(v);
-    grid->GetCellData()->AddArray(a);
-  }
+  add_int_cell_fields(path, grid->GetCellData(), int_cell_fields, n);
   write_grid(path, grid);
 }
 
 void write_discontinuities_vtu(const std::string& path, const std::vector<DiscontinuitySegment>& segments) {
-  vtkNew<vtkPoints> points;
-  points->SetDataTypeToDouble();
-  vtkNew<vtkCellArray> lines;
-  vtkNew<vtkIntArray> kind, event, emitter, patch, other;
-  kind->SetName("kind");
-  event->SetName("event");
-  emitter->SetName("emitter");
-  patch->SetName("patch_id");
-  other->SetName("other_patch");
+  LineSet lines;
+  std::vector<int> kind, event, emitter, patch, other;
   for (const DiscontinuitySegment& d : segments) {
-    const vtkIdType ids[2] = {points->InsertNextPoint(d.a.x, d.a.y, d.a.z),
-                              points->InsertNextPoint(d.b.x, d.b.y, d.b.z)};
-    lines->InsertNextCell(2, ids);
-    kind->InsertNextValue(d.kind);
-    event->InsertNextValue(static_cast<int>(d.event));
-    emitter->InsertNextValue(d.emitter);
-    patch->InsertNextValue(d.patch);
-    other->InsertNextValue(d.other);
+    lines.segments.push_back({d.a, d.b});
+    kind.push_back(d.kind);
+    event.push_back(static_cast<int>(d.event));
+    emitter.push_back(d.emitter);
+    patch.push_back(d.patch);
+    other.push_back(d.other);
   }
-  vtkNew<vtkUnstructuredGrid> grid;
-  grid->SetPoints(points);
-  grid->SetCells(VTK_LINE, lines);
-  for (vtkIntArray* a : {kind.Get(), event.Get(), emitter.Get(), patch.Get(), other.Get()})
-    grid->GetCellData()->AddArray(a);
-  write_grid(path, grid);
+  lines.int_fields = {{"kind", kind}, {"event", event}, {"emitter", emitter}, {"patch_id", patch}, {"other_patch", other}};
+  write_lines_vtu(path, lines);
 }
 
 void write_lines_vtu(const std::string& path, const LineSet& lines) {
@@ -228,13 +221,7 @@ void write_lines_vtu(const std::string& path, const LineSet& lines) {
   vtkNew<vtkUnstructuredGrid> grid;
   grid->SetPoints(points);
   grid->SetCells(VTK_LINE, cells);
-  for (const auto& [name, values] : lines.int_fields) {
-    check_count(path, name.c_str(), values.size(), n);
-    vtkNew<vtkIntArray> a;
-    a->SetName(name.c_str());
-    for (int v : values) a->InsertNextValue(v);
-    grid->GetCellData()->AddArray(a);
-  }
+  add_int_cell_fields(path, grid->GetCellData(), lines.int_fields, n);
   for (const auto& [name, values] : lines.real_fields) {
     check_count(path, name.c_str(), values.size(), n);
     vtkNew<vtkDoubleArray> a;

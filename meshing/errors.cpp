@@ -1,5 +1,7 @@
 #include "meshing/errors.h"
 
+#include <sstream>
+
 namespace radmesh {
 
 std::string where(const std::string& file, int line) {
@@ -11,6 +13,13 @@ std::string where(const std::string& file, int line) {
   }
   if (!s.empty()) s.append(": ");
   return s;
+}
+
+std::string format_number(double v) {
+  std::ostringstream s;
+  s.precision(9);
+  s << v;
+  return s.str();
 }
 
 }  // namespace radmesh

@@ -41,4 +41,8 @@ public:
 // Helper: "file:line: " prefix (line omitted when <= 0, file omitted when empty).
 std::string where(const std::string& file, int line);
 
+// A number for a message: up to 9 significant digits, no trailing zeros
+// (std::to_string would print 1e-20 as 0.000000).
+std::string format_number(double v);
+
 }  // namespace radmesh

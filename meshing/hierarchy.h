@@ -14,12 +14,6 @@
 
 namespace radmesh {
 
-// How the T-vertices of the leaves are made conforming.
-enum class TVertexClosure {
-  zero_area,  // fans of zero-area triangles along the unsplit edge (no neighbour is split)
-  split,      // the conventional way: split neighbours until no T-vertex is left
-};
-
 class ElementTree {
 public:
   struct Node {

@@ -51,14 +51,8 @@ bool Scene::has_emitter() const {
 
 namespace {
 
-std::string fmt(double v) {
-  std::ostringstream s;
-  s.precision(9);
-  s << v;
-  return s.str();
-}
 
-std::string fmt(const Vec3& v) { return fmt(v.x) + " " + fmt(v.y) + " " + fmt(v.z); }
+std::string fmt(const Vec3& v) { return format_number(v.x) + " " + format_number(v.y) + " " + format_number(v.z); }
 
 bool finite(const Vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
 
@@ -203,7 +197,7 @@ Scene build_scene(const std::vector<RawFace>& faces, std::vector<Material> mater
 
     if (deviation > options.planarity_tolerance * diam) {
       if (!f.holes.empty())
-        throw InputError(at + "is not planar (deviation " + fmt(deviation) +
+        throw InputError(at + "is not planar (deviation " + format_number(deviation) +
                          ") and has holes; split it into planar faces");
       // Fan-split into triangles; each keeps the face's name and material.
       int made = 0;
@@ -221,8 +215,8 @@ Scene build_scene(const std::vector<RawFace>& faces, std::vector<Material> mater
       }
       ++scene.report.nonplanar_faces_split;
       scene.report.warnings.push_back(where(f.file, f.line) + "face '" + f.name +
-                                      "' is not planar (a vertex lies " + fmt(deviation) +
-                                      " from its plane, " + fmt(deviation / diam) +
+                                      "' is not planar (a vertex lies " + format_number(deviation) +
+                                      " from its plane, " + format_number(deviation / diam) +
                                       " of its size): split into " + std::to_string(made) +
                                       " triangles");
       continue;

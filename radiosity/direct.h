@@ -40,8 +40,6 @@ public:
   // itself is not included.
   Rgb reflected(const Vec3& x, int patch) const;
 
-  const std::vector<int>& emitters() const;
-
 private:
   struct Impl;
   std::unique_ptr<Impl> impl_;
@@ -51,11 +49,10 @@ private:
 // reflected direct radiosity at every triangle corner (taken a hair inside
 // the triangle, so a corner on a contact line gets the value of its own
 // side). Per triangle, three corners. Runs in parallel.
-std::vector<std::array<Rgb, 3>> direct_corner_values(const DirectIllumination& direct, const Scene& scene,
-                                                     const Mesh& mesh);
+std::vector<std::array<Rgb, 3>> direct_corner_values(const DirectIllumination& direct, const Mesh& mesh);
 
 // The same as a field over the mesh: one display vertex per triangle corner
 // (so a value may jump across any edge), for interpolate_nodal.
-NodalField direct_field(const DirectIllumination& direct, const Scene& scene, const Mesh& mesh);
+NodalField direct_field(const DirectIllumination& direct, const Mesh& mesh);
 
 }  // namespace radmesh

@@ -109,7 +109,6 @@ std::vector<Point3> clip(const std::vector<Point3>& poly, const EK::Plane_3& pla
 struct DirectIllumination::Impl {
   const Scene& scene;
   std::vector<Emitter> emitters;
-  std::vector<int> emitter_ids;
   std::vector<OccluderTriangle> occluders;
   explicit Impl(const Scene& s) : scene(s) {}
 
@@ -252,14 +251,11 @@ DirectIllumination::DirectIllumination(const Scene& scene) : impl_(std::make_uni
       e.lo = glm::min(e.lo, d);
       e.hi = glm::max(e.hi, d);
     }
-    impl_->emitter_ids.push_back(e.patch);
     impl_->emitters.push_back(std::move(e));
   }
 }
 
 DirectIllumination::~DirectIllumination() = default;
-
-const std::vector<int>& DirectIllumination::emitters() const { return impl_->emitter_ids; }
 
 double DirectIllumination::visible_form_factor(const Vec3& x, const Vec3& n, int receiver, int emitter) const {
   for (const Emitter& e : impl_->emitters)
@@ -283,9 +279,7 @@ Rgb DirectIllumination::reflected(const Vec3& x, int patch) const {
   return rho * sum;
 }
 
-std::vector<std::array<Rgb, 3>> direct_corner_values(const DirectIllumination& direct, const Scene& scene,
-                                                     const Mesh& mesh) {
-  (void)scene;
+std::vector<std::array<Rgb, 3>> direct_corner_values(const DirectIllumination& direct, const Mesh& mesh) {
   std::vector<std::array<Rgb, 3>> out(static_cast<size_t>(mesh.triangle_count()));
   tbb::parallel_for(0, mesh.triangle_count(), [&](int t) {
     const auto& tri = mesh.triangles[static_cast<size_t>(t)];
@@ -299,8 +293,8 @@ std::vector<std::array<Rgb, 3>> direct_corner_values(const DirectIllumination& d
   return out;
 }
 
-NodalField direct_field(const DirectIllumination& direct, const Scene& scene, const Mesh& mesh) {
-  const auto corners = direct_corner_values(direct, scene, mesh);
+NodalField direct_field(const DirectIllumination& direct, const Mesh& mesh) {
+  const auto corners = direct_corner_values(direct, mesh);
   NodalField f;
   for (int t = 0; t < mesh.triangle_count(); ++t) {
     std::array<int, 3> c{};

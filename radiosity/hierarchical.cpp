@@ -15,10 +15,8 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <cstdio>
 #include <string>
 #include <limits>
-#include <map>
 #include <optional>
 #include <set>
 #include <unordered_map>
@@ -31,11 +29,11 @@ double seconds_since(std::chrono::steady_clock::time_point t) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
 }
 double max3(const Rgb& c) { return std::max({c.x, c.y, c.z}); }
-std::string fmt(double v) {
-  char b[32];
-  std::snprintf(b, sizeof b, "%g", v);
-  return b;
-}
+
+// Shadow rays of one node pair: cast, or skipped because nothing can occlude.
+struct RayCount {
+  long long cast = 0, skipped = 0;
+};
 
 struct Link {
   int source = -1;
@@ -77,8 +75,8 @@ public:
           facing_pairs += static_cast<double>(per_patch[a]) * static_cast<double>(per_patch[b]);
     if (facing_pairs * kLinkBytes > limit_)
       throw NumericalError(scene_.source + ": " + std::to_string(tree.root_count()) + " initial elements make " +
-                           fmt(facing_pairs) + " pairs to link, " + fmt(facing_pairs * kLinkBytes / kGiB) +
-                           " GiB at least, more than the " + fmt(limit_ / kGiB) +
+                           format_number(facing_pairs) + " pairs to link, " + format_number(facing_pairs * kLinkBytes / kGiB) +
+                           " GiB at least, more than the " + format_number(limit_ / kGiB) +
                            " GiB allowed; use a larger --max-edge (hierarchical radiosity refines by itself) or "
                            "raise --max-memory");
     // In blocks of receivers, so that a generation's scratch stays small.
@@ -128,6 +126,11 @@ public:
       if (refined == 0 && baum == 0) break;
     }
     st.links = count_links();
+    // The links as they stand at the end (they do not change after the last
+    // publish), copied once.
+    out_.links.assign(links_.size(), {});
+    for (size_t p = 0; p < links_.size(); ++p)
+      for (const Link& l : links_[p]) out_.links[p].push_back({l.source, l.f * l.visible, l.visible});
   }
 
 private:
@@ -194,12 +197,12 @@ private:
   bool splittable(int n) const { return tri_[static_cast<size_t>(n)].area > 4.0 * min_area_; }
 
   // Visible fraction of the segments between stratified points of p and q.
-  // Thread-safe; counts the rays cast in `rays`.
-  double visible_fraction(int p, int q, long long& rays) const {
+  // Thread-safe; counts the rays in `rays`.
+  double visible_fraction(int p, int q, RayCount& rays) const {
     const Triangle& a = tri_[static_cast<size_t>(p)];
     const Triangle& b = tri_[static_cast<size_t>(q)];
     if (occlusion_.convex_enclosure() || !occlusion_.may_occlude(node_patch(p), node_patch(q), a, b)) {
-      rays -= static_cast<long long>(side_) * side_;  // negative: rays skipped, nothing can occlude
+      rays.skipped += static_cast<long long>(side_) * side_;
       return 1.0;
     }
     SplitMix rng(pair_seed(static_cast<uint64_t>(std::min(p, q)), static_cast<uint64_t>(std::max(p, q))));
@@ -215,7 +218,7 @@ private:
         open += visibility_.visible(x, y, node_patch(p), node_patch(q)) ? 1 : 0;
         ++total;
       }
-    rays += total;
+    rays.cast += total;
     return static_cast<double>(open) / total;
   }
 
@@ -237,7 +240,7 @@ private:
   void link_pairs(std::vector<std::pair<int, int>> todo) {
     while (!todo.empty()) {
       std::vector<Link> ev(todo.size());
-      std::vector<long long> rays(todo.size(), 0);
+      std::vector<RayCount> rays(todo.size());
       tbb::parallel_for(tbb::blocked_range<size_t>(0, todo.size(), 16), [&](const tbb::blocked_range<size_t>& r) {
         for (size_t i = r.begin(); i != r.end(); ++i) {
           const auto [p, q] = todo[i];
@@ -253,13 +256,13 @@ private:
       for (size_t i = 0; i < todo.size(); ++i) {
         const int p = todo[i].first;
         ++out_.stats.links_examined;
-        if (rays[i] >= 0) {
-          out_.stats.rays_cast += rays[i];
-        } else {
-          out_.stats.rays_skipped -= rays[i];
-          ++out_.stats.pairs_unoccludable;
-        }
+        out_.stats.rays_cast += rays[i].cast;
+        out_.stats.rays_skipped += rays[i].skipped;
+        if (rays[i].skipped > 0) ++out_.stats.pairs_unoccludable;
         const Link& l = ev[i];
+        if (!std::isfinite(l.f) || !std::isfinite(l.spread))
+          throw NumericalError(scene_.source + ": link from node " + std::to_string(l.source) + " to node " +
+                               std::to_string(p) + " has a non-finite form factor");
         if (l.f <= 0.0) continue;
         if (wants_refinement(p, l) && split_pair(p, l.source, spread_dominates(l), next)) continue;
         links_[static_cast<size_t>(p)].push_back(l);
@@ -272,13 +275,12 @@ private:
 
   // Links and leaf terms against the memory limit, after every generation.
   void check_memory() {
-    links_total_ = 0;
-    for (const auto& l : links_) links_total_ += static_cast<long long>(l.size());
-    const double bytes = static_cast<double>(links_total_) * kLinkBytes +
+    const long long links = count_links();
+    const double bytes = static_cast<double>(links) * kLinkBytes +
                          static_cast<double>(out_.stats.leaf_terms) * sizeof(std::pair<int, double>);
     if (bytes > limit_)
-      throw NumericalError(scene_.source + ": hierarchical refinement reached " + std::to_string(links_total_) +
-                           " links (" + fmt(bytes / kGiB) + " GiB), more than the " + fmt(limit_ / kGiB) +
+      throw NumericalError(scene_.source + ": hierarchical refinement reached " + std::to_string(links) +
+                           " links (" + format_number(bytes / kGiB) + " GiB), more than the " + format_number(limit_ / kGiB) +
                            " GiB allowed; raise --epsilon or --min-area, or raise --max-memory");
   }
 
@@ -476,11 +478,7 @@ private:
     HierarchicalSolution& o = out_;
     o.node_radiosity = B_;
     o.node_links.assign(links_.size(), 0);
-    o.links.assign(links_.size(), {});
-    for (size_t p = 0; p < links_.size(); ++p) {
-      o.node_links[p] = static_cast<int>(links_[p].size());
-      for (const Link& l : links_[p]) o.links[p].push_back({l.source, l.f * l.visible, l.visible});
-    }
+    for (size_t p = 0; p < links_.size(); ++p) o.node_links[p] = static_cast<int>(links_[p].size());
     o.mesh = o.tree.conforming_mesh(&o.leaf_of);
     Solution& s = o.solution;
     s = Solution{};
@@ -614,7 +612,6 @@ private:
   Occlusion occlusion_;
   double min_area_ = 0.0, max_emission_ = 0.0;
   double limit_ = 0.0;          // memory limit, bytes
-  long long links_total_ = 0;
   // A link's memory: the Link in its receiver's list, with the vector's slack.
   static constexpr double kLinkBytes = 1.5 * sizeof(Link);
   static constexpr double kGiB = 1024.0 * 1024.0 * 1024.0;
@@ -634,19 +631,35 @@ private:
 
 }  // namespace
 
+TVertexMode parse_tvertex_mode(const std::string& name) {
+  if (name == "anchor") return TVertexMode::anchor;
+  if (name == "free") return TVertexMode::free;
+  if (name == "split") return TVertexMode::split;
+  throw InputError("T-vertex mode '" + name + "': expected anchor, free or split");
+}
+
+const char* to_string(TVertexMode mode) {
+  switch (mode) {
+    case TVertexMode::anchor: return "anchor";
+    case TVertexMode::free: return "free";
+    case TVertexMode::split: return "split";
+  }
+  return "?";
+}
+
 HierarchicalSolution solve_hierarchical(const Scene& scene, const Mesh& initial, const SolveOptions& options,
                                         const HierarchicalOptions& hopt,
                                         const std::function<void(const HierarchicalSolution&, int)>& on_round) {
   check_solve_options(options);
   if (!(hopt.epsilon > 0.0) || !(hopt.min_area >= 0.0) || hopt.max_rounds < 0 || !(hopt.baum_relative >= 0.0) ||
       !(hopt.baum_absolute >= 0.0))
-    throw InputError("hierarchical options out of range: epsilon " + fmt(hopt.epsilon) + ", min area " +
-                     fmt(hopt.min_area) + ", rounds " + std::to_string(hopt.max_rounds) + ", baum " +
-                     fmt(hopt.baum_relative) + " / " + fmt(hopt.baum_absolute));
+    throw InputError("hierarchical options out of range: epsilon " + format_number(hopt.epsilon) + ", min area " +
+                     format_number(hopt.min_area) + ", rounds " + std::to_string(hopt.max_rounds) + ", baum " +
+                     format_number(hopt.baum_relative) + " / " + format_number(hopt.baum_absolute));
   const double diag2 = scene.diagonal() * scene.diagonal();
   if (hopt.min_area > 0.0 && hopt.min_area < 1e-8 * diag2)
-    throw InputError("minimum element area (--min-area) " + fmt(hopt.min_area) +
-                     " is below 1e-8 of the scene diagonal squared (" + fmt(diag2) +
+    throw InputError("minimum element area (--min-area) " + format_number(hopt.min_area) +
+                     " is below 1e-8 of the scene diagonal squared (" + format_number(diag2) +
                      "): refinement to it would not end in time or memory");
   std::optional<tbb::global_control> threads;
   if (options.threads > 0)

@@ -11,6 +11,7 @@
 #include "radiosity/solve.h"
 
 #include <functional>
+#include <string>
 #include <vector>
 
 namespace radmesh {
@@ -21,6 +22,10 @@ enum class TVertexMode {
   free,    // what the finer side's elements give it (shading may jump along the edge)
   split,   // no T-vertices: neighbours are split until none is left (the conventional way)
 };
+
+// "anchor", "free", "split"; InputError naming the value otherwise.
+TVertexMode parse_tvertex_mode(const std::string& name);
+const char* to_string(TVertexMode mode);
 
 struct HierarchicalOptions {
   // Oracle: the link receiver p <- source q is refined while its error
@@ -90,7 +95,7 @@ struct HierarchicalSolution {
   ElementTree tree;
   std::vector<Rgb> node_radiosity;  // per tree node (inner nodes: area-weighted mean of children)
   std::vector<int> node_links;      // per tree node: links it gathers over
-  std::vector<std::vector<HierarchicalLink>> links;  // per receiver node, as they stand at the end
+  std::vector<std::vector<HierarchicalLink>> links;  // per receiver node, filled at the end (not in on_round)
   Mesh mesh;                        // conforming mesh: leaves, then zero-area fans
   std::vector<int> leaf_of;         // per mesh triangle: its leaf, or -1 (zero-area)
   Solution solution;                // per mesh triangle (zero-area: the leaf owning the edge) and per vertex

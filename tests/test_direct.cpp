@@ -98,7 +98,7 @@ TEST_F(BoxOnFloor, LinearInterpolantErrorFallsWithTheMesh) {
     o.max_edge = edge;
     o.discontinuity = mode;
     const Mesh m = mesh_scene(s, o);
-    return field_error(samples, interpolate_nodal(s, m, direct_field(direct, s, m), samples), exact).l2;
+    return field_error(samples, interpolate_nodal(s, m, direct_field(direct, m), samples), exact).l2;
   };
   const double coarse = error(0.5, DiscontinuityMode::contacts), fine = error(0.25, DiscontinuityMode::contacts);
   const double full = error(0.5, DiscontinuityMode::full);
