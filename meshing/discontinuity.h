@@ -90,7 +90,10 @@ struct ShadowReport {
   std::vector<std::string> warnings;
 };
 
-std::vector<DiscontinuitySegment> shadow_segments(const Scene& scene, const ShadowOptions& options,
-                                                  ShadowReport* report = nullptr);
+// `contacts` are the scene's contact lines (contact_segments(scene)): a
+// shadow line loses the parts that run along one of them.
+std::vector<DiscontinuitySegment> shadow_segments(const Scene& scene,
+                                                  const std::vector<DiscontinuitySegment>& contacts,
+                                                  const ShadowOptions& options, ShadowReport* report = nullptr);
 
 }  // namespace radmesh

@@ -241,10 +241,15 @@ struct Event {
 
 class ShadowCaster {
 public:
-  ShadowCaster(const Scene& scene, const ShadowOptions& opt, ShadowReport& rep)
-      : scene_(scene), opt_(opt), rep_(rep), polys_(make_polys(scene)),
+  ShadowCaster(const Scene& scene, const std::vector<DiscontinuitySegment>& contacts, const ShadowOptions& opt,
+               ShadowReport& rep)
+      : scene_(scene), contacts_(contacts), opt_(opt), rep_(rep), polys_(make_polys(scene)),
         diag_(std::max(scene.diagonal(), std::numeric_limits<double>::min())), eps_(1e-9 * diag_),
         blockers_(polys_, eps_) {
+    for (const Patch& patch : scene.patches) {
+      loops_.push_back({patch.outer});
+      loops_.back().insert(loops_.back().end(), patch.holes.begin(), patch.holes.end());
+    }
     for (size_t p = 0; p < scene.patches.size(); ++p)
       for (const auto& loop : loops(static_cast<int>(p)))
         for (size_t i = 0; i < loop.size(); ++i) {
@@ -280,12 +285,8 @@ public:
   }
 
 private:
-  std::vector<std::vector<int>> loops(int p) const {
-    const Patch& patch = scene_.patches[static_cast<size_t>(p)];
-    std::vector<std::vector<int>> out = {patch.outer};
-    out.insert(out.end(), patch.holes.begin(), patch.holes.end());
-    return out;
-  }
+  // The outer loop and the holes of patch p (made once, in the constructor).
+  const std::vector<std::vector<int>>& loops(int p) const { return loops_[static_cast<size_t>(p)]; }
   const Vec3& pos(int v) const { return scene_.vertices[static_cast<size_t>(v)]; }
 
   void pair(int e, int r) {
@@ -320,7 +321,7 @@ private:
     }
     const EK::Plane_3 plane_r(to_exact(R.origin), EK::Vector_3(R.normal.x, R.normal.y, R.normal.z));
     std::set<std::array<int, 4>> seen;
-    const auto emitter_loops = loops(e);
+    const auto& emitter_loops = loops(e);
     for (int o : occluders)
       for (const auto& loop : loops(o))
         for (size_t i = 0; i < loop.size(); ++i) {
@@ -483,7 +484,7 @@ private:
   // segment already kept. Then the budget.
   std::vector<DiscontinuitySegment> finish() {
     std::vector<std::vector<DiscontinuitySegment>> kept(found_.size());
-    for (const DiscontinuitySegment& c : contact_segments(scene_)) kept[static_cast<size_t>(c.patch)].push_back(c);
+    for (const DiscontinuitySegment& c : contacts_) kept[static_cast<size_t>(c.patch)].push_back(c);
     std::vector<DiscontinuitySegment> out;
     for (size_t r = 0; r < found_.size(); ++r) {
       auto& f = found_[r];
@@ -570,6 +571,8 @@ private:
   }
 
   const Scene& scene_;
+  const std::vector<DiscontinuitySegment>& contacts_;
+  std::vector<std::vector<std::vector<int>>> loops_;  // per patch: outer loop, then holes
   ShadowOptions opt_;
   ShadowReport& rep_;
   std::vector<Poly> polys_;
@@ -583,14 +586,15 @@ private:
 
 }  // namespace
 
-std::vector<DiscontinuitySegment> shadow_segments(const Scene& scene, const ShadowOptions& options,
-                                                  ShadowReport* report) {
+std::vector<DiscontinuitySegment> shadow_segments(const Scene& scene,
+                                                  const std::vector<DiscontinuitySegment>& contacts,
+                                                  const ShadowOptions& options, ShadowReport* report) {
   if (!(options.weak_emitter >= 0.0) || options.max_lines_per_receiver < 0 || options.visibility_pieces < 1)
     throw InputError("shadow options out of range: weak_emitter " + std::to_string(options.weak_emitter) +
                      ", max_lines_per_receiver " + std::to_string(options.max_lines_per_receiver) +
                      ", visibility_pieces " + std::to_string(options.visibility_pieces));
   ShadowReport rep;
-  ShadowCaster caster(scene, options, rep);
+  ShadowCaster caster(scene, contacts, options, rep);
   std::vector<DiscontinuitySegment> out = caster.run();
   if (report) *report = std::move(rep);
   return out;

@@ -76,6 +76,7 @@ struct TriangleQuality {
   std::vector<double> min_angle;     // degrees
   std::vector<double> max_angle;     // degrees
   std::vector<double> aspect_ratio;  // longest edge / (2 sqrt(3) inradius): 1 for equilateral
+  std::vector<char> zero_area;       // Mesh::zero_area, once per triangle
 };
 // A zero-area triangle (Mesh::zero_area) gets 0 and 180 degrees and aspect
 // ratio 0: it has no shape worth the name, and never inf or NaN in a file.

@@ -323,7 +323,7 @@ private:
     if (opt_.discontinuity == DiscontinuityMode::full) {
       ShadowOptions so = opt_.shadow;
       if (so.min_separation == 0.0) so.min_separation = opt_.min_separation_fraction * opt_.max_edge;
-      std::vector<DiscontinuitySegment> shadows = shadow_segments(scene_, so, &shadow_report_);
+      std::vector<DiscontinuitySegment> shadows = shadow_segments(scene_, lines, so, &shadow_report_);
       lines.insert(lines.end(), shadows.begin(), shadows.end());
     }
     std::vector<int> extra;  // global ids of constraint points made so far
@@ -339,6 +339,8 @@ private:
     };
     std::vector<std::vector<size_t>> by_patch(scene_.patches.size());
     for (size_t i = 0; i < lines.size(); ++i) by_patch[static_cast<size_t>(lines[i].patch)].push_back(i);
+    std::vector<std::vector<size_t>> segments_of(scene_.patches.size());  // boundary segments per patch
+    for (size_t s = 0; s < segments_.size(); ++s) segments_of[static_cast<size_t>(segments_[s].patch)].push_back(s);
     for (size_t p = 0; p < by_patch.size(); ++p) {
       if (by_patch[p].empty()) continue;
       const Frame frame = make_frame(scene_, scene_.patches[p]);
@@ -372,16 +374,18 @@ private:
         auto& c = cuts[k];
         c.push_back({0.0, d.a});
         c.push_back({1.0, d.b});
+        // Crossings lie strictly inside (more than eps from either end), so
+        // the sorted cuts start at d.a and end at d.b.
         std::sort(c.begin(), c.end(), [](auto& x, auto& y) { return x.first < y.first; });
-        int prev = id_of(c[0].second);
+        const int first = id_of(c[0].second);
+        int prev = first;
         for (size_t i = 1; i < c.size(); ++i) {
           const int cur = id_of(c[i].second);
           if (cur != prev) constraints_[p].push_back({prev, cur, d.kind});
           prev = cur;
         }
-        for (int g : {id_of(d.a), id_of(d.b)})
-          for (size_t s = 0; s < segments_.size(); ++s)
-            if (segments_[s].patch == static_cast<int>(p)) add_point(s, g, nullptr);
+        for (int g : {first, prev})
+          for (size_t s : segments_of[p]) add_point(s, g, nullptr);
         discontinuities_.push_back(d);
         ++(d.kind == 0 ? contact_count_ : shadow_count_);
       }
@@ -479,15 +483,20 @@ private:
     // The last round (no refinement) keeps the patch's interior points from
     // its last refined mesh; those the mesher put on a line are chained into
     // it, so the line is not crossed by a sliver.
-    static const std::vector<Steiner> none;
-    const std::vector<Steiner>& kept = refine ? none : steiner_[p];
+    std::vector<const Steiner*> on_line;  // kept points the mesher put on a line
+    if (!refine)
+      for (const Steiner& st : steiner_[p])
+        if (st.on_line) on_line.push_back(&st);
     const double on_tol = 100.0 * eps_;
     for (const auto& [a, b, kind] : constraints_[static_cast<size_t>(p)]) {
       CDT::Vertex_handle va = insert_vertex(a), vb = insert_vertex(b);
       const K::Segment_2 seg(va->point(), vb->point());
+      const CGAL::Bbox_2 sb = seg.bbox();
+      const CGAL::Bbox_2 near(sb.xmin() - on_tol, sb.ymin() - on_tol, sb.xmax() + on_tol, sb.ymax() + on_tol);
       std::vector<std::pair<double, int>> chain;
-      for (const Steiner& st : kept)
-        if (st.on_line && CGAL::squared_distance(st.q, seg) <= on_tol * on_tol)
+      for (const Steiner* sp : on_line)
+        if (const Steiner& st = *sp;
+            CGAL::do_overlap(st.q.bbox(), near) && CGAL::squared_distance(st.q, seg) <= on_tol * on_tol)
           chain.push_back({std::sqrt(CGAL::squared_distance(st.q, va->point())), st.id});
       std::sort(chain.begin(), chain.end());
       CDT::Vertex_handle prev = va;
@@ -499,8 +508,9 @@ private:
       if (prev != vb) cdt.insert_constraint(prev, vb);
       lines2.push_back({seg, seg.bbox(), kind});
     }
-    for (const Steiner& st : kept)
-      if (!st.on_line) insert_vertex(st.id);
+    if (!refine)
+      for (const Steiner& st : steiner_[p])
+        if (!st.on_line) insert_vertex(st.id);
     // The rounded end points must not make lines cross anywhere but at
     // their shared ends: CGAL would then add a crossing vertex (counted; the
     // triangulation stays valid, as it uses exact predicates).

@@ -13,6 +13,7 @@ TriangleQuality compute_quality(const Mesh& mesh) {
   q.min_angle.resize(static_cast<size_t>(n));
   q.aspect_ratio.resize(static_cast<size_t>(n));
   q.max_angle.resize(static_cast<size_t>(n));
+  q.zero_area.resize(static_cast<size_t>(n));
   for (int t = 0; t < n; ++t) {
     const auto& tri = mesh.triangles[static_cast<size_t>(t)];
     const Vec3 p[3] = {mesh.positions[tri[0]], mesh.positions[tri[1]], mesh.positions[tri[2]]};
@@ -36,7 +37,8 @@ TriangleQuality compute_quality(const Mesh& mesh) {
       const double inradius = area / s;
       aspect = longest / (2.0 * std::sqrt(3.0) * inradius);
     }
-    if (mesh.zero_area(t)) {  // no shape worth the name: 0 and 180 degrees, aspect 0 (never inf in a file)
+    q.zero_area[static_cast<size_t>(t)] = mesh.zero_area(t);
+    if (q.zero_area[static_cast<size_t>(t)]) {  // no shape worth the name: 0 and 180 degrees, aspect 0 (never inf in a file)
       min_angle = 0.0;
       max_angle = 180.0;
       aspect = 0.0;
@@ -65,30 +67,34 @@ std::vector<PatchQuality> patch_quality(int patch_count, const Mesh& mesh, const
     tris[static_cast<size_t>(mesh.patch[static_cast<size_t>(t)])].push_back(t);
     tris[np].push_back(t);
   }
-  std::vector<PatchQuality> rows;
+  std::vector<PatchQuality> rows(np + 1);
+  auto count = [](PatchQuality& r, int kind) {
+    ++(kind == 0 ? r.contact_segments : kind == 1 ? r.d1_segments : r.d2_segments);
+  };
+  for (const DiscontinuitySegment& d : discontinuities) {  // segment counts per patch and in total
+    if (d.patch >= 0 && static_cast<size_t>(d.patch) < np) count(rows[static_cast<size_t>(d.patch)], d.kind);
+    count(rows[np], d.kind);
+  }
   for (size_t p = 0; p <= np; ++p) {
-    PatchQuality r;
+    PatchQuality& r = rows[p];
     r.patch = p < np ? static_cast<int>(p) : -1;
     r.triangles = static_cast<int>(tris[p].size());
     std::vector<double> aspect;
-    r.min_angle = tris[p].empty() ? 0.0 : 180.0;
+    double min_angle = 180.0;
     for (int t : tris[p]) {
       const size_t u = static_cast<size_t>(t);
-      if (mesh.zero_area(t)) {  // counted apart: they have no shape to speak of
+      if (quality.zero_area[u]) {  // counted apart: they have no shape to speak of
         ++r.zero_area;
         continue;
       }
-      r.min_angle = std::min(r.min_angle, quality.min_angle[u]);
+      min_angle = std::min(min_angle, quality.min_angle[u]);
       r.max_angle = std::max(r.max_angle, quality.max_angle[u]);
       aspect.push_back(quality.aspect_ratio[u]);
     }
-    if (aspect.empty()) r.min_angle = 0.0;
+    r.min_angle = aspect.empty() ? 0.0 : min_angle;  // no triangle with area: nothing to report
     r.aspect_p50 = percentile(aspect, 0.5);
     r.aspect_p95 = percentile(aspect, 0.95);
     r.aspect_max = percentile(aspect, 1.0);
-    for (const DiscontinuitySegment& d : discontinuities)
-      if (r.patch < 0 || d.patch == r.patch) ++(d.kind == 0 ? r.contact_segments : d.kind == 1 ? r.d1_segments : r.d2_segments);
-    rows.push_back(r);
   }
   return rows;
 }

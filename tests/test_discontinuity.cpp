@@ -339,7 +339,7 @@ TEST(Shadows, BoxOnFloorPenumbraLinesMatchHandDerivedCoordinates) {
   const Scene s = read_obj_scene(kData + "/box_on_floor/box_on_floor.obj");
   const int floor = patch_named(s, "floor"), light = patch_named(s, "light");
   ShadowReport rep;
-  const auto lines = shadow_segments(s, {}, &rep);
+  const auto lines = shadow_segments(s, contact_segments(s), {}, &rep);
   ASSERT_FALSE(lines.empty());
   EXPECT_EQ(rep.d2, 0);
   EXPECT_EQ(rep.d1, static_cast<int>(lines.size()));
