@@ -14,7 +14,6 @@
 #include <numbers>
 
 using namespace radmesh;
-using radmesh::test::patch_areas;
 using radmesh::test::patch_named;
 
 namespace {
@@ -43,6 +42,10 @@ protected:
   BoxOnFloor() : s(read_obj_scene(kData + "/box_on_floor/box_on_floor.obj")), direct(s) {
     floor = patch_named(s, "floor");
     light = patch_named(s, "light");
+  }
+  void SetUp() override {
+    ASSERT_GE(floor, 0);  // a misnamed patch would make every light value 0
+    ASSERT_GE(light, 0);
   }
   Scene s;
   DirectIllumination direct;

@@ -11,6 +11,8 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
+
 #include <cmath>
 #include <map>
 
@@ -158,8 +160,22 @@ TEST(Hierarchy, ALevelTwelveSplitStillHasExactMidpoints) {
   m.triangles = {{0, 1, 2}};
   m.patch = {0};
   ElementTree tree(m);
+  // The same path followed independently: each child's corners as averages
+  // of its parent's, in long double (ElementTree's children 0..2 sit at the
+  // corners, 3 is the middle one).
+  using P = std::array<long double, 3>;
+  auto mid = [](const P& x, const P& y) { return P{(x[0] + y[0]) / 2, (x[1] + y[1]) / 2, (x[2] + y[2]) / 2}; };
+  std::array<P, 3> path;
+  for (int k = 0; k < 3; ++k)
+    path[static_cast<size_t>(k)] = {m.positions[static_cast<size_t>(k)].x, m.positions[static_cast<size_t>(k)].y,
+                                    m.positions[static_cast<size_t>(k)].z};
   int n = 0;
-  for (int level = 0; level < 12; ++level) n = tree.split(n) + (level % 2 == 0 ? 3 : 1);  // middle, then corner
+  for (int level = 0; level < 12; ++level) {
+    const int child = level % 2 == 0 ? 3 : 1;  // middle, then corner
+    n = tree.split(n) + child;
+    const P ab = mid(path[0], path[1]), bc = mid(path[1], path[2]), ca = mid(path[2], path[0]);
+    path = child == 3 ? std::array<P, 3>{bc, ca, ab} : std::array<P, 3>{ab, path[1], bc};
+  }
   ASSERT_EQ(tree.node(n).level, 12);
   const auto& v = tree.node(n).v;
   const auto& pv = tree.node(tree.node(n).parent).v;
@@ -179,10 +195,14 @@ TEST(Hierarchy, ALevelTwelveSplitStillHasExactMidpoints) {
         found = found || (b[0] == 0.5 * (bi[0] + bj[0]) && b[1] == 0.5 * (bi[1] + bj[1]));
       }
     EXPECT_TRUE(found);
-    // And the point is where those coordinates say, to rounding.
-    const Vec3 A = m.positions[0], B = m.positions[1], C = m.positions[2];
-    const Vec3 exact = A + b[0] * (B - A) + b[1] * (C - A);
-    EXPECT_LE(glm::length(tree.positions()[static_cast<size_t>(id)] - exact), 4e-16 * 2.0);
+  }
+  // And each corner is where twelve halvings in long double put it, to the
+  // rounding of one double evaluation (coordinates are below 2).
+  for (int k = 0; k < 3; ++k) {
+    const Vec3& x = tree.positions()[static_cast<size_t>(v[static_cast<size_t>(k)])];
+    const P& e = path[static_cast<size_t>(k)];
+    for (int c = 0; c < 3; ++c)
+      EXPECT_LE(std::abs(static_cast<long double>(x[c]) - e[static_cast<size_t>(c)]), 8e-16L) << "corner " << k;
   }
   // The node's area is 4^-12 of the root's.
   EXPECT_NEAR(tree.area(n) / tree.area(0), std::ldexp(1.0, -24), 1e-12 * std::ldexp(1.0, -24));
