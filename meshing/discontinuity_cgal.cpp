@@ -126,11 +126,8 @@ bool inside(const Poly& t, const Vec3& p) {
 double boundary_distance(const Poly& t, const Vec3& p) {
   double best = std::numeric_limits<double>::infinity();
   for (const auto& loop : t.loops)
-    for (size_t i = 0, n = loop.size(); i < n; ++i) {
-      const Vec3 a = loop[i], ab = loop[(i + 1) % n] - a;
-      const double s = std::clamp(glm::dot(p - a, ab) / glm::dot(ab, ab), 0.0, 1.0);
-      best = std::min(best, glm::length(p - (a + s * ab)));
-    }
+    for (size_t i = 0, n = loop.size(); i < n; ++i)
+      best = std::min(best, point_segment_distance(p, loop[i], loop[(i + 1) % n]));
   return best;
 }
 
@@ -522,11 +519,7 @@ private:
   bool near_duplicate(const DiscontinuitySegment& s, const std::vector<DiscontinuitySegment>& kept) const {
     const double tol = opt_.min_separation;
     if (!(tol > 0.0)) return false;
-    auto dist = [](const Vec3& p, const DiscontinuitySegment& k) {
-      const Vec3 ab = k.b - k.a;
-      const double t = std::clamp(glm::dot(p - k.a, ab) / glm::dot(ab, ab), 0.0, 1.0);
-      return glm::length(p - (k.a + t * ab));
-    };
+    auto dist = [](const Vec3& p, const DiscontinuitySegment& k) { return point_segment_distance(p, k.a, k.b); };
     const Vec3 mid = 0.5 * (s.a + s.b);
     for (const DiscontinuitySegment& k : kept)
       if (dist(s.a, k) <= tol && dist(s.b, k) <= tol && dist(mid, k) <= tol) return true;

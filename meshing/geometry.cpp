@@ -1,5 +1,7 @@
 #include "meshing/geometry.h"
 
+#include <algorithm>
+
 namespace radmesh {
 
 Vec3 newell_normal(const std::vector<Vec3>& loop) {
@@ -17,6 +19,12 @@ Vec3 newell_normal(const std::vector<Vec3>& loop) {
 
 double triangle_area(const Vec3& a, const Vec3& b, const Vec3& c) {
   return 0.5 * glm::length(glm::cross(b - a, c - a));
+}
+
+double point_segment_distance(const Vec3& p, const Vec3& a, const Vec3& b) {
+  const Vec3 ab = b - a;
+  const double t = std::clamp(glm::dot(p - a, ab) / std::max(glm::dot(ab, ab), 1e-300), 0.0, 1.0);
+  return glm::length(p - (a + t * ab));
 }
 
 }  // namespace radmesh

@@ -19,4 +19,7 @@ Vec3 newell_normal(const std::vector<Vec3>& loop);
 // Area of a triangle.
 double triangle_area(const Vec3& a, const Vec3& b, const Vec3& c);
 
+// Distance from p to the segment (a, b) (to a when a == b).
+double point_segment_distance(const Vec3& p, const Vec3& a, const Vec3& b);
+
 }  // namespace radmesh

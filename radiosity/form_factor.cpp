@@ -153,9 +153,7 @@ double distance_to_polygon(const Vec3& p, const std::vector<Vec3>& poly, const V
   for (size_t i = 0; i < poly.size(); ++i) {
     const Vec3& a3 = poly[i];
     const Vec3& b3 = poly[(i + 1) % poly.size()];
-    const Vec3 ab = b3 - a3;
-    const double t = std::clamp(glm::dot(p - a3, ab) / std::max(glm::dot(ab, ab), 1e-300), 0.0, 1.0);
-    edge_dist = std::min(edge_dist, glm::length(p - (a3 + t * ab)));
+    edge_dist = std::min(edge_dist, point_segment_distance(p, a3, b3));
     const double ay = glm::dot(a3 - q, v), by = glm::dot(b3 - q, v);
     const double ax = glm::dot(a3 - q, u), bx = glm::dot(b3 - q, u);
     const double cross = ax * by - bx * ay;
