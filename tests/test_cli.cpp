@@ -44,6 +44,12 @@ Result radmesh(const std::string& args) {
   return {WEXITSTATUS(rc), text};
 }
 
+// The summary.json a run wrote into `out`.
+nlohmann::json read_summary(const fs::path& out) {
+  std::ifstream in(out / "summary.json");
+  return nlohmann::json::parse(in);
+}
+
 fs::path fresh_dir(const std::string& name) {
   const fs::path d = fs::temp_directory_path() / ("radmesh_cli_" + name + "_" + std::to_string(::getpid()));
   fs::remove_all(d);
@@ -63,8 +69,7 @@ TEST(Cli, RunWritesVtuSummaryAndProbes) {
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_TRUE(fs::exists(out / "radiosity.vtu"));
   EXPECT_TRUE(fs::exists(out / "probes.csv"));
-  std::ifstream in(out / "summary.json");
-  const nlohmann::json s = nlohmann::json::parse(in);
+  const nlohmann::json s = read_summary(out);
   EXPECT_EQ(s["counts"]["patches"], 2);
   EXPECT_EQ(s["solver"]["convex_enclosure"], true);
   EXPECT_EQ(s["counts"]["rays_cast"], 0);
@@ -94,8 +99,7 @@ TEST(Cli, DefaultMethodIsHierarchicalAndMatchesHowellOnThePlates) {
   const fs::path out = fresh_dir("plates_default");
   const Result r = radmesh("run " + kData + "/parallel_plates/parallel_plates.obj --no-png -q -o " + out.string());
   ASSERT_EQ(r.status, 0) << r.err;
-  std::ifstream in(out / "summary.json");
-  const nlohmann::json s = nlohmann::json::parse(in);
+  const nlohmann::json s = read_summary(out);
   EXPECT_EQ(s["solver"]["method"], "hierarchical");
   EXPECT_EQ(s["counts"]["rays_cast"], 0);  // nothing can occlude: no shadow ray,
   EXPECT_GT(s["counts"]["rays_skipped"].get<long long>(), 0);  // and the summary says so
@@ -117,8 +121,7 @@ TEST(Cli, MeshWritesMeshAndSummary) {
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_TRUE(fs::exists(out / "mesh.vtu"));
   EXPECT_TRUE(fs::exists(out / "discontinuities.vtu"));  // the blocks' contact outlines
-  std::ifstream in(out / "summary.json");
-  const nlohmann::json s = nlohmann::json::parse(in);
+  const nlohmann::json s = read_summary(out);
   EXPECT_GE(s["mesh_quality"]["min_angle_min"].get<double>(), 20.0 - 1e-6);
   EXPECT_EQ(r.err, "");  // --quiet
   fs::remove_all(out);
@@ -127,8 +130,7 @@ TEST(Cli, MeshWritesMeshAndSummary) {
 TEST(Cli, QualityOfAHierarchicalResultCountsZeroAreaTrianglesApart) {
   const fs::path out = fresh_dir("quality_hier");
   ASSERT_EQ(radmesh("run " + kData + "/box_on_floor/box_on_floor.obj --no-png -q -o " + out.string()).status, 0);
-  std::ifstream in(out / "summary.json");
-  const nlohmann::json s = nlohmann::json::parse(in);
+  const nlohmann::json s = read_summary(out);
   const int zero = s["solver"]["zero_area_triangles"].get<int>();
   ASSERT_GT(zero, 0);
   const Result r = radmesh("quality " + (out / "radiosity.vtu").string() + " -q -o " + (out / "q").string());
@@ -167,8 +169,7 @@ TEST(Cli, MeshDefaultsToFullDiscontinuityLines) {
   const fs::path out = fresh_dir("mesh_default");
   const Result r = radmesh("mesh " + kData + "/box_on_floor/box_on_floor.obj -q -o " + out.string());
   ASSERT_EQ(r.status, 0) << r.err;
-  std::ifstream in(out / "summary.json");
-  const nlohmann::json s = nlohmann::json::parse(in);
+  const nlohmann::json s = read_summary(out);
   EXPECT_EQ(s["options"]["discontinuity"], "full");
   EXPECT_GT(s["counts"]["shadow_segments"].get<int>(), 0);
   fs::remove_all(out);
@@ -179,8 +180,7 @@ TEST(Cli, RunWithShadowLinesReportsThemAndWhatWasSkipped) {
   const Result r = radmesh("run " + kData + "/box_on_floor/box_on_floor.obj --discontinuity full --max-edge 0.5 "
                            "--no-png -q -o " + out.string());
   ASSERT_EQ(r.status, 0) << r.err;
-  std::ifstream in(out / "summary.json");
-  const nlohmann::json s = nlohmann::json::parse(in);
+  const nlohmann::json s = read_summary(out);
   EXPECT_EQ(s["options"]["discontinuity"], "full");
   EXPECT_EQ(s["counts"]["contact_segments"], 4);
   EXPECT_EQ(s["counts"]["rounding_crossings"], 0);
@@ -199,8 +199,7 @@ TEST(Cli, HierarchicalRunWritesTheRefinementSeriesWithZeroAreaFlags) {
   const Result r = radmesh("run " + kData + "/box_on_floor/box_on_floor.obj --method hierarchical --epsilon 0.01 "
                            "--export-links --no-png -q -o " + out.string());
   ASSERT_EQ(r.status, 0) << r.err;
-  std::ifstream in(out / "summary.json");
-  const nlohmann::json s = nlohmann::json::parse(in);
+  const nlohmann::json s = read_summary(out);
   EXPECT_EQ(s["solver"]["method"], "hierarchical");
   EXPECT_EQ(s["options"]["discontinuity"], "contacts");  // the hierarchical default
   const int rounds = s["solver"]["rounds"].get<int>();
