@@ -2,7 +2,7 @@
 #include "bench/plot.h"
 
 #include "io/atomic_file.h"
-#include "io/vtk_file.h"
+#include "io/vtk_render.h"
 #include "io/x_display.h"
 #include "meshing/errors.h"
 

@@ -13,7 +13,7 @@
 #include "meshing/errors.h"
 #include "radiosity/direct.h"
 #include "radiosity/error_metric.h"
-#include "radiosity/hierarchical.h"
+#include "radiosity/method.h"
 #include "radiosity/probe.h"
 #include "radiosity/solve.h"
 
@@ -28,7 +28,8 @@
 #include <iomanip>
 #include <map>
 #include <sstream>
-#include <tuple>
+#include <algorithm>
+#include <cstdlib>
 
 namespace {
 
@@ -38,15 +39,20 @@ namespace fs = std::filesystem;
 constexpr int kSamples = 2000;  // error-metric points per scene
 
 struct Settings {
-  double max_edge;  // scene units (hierarchical: the initial mesh)
+  double max_edge;  // scene units (the initial mesh)
   int rays;
   int quad_level;
   DiscontinuityMode discontinuity = DiscontinuityMode::contacts;
-  double epsilon = 0.0;  // > 0: hierarchical radiosity with this oracle epsilon
-  TVertexMode tvertex = TVertexMode::free;
-  double min_area = 0.0;  // hierarchical: smallest element area (0 = its default)
-  double baum = 0.0;      // hierarchical: Baum's criterion, relative (0 = off)
+  std::string method = "matrix";  // a name in methods()
+  OptionValues options = {};      // the method's options (the rest take defaults)
 };
+
+// "epsilon=0.001;tvertex=split": the options of a row, in the CSV and series names.
+std::string options_text(const OptionValues& o) {
+  std::string t;
+  for (const auto& [k, v] : o) t += (t.empty() ? "" : ";") + k + "=" + v;
+  return t;
+}
 
 struct Scenario {
   std::string name;
@@ -84,7 +90,7 @@ std::vector<Rgb> plates_reference(const Scene& s, const std::vector<SurfaceSampl
       r.push_back(m.emission);
       continue;
     }
-    const double f = point_polygon_form_factor(sp.x, p.normal, poly.data(), static_cast<int>(poly.size()), e.normal);
+    const double f = point_polygon_form_factor(sp.x, p.normal, poly.data(), poly.size(), e.normal);
     r.push_back(m.emission + m.reflectance * E * f);
   }
   return r;
@@ -149,19 +155,21 @@ std::vector<Scenario> scenes(const std::string& data) {
                   {70, 16, 3},
                   {45, 16, 0},
                   {45, 16, 2},
-                  // Hierarchical radiosity from 200 mm roots (epsilon > 0).
-                  {200, 16, 1, DiscontinuityMode::contacts, 0.01},
-                  {200, 16, 1, DiscontinuityMode::contacts, 0.003},
-                  {200, 16, 1, DiscontinuityMode::contacts, 0.001},
-                  {200, 16, 1, DiscontinuityMode::contacts, 0.0005},
-                  {200, 16, 1, DiscontinuityMode::contacts, 0.0002},
-                  {200, 16, 1, DiscontinuityMode::contacts, 0.0001}},
-                 {{160, 16, 1}, {120, 16, 1}, {200, 16, 1, DiscontinuityMode::contacts, 0.003}}});
+                  // Hierarchical radiosity from 200 mm roots.
+                  {200, 16, 1, DiscontinuityMode::contacts, "hierarchical", {{"epsilon", "0.01"}}},
+                  {200, 16, 1, DiscontinuityMode::contacts, "hierarchical", {{"epsilon", "0.003"}}},
+                  {200, 16, 1, DiscontinuityMode::contacts, "hierarchical", {{"epsilon", "0.001"}}},
+                  {200, 16, 1, DiscontinuityMode::contacts, "hierarchical", {{"epsilon", "0.0005"}}},
+                  {200, 16, 1, DiscontinuityMode::contacts, "hierarchical", {{"epsilon", "0.0002"}}},
+                  {200, 16, 1, DiscontinuityMode::contacts, "hierarchical", {{"epsilon", "0.0001"}}}},
+                 {{160, 16, 1},
+                  {120, 16, 1},
+                  {200, 16, 1, DiscontinuityMode::contacts, "hierarchical", {{"epsilon", "0.003"}}}}});
   return out;
 }
 
 struct Row {
-  std::string scene, method;
+  std::string scene, method;  // method: name, then the options that name a series (choices, flags)
   Settings set;
   long long elements, form_factors, rays;
   double seconds;
@@ -169,57 +177,70 @@ struct Row {
   FieldError element;   // the per-element constant field
 };
 
-// The leaves of a hierarchical solution as a plain mesh and solution (the
-// zero-area triangles carry no area, so the error metric leaves them out).
-std::pair<Mesh, Solution> leaves_only(const HierarchicalSolution& h) {
-  Mesh m;
-  m.positions = h.mesh.positions;
-  m.feature_edges = h.mesh.feature_edges;
-  Solution s;
-  s.nodal.points = h.solution.nodal.points;
-  s.nodal.source_vertex = h.solution.nodal.source_vertex;
-  s.nodal.radiosity = h.solution.nodal.radiosity;
-  s.stats = h.solution.stats;
-  for (size_t t = 0; t < h.leaf_of.size(); ++t) {
-    if (h.leaf_of[t] < 0) continue;
-    m.triangles.push_back(h.mesh.triangles[t]);
-    m.patch.push_back(h.mesh.patch[t]);
-    s.element.push_back(h.solution.element[t]);
-    s.nodal.corners.push_back(h.solution.nodal.corners[t]);
+// The series a row belongs to: its method and the options that are not
+// numbers (a choice such as tvertex=split is another curve; a number such
+// as epsilon is what a curve sweeps).
+std::string series_key(const Settings& set) {
+  std::string key = set.method;
+  for (const auto& [k, v] : set.options) {
+    char* end = nullptr;
+    std::strtod(v.c_str(), &end);
+    if (v.empty() || *end != '\0') key += " " + k + "=" + v;
   }
-  return {m, s};
+  return key;
+}
+
+// --settings EDGE:RAYS:QUAD_LEVEL[:DISCONTINUITY[:METHOD[:NAME=VALUE]...]]
+Settings parse_settings(const std::string& text) {
+  std::vector<std::string> f;
+  std::stringstream ss(text);
+  for (std::string x; std::getline(ss, x, ':');) f.push_back(x);
+  auto bad = [&](const std::string& why) {
+    return InputError("--settings '" + text + "': " + why +
+                      " (expected EDGE:RAYS:QUAD_LEVEL[:off|contacts|full[:METHOD[:NAME=VALUE]...]])");
+  };
+  if (f.size() < 3) throw bad("too few fields");
+  Settings set{};
+  try {
+    set.max_edge = std::stod(f[0]);
+    set.rays = std::stoi(f[1]);
+    set.quad_level = std::stoi(f[2]);
+  } catch (const std::exception&) {
+    throw bad("EDGE, RAYS and QUAD_LEVEL must be numbers");
+  }
+  if (f.size() > 3) set.discontinuity = parse_discontinuity_mode(f[3]);
+  if (f.size() > 4) set.method = find_method(f[4]).name;
+  for (size_t k = 5; k < f.size(); ++k) {
+    const size_t eq = f[k].find('=');
+    if (eq == std::string::npos) throw bad("'" + f[k] + "' is not NAME=VALUE");
+    std::string name = f[k].substr(0, eq);
+    std::replace(name.begin(), name.end(), '-', '_');
+    set.options[name] = f[k].substr(eq + 1);
+  }
+  // Checked now, before any run: unknown options and bad values are errors.
+  MethodOptions(find_method(set.method).options, set.options, set.method);
+  return set;
 }
 
 Row run_one(const Scenario& sc, const Scene& scene, const std::vector<SurfaceSample>& samples,
             const std::vector<Rgb>& reference, const Settings& set) {
   const auto t0 = std::chrono::steady_clock::now();
-  MeshingOptions mo;
+  const Method& method = find_method(set.method);
+  MeshingOptions mo = method.meshing(scene);
   mo.max_edge = set.max_edge;
   mo.discontinuity = set.discontinuity;
-  Mesh mesh = mesh_scene(scene, mo);
+  const Mesh mesh = mesh_scene(scene, mo);
   SolveOptions so;
   so.rays = set.rays;
   so.quadrature.max_level = set.quad_level;
-  Solution sol;
-  if (set.epsilon > 0.0) {
-    HierarchicalOptions ho;
-    ho.epsilon = set.epsilon;
-    ho.tvertex = set.tvertex;
-    ho.min_area = set.min_area;
-    ho.baum_relative = set.baum;
-    const HierarchicalSolution h = solve_hierarchical(scene, mesh, so, ho);
-    std::tie(mesh, sol) = leaves_only(h);  // stats.form_factors: the links
-  } else {
-    sol = solve_matrix(scene, mesh, so);
-  }
+  const MethodResult r = run_method(method, scene, mesh, so, set.options);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  const std::vector<Rgb> values = interpolate_nodal(scene, mesh, sol.nodal, samples);
-  const std::vector<Rgb> flat = element_values(scene, mesh, sol.element, samples);
+  const Solution& sol = r.solution;
+  const std::vector<Rgb> values = interpolate_nodal(scene, r.mesh, sol.nodal, samples);
+  const std::vector<Rgb> flat = element_values(scene, r.mesh, sol.element, samples);
   const auto ref = reflected_part(scene, samples, reference);
-  const std::string method = set.epsilon > 0.0
-                                 ? std::string(set.tvertex == TVertexMode::split ? "hier-split" : "hierarchical")
-                                 : std::string("matrix");
-  return {sc.name, method + "/" + to_string(set.discontinuity), set, mesh.triangle_count(), sol.stats.form_factors, sol.stats.rays_cast, seconds,
+  return {sc.name, series_key(set) + "/" + to_string(set.discontinuity), set, sol.stats.elements,
+          sol.stats.form_factors, sol.stats.rays_cast, seconds,
           field_error(samples, reflected_part(scene, samples, values), ref),
           field_error(samples, reflected_part(scene, samples, flat), ref)};
 }
@@ -356,9 +377,9 @@ int main(int argc, char** argv) {
   std::vector<std::string> custom;
   app.add_option("--settings", custom,
                  "run these settings instead of the sweep: "
-                 "EDGE:RAYS:QUAD_LEVEL[:off|contacts|full[:EPSILON[:free|anchor|split[:MIN_AREA[:BAUM]]]]] (repeatable; "
-                 "an EPSILON > 0 solves with hierarchical radiosity from a mesh of that EDGE, with that T-vertex "
-                 "mode, smallest element area (0 = default) and Baum tolerance (0 = off))");
+                 "EDGE:RAYS:QUAD_LEVEL[:off|contacts|full[:METHOD[:NAME=VALUE]...]] (repeatable; METHOD a "
+                 "method of radmesh run --method, default matrix; NAME=VALUE its options as in radmesh run, "
+                 "e.g. 200:16:1:contacts:hierarchical:epsilon=0.001:tvertex=anchor)");
   app.add_flag("--make-reference", reference, "compute data/cornell_box/reference.csv and exit");
   app.add_flag("--direct", direct,
                "meshing study instead: direct light only, exact at the triangle corners, for discontinuity "
@@ -387,17 +408,7 @@ int main(int argc, char** argv) {
       std::vector<Settings> sweep = quick ? sc.quick : sc.sweep;
       if (!custom.empty()) {
         sweep.clear();
-        for (const std::string& c : custom) {
-          Settings set{};
-          char mode[16] = "contacts", tv[16] = "free";
-          if (std::sscanf(c.c_str(), "%lf:%d:%d:%15[a-z]:%lf:%15[a-z]:%lf:%lf", &set.max_edge, &set.rays, &set.quad_level,
-                          mode, &set.epsilon, tv, &set.min_area, &set.baum) < 3)
-            throw InputError("--settings '" + c +
-                             "': expected EDGE:RAYS:QUAD_LEVEL[:off|contacts|full[:EPSILON[:anchor|free|split[:MIN_AREA[:BAUM]]]]]");
-          set.discontinuity = parse_discontinuity_mode(mode);
-          set.tvertex = parse_tvertex_mode(tv);
-          sweep.push_back(set);
-        }
+        for (const std::string& c : custom) sweep.push_back(parse_settings(c));
       }
       for (const Settings& set : sweep) {
         const Row r = run_one(sc, scene, samples, ref, set);
@@ -406,7 +417,8 @@ int main(int argc, char** argv) {
                      r.err.linf, r.err.patch_mean,
                      r.element.patch_mean, (r.err.worst_patch >= 0 ? scene.patches[static_cast<size_t>(r.err.worst_patch)].name + " #" + std::to_string(r.err.worst_patch) : std::string("-")).c_str());
         rows.push_back(r);
-        if (set.rays == 16 && set.quad_level == 1 && set.discontinuity == DiscontinuityMode::off) {
+        if (set.rays == 16 && set.quad_level == 1 && set.discontinuity == DiscontinuityMode::off &&
+            set.method == "matrix") {
           l2_off.x.push_back(r.seconds);
           l2_off.y.push_back(r.err.l2);
         } else if (set.rays == 16 && set.quad_level == 1) {
@@ -431,14 +443,12 @@ int main(int argc, char** argv) {
     const std::string csv = (fs::path(out_dir) / "bench.csv").string();
     write_file_atomically(csv, [&](std::ostream& out) {
       out << "scene,method,discontinuity,max_edge,rays,quad_level,elements,form_factors,rays_cast,wall_s,l2,linf,patch_mean,"
-             "element_l2,element_patch_mean,epsilon,tvertex\n";
+             "element_l2,element_patch_mean,options\n";
       for (const Row& r : rows)
-        out << r.scene << ',' << (r.set.epsilon > 0.0 ? "hierarchical" : "matrix") << ',' << to_string(r.set.discontinuity) << ',' << r.set.max_edge << ',' << r.set.rays << ',' << r.set.quad_level
-            << ',' << r.elements << ',' << r.form_factors << ',' << r.rays << ',' << r.seconds << ',' << r.err.l2
-            << ',' << r.err.linf << ',' << r.err.patch_mean << ',' << r.element.l2 << ',' << r.element.patch_mean
-            << ',' << r.set.epsilon << ','
-            << (r.set.epsilon > 0.0 ? to_string(r.set.tvertex) : "")
-            << '\n';
+        out << r.scene << ',' << r.set.method << ',' << to_string(r.set.discontinuity) << ',' << r.set.max_edge << ','
+            << r.set.rays << ',' << r.set.quad_level << ',' << r.elements << ',' << r.form_factors << ',' << r.rays << ','
+            << r.seconds << ',' << r.err.l2 << ',' << r.err.linf << ',' << r.err.patch_mean << ',' << r.element.l2 << ','
+            << r.element.patch_mean << ',' << options_text(r.set.options) << '\n';
     });
     std::printf("%s\n", csv.c_str());
     std::string why;

@@ -1,6 +1,6 @@
 #include "io/histogram.h"
 
-#include "io/vtk_file.h"
+#include "io/vtk_render.h"
 #include "io/x_display.h"
 
 #include <vtkAxis.h>

@@ -2,7 +2,7 @@
 #include "io/png_render.h"
 
 #include "io/atomic_file.h"
-#include "io/vtk_file.h"
+#include "io/vtk_render.h"
 #include "io/x_display.h"
 #include "meshing/errors.h"
 

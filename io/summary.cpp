@@ -1,9 +1,11 @@
 #include "io/summary.h"
 
 #include "io/atomic_file.h"
+#include "radmesh_version.h"
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 
 namespace radmesh {
 
@@ -28,10 +30,11 @@ std::vector<Rgb> patch_mean_radiosity(const Scene& scene, const Mesh& mesh, cons
 }
 
 nlohmann::json make_summary(const RunInfo& info, const Scene& scene, const Mesh& mesh,
-                            const TriangleQuality& quality, const Solution* solution) {
+                            const TriangleQuality& quality, const MethodResult* result) {
+  const Solution* solution = result ? &result->solution : nullptr;
   using nlohmann::json;
   json doc;
-  doc["radmesh_version"] = "0.1.0";
+  doc["radmesh_version"] = RADMESH_VERSION;
   doc["command"] = info.command;
   doc["scene"] = info.scene_path;
   doc["options"] = {{"max_edge", info.meshing.max_edge},
@@ -112,12 +115,26 @@ nlohmann::json make_summary(const RunInfo& info, const Scene& scene, const Mesh&
     doc["counts"]["rays_cast"] = st.rays_cast;
     doc["counts"]["rays_skipped"] = st.rays_skipped;
     doc["counts"]["pairs_unoccludable"] = st.pairs_unoccludable;
-    doc["solver"] = {{"method", info.method},
-                     {"channels_solved", st.channels_solved},
-                     {"iterations", st.iterations},
-                     {"residual", st.residual},
-                     {"convex_enclosure", st.convex_enclosure}};
-    for (const auto& [k, v] : info.solver_extra.items()) doc["solver"][k] = v;
+    doc["solver"] = {{"method", info.method}, {"residual", st.residual}, {"convex_enclosure", st.convex_enclosure}};
+    for (const auto& [name, text] : info.method_options) {
+      // Numbers as numbers, the rest (choices, flags) as written.
+      char* end = nullptr;
+      const double v = std::strtod(text.c_str(), &end);
+      if (!text.empty() && *end == '\0' && std::isfinite(v))
+        doc["solver"][name] = v;
+      else if (text == "true" || text == "false")
+        doc["solver"][name] = text == "true";
+      else
+        doc["solver"][name] = text;
+    }
+    json units = json::object();
+    for (const Counter& c : result->counters) {
+      json values = json::array();
+      for (double v : c.values) values.push_back(c.integral ? json(static_cast<long long>(v)) : json(v));
+      doc["solver"][c.name] = c.series ? values : values.at(0);
+      if (!c.unit.empty()) units[c.name] = c.unit;
+    }
+    if (!units.empty()) doc["solver"]["units"] = units;
     const Rgb imbalance = st.power_emitted - st.power_absorbed - st.power_escaped;
     Rgb rel(0.0);
     for (int c = 0; c < 3; ++c)

@@ -3,6 +3,7 @@
 
 #include "meshing/mesh.h"
 #include "meshing/scene.h"
+#include "radiosity/method.h"
 #include "radiosity/solution.h"
 #include "radiosity/solve.h"
 
@@ -21,16 +22,19 @@ struct RunInfo {
   SolveOptions solve;
   MeshReport mesh_report;
   std::vector<std::pair<std::string, double>> seconds;  // phase -> wall seconds, in order
-  std::string method = "matrix";  // the solver
-  nlohmann::json solver_extra = nlohmann::json::object();  // merged into "solver"
+  std::string method = "none";  // the solver (methods() name), "none" for mesh only
+  std::vector<std::pair<std::string, std::string>> method_options;  // MethodOptions::items()
 };
 
 // Per patch: area-weighted mean of the element radiosity.
 std::vector<Rgb> patch_mean_radiosity(const Scene& scene, const Mesh& mesh, const std::vector<Rgb>& element);
 
-// The summary document; `solution` may be null (mesh only).
+// The summary document; `result` may be null (mesh only). The "solver"
+// object holds the method's name, the common solve counts, every option of
+// the method (as given or its default) and every counter it published
+// (units, where a counter has one, in "solver.units").
 nlohmann::json make_summary(const RunInfo& info, const Scene& scene, const Mesh& mesh,
-                            const TriangleQuality& quality, const Solution* solution);
+                            const TriangleQuality& quality, const MethodResult* result);
 
 // quality.csv: one row per patch and a total row (patch_id -1, name "total"):
 // patch_id,name,triangles,min_angle,max_angle,aspect_p50,aspect_p95,aspect_max,

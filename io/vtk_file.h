@@ -11,14 +11,6 @@
 #include <vtkErrorCode.h>
 #include <vtkExecutive.h>
 #include <vtkNew.h>
-#include <vtkPNGWriter.h>
-#include <vtkContextItem.h>
-#include <vtkContextScene.h>
-#include <vtkContextView.h>
-#include <vtkRenderWindow.h>
-#include <vtkRenderer.h>
-#include <vtkUnsignedCharArray.h>
-#include <vtkWindowToImageFilter.h>
 
 #include "io/atomic_file.h"
 
@@ -70,39 +62,6 @@ void run_vtk_writer(Writer* writer, const std::string& path) {
   writer->RemoveObservers(vtkCommand::ErrorEvent);
   writer->GetExecutive()->RemoveObservers(vtkCommand::ErrorEvent);
   if (!why.empty()) throw IoError(path + ": " + why);
-}
-
-// Renders nothing itself: grabs what `window` shows (after its Render()) and
-// writes it as a PNG to `path`, atomically. Throws IoError.
-inline void write_window_png(vtkRenderWindow* window, const std::string& path) {
-  vtkNew<vtkWindowToImageFilter> grab;
-  grab->SetInput(window);
-  grab->SetInputBufferTypeToRGB();
-  grab->ReadFrontBufferOff();
-  vtkNew<vtkPNGWriter> writer;
-  writer->SetInputConnection(grab->GetOutputPort());
-  writer->WriteToMemoryOn();
-  run_vtk_writer(writer.Get(), path);
-  vtkUnsignedCharArray* bytes = writer->GetResult();
-  write_file_atomically(path, [bytes](std::ostream& out) {
-    out.write(reinterpret_cast<const char*>(bytes->GetPointer(0)),
-              static_cast<std::streamsize>(bytes->GetNumberOfValues()));
-  });
-}
-
-// Renders a chart off screen on `display` (an XConnection's Display*) at
-// width x height on white, and writes it as a PNG to `path`. Throws IoError.
-inline void write_chart_png(vtkContextItem* chart, void* display, int width, int height, const std::string& path) {
-  vtkNew<vtkRenderWindow> window;
-  window->SetDisplayId(display);
-  window->SetOffScreenRendering(1);
-  window->SetSize(width, height);
-  vtkNew<vtkContextView> view;
-  view->SetRenderWindow(window);
-  view->GetRenderer()->SetBackground(1.0, 1.0, 1.0);
-  view->GetScene()->AddItem(chart);
-  window->Render();
-  write_window_png(window, path);
 }
 
 }  // namespace radmesh::io_detail

@@ -5,6 +5,7 @@
 #include "meshing/discontinuity.h"
 #include "meshing/mesh.h"
 #include "meshing/scene.h"
+#include "radiosity/method.h"
 #include "radiosity/solution.h"
 
 #include <array>
@@ -37,14 +38,10 @@ void write_pvd(const std::string& path, const std::vector<std::string>& files);
 // patch that causes it: the touching patch or the occluder).
 void write_discontinuities_vtu(const std::string& path, const std::vector<DiscontinuitySegment>& segments);
 
-// Line segments with per-segment integer and real fields (cell data), as
-// VTK_LINE cells: links of hierarchical radiosity. Every field must have one
-// value per segment; real values must be finite. Atomic; throws IoError.
-struct LineSet {
-  std::vector<std::array<Vec3, 2>> segments;
-  std::vector<std::pair<std::string, std::vector<int>>> int_fields;
-  std::vector<std::pair<std::string, std::vector<double>>> real_fields;
-};
+// Line segments with per-segment integer and real fields (cell data, see
+// LineSet in radiosity/method.h), as VTK_LINE cells: links of hierarchical
+// radiosity. Every field must have one value per segment; real values must be
+// finite. Atomic; throws IoError.
 void write_lines_vtu(const std::string& path, const LineSet& lines);
 
 // Reads back a mesh written by write_mesh_vtu or write_vtu (points, triangles,

@@ -5,6 +5,7 @@
 #include "radiosity/direct.h"
 
 #include "meshing/errors.h"
+#include "radiosity/form_factor.h"
 
 #include <CGAL/Boolean_set_operations_2.h>
 #include <CGAL/Exact_predicates_exact_constructions_kernel.h>
@@ -29,30 +30,6 @@ using PolygonWithHoles2 = CGAL::Polygon_with_holes_2<EK>;
 using PolygonSet2 = CGAL::Polygon_set_2<EK>;
 
 Point3 exact(const Vec3& p) { return Point3(p.x, p.y, p.z); }
-
-// Signed Lambert contour sum of one loop, clipped to x's tangent half-space
-// (Sutherland-Hodgman; regions add up, so loops of a polygon with holes can be
-// clipped one by one). Divided by 2 pi and made positive at the end.
-double contour(const Vec3& x, const Vec3& n, const std::vector<Vec3>& loop) {
-  std::vector<Vec3> c;
-  const size_t m = loop.size();
-  for (size_t i = 0; i < m; ++i) {
-    const Vec3& a = loop[i];
-    const Vec3& b = loop[(i + 1) % m];
-    const double da = glm::dot(n, a - x), db = glm::dot(n, b - x);
-    if (da >= 0.0) c.push_back(a);
-    if ((da >= 0.0) != (db >= 0.0)) c.push_back(a + (b - a) * (da / (da - db)));
-  }
-  double sum = 0.0;
-  for (size_t i = 0; i < c.size(); ++i) {
-    const Vec3 r0 = c[i] - x, r1 = c[(i + 1) % c.size()] - x;
-    const Vec3 cr = glm::cross(r0, r1);
-    const double s = glm::length(cr);
-    if (s <= 0.0) continue;
-    sum += std::atan2(s, glm::dot(r0, r1)) * glm::dot(n, cr) / s;
-  }
-  return sum;
-}
 
 struct Emitter {
   int patch = -1;
@@ -186,8 +163,12 @@ struct DirectIllumination::Impl {
       return out;
     };
     for (const PolygonWithHoles2& part : parts) {
-      sum += contour(x, n, loop3(part.outer_boundary()));
-      for (auto h = part.holes_begin(); h != part.holes_end(); ++h) sum += contour(x, n, loop3(*h));
+      const std::vector<Vec3> outer = loop3(part.outer_boundary());
+      sum += lambert_contour_sum(x, n, outer.data(), outer.size());
+      for (auto h = part.holes_begin(); h != part.holes_end(); ++h) {
+        const std::vector<Vec3> hole = loop3(*h);
+        sum += lambert_contour_sum(x, n, hole.data(), hole.size());
+      }
     }
     return std::abs(sum) / (2.0 * std::numbers::pi);
   }

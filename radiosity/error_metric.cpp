@@ -45,7 +45,9 @@ struct Location {
 // The mesh triangle of each sample's patch that contains it.
 std::vector<Location> locate(const Scene& scene, const Mesh& mesh, const std::vector<SurfaceSample>& samples) {
   std::vector<std::vector<int>> by_patch(scene.patches.size());
-  for (int t = 0; t < mesh.triangle_count(); ++t) by_patch[static_cast<size_t>(mesh.patch[static_cast<size_t>(t)])].push_back(t);
+  for (int t = 0; t < mesh.triangle_count(); ++t)
+    if (!mesh.zero_area(t))  // no area, so no sample lies on it (its corners are a leaf's)
+      by_patch[static_cast<size_t>(mesh.patch[static_cast<size_t>(t)])].push_back(t);
   std::vector<Location> out(samples.size());
   for (size_t k = 0; k < samples.size(); ++k) {
     const SurfaceSample& s = samples[k];

@@ -7,42 +7,47 @@
 
 namespace radmesh {
 
-namespace {
-
-// Clips a polygon to the half-space dot(n, p - x) >= 0 (Sutherland-Hodgman).
-int clip_to_plane(const Vec3* in, int count, const Vec3& x, const Vec3& n, Vec3* out) {
-  int m = 0;
-  for (int i = 0; i < count; ++i) {
-    const Vec3& a = in[i];
-    const Vec3& b = in[(i + 1) % count];
-    const double da = glm::dot(n, a - x);
-    const double db = glm::dot(n, b - x);
-    if (da >= 0.0) out[m++] = a;
-    if ((da >= 0.0) != (db >= 0.0)) out[m++] = a + (b - a) * (da / (da - db));
-  }
-  return m;
-}
-
-}  // namespace
-
-double point_polygon_form_factor(const Vec3& x, const Vec3& n, const Vec3* pts, int count,
-                                 const Vec3& poly_normal) {
-  // The source emits from its front only.
-  if (glm::dot(x - pts[0], poly_normal) <= 0.0) return 0.0;
-  Vec3 clipped[40];
-  const int m = clip_to_plane(pts, std::min(count, 32), x, n, clipped);
-  if (m < 3) return 0.0;
+double lambert_contour_sum(const Vec3& x, const Vec3& n, const Vec3* pts, size_t count) {
+  // Sutherland-Hodgman clipping to the half-space dot(n, p - x) >= 0, with
+  // the clipped loop streamed into the contour sum instead of stored: no
+  // limit on the vertex count and no allocation. Edges are summed in the
+  // order of the clipped loop, the closing edge last.
   double sum = 0.0;
-  for (int i = 0; i < m; ++i) {
-    const Vec3 r0 = clipped[i] - x;
-    const Vec3 r1 = clipped[(i + 1) % m] - x;
+  size_t emitted = 0;
+  Vec3 first{0.0}, prev{0.0};
+  auto edge = [&](const Vec3& a, const Vec3& b) {
+    const Vec3 r0 = a - x, r1 = b - x;
     const Vec3 c = glm::cross(r0, r1);
     const double s = glm::length(c);
-    if (s <= 0.0) continue;  // edge seen end-on: contributes nothing
-    const double angle = std::atan2(s, glm::dot(r0, r1));
-    sum += angle * glm::dot(n, c) / s;
+    if (s <= 0.0) return;  // edge seen end-on: contributes nothing
+    sum += std::atan2(s, glm::dot(r0, r1)) * glm::dot(n, c) / s;
+  };
+  auto emit = [&](const Vec3& p) {
+    if (emitted == 0)
+      first = p;
+    else
+      edge(prev, p);
+    prev = p;
+    ++emitted;
+  };
+  for (size_t i = 0; i < count; ++i) {
+    const Vec3& a = pts[i];
+    const Vec3& b = pts[i + 1 == count ? 0 : i + 1];
+    const double da = glm::dot(n, a - x);
+    const double db = glm::dot(n, b - x);
+    if (da >= 0.0) emit(a);
+    if ((da >= 0.0) != (db >= 0.0)) emit(a + (b - a) * (da / (da - db)));
   }
-  return std::abs(sum) / (2.0 * std::numbers::pi);
+  if (emitted < 3) return 0.0;
+  edge(prev, first);
+  return sum;
+}
+
+double point_polygon_form_factor(const Vec3& x, const Vec3& n, const Vec3* pts, size_t count,
+                                 const Vec3& poly_normal) {
+  // The source emits from its front only.
+  if (count < 3 || glm::dot(x - pts[0], poly_normal) <= 0.0) return 0.0;
+  return std::abs(lambert_contour_sum(x, n, pts, count)) / (2.0 * std::numbers::pi);
 }
 
 Triangle make_triangle(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& normal) {

@@ -10,12 +10,21 @@
 
 namespace radmesh {
 
+// Lambert's contour sum of one closed loop of vertices pts[0..count), any
+// count, clipped to the half-space in front of x's tangent plane (unit
+// normal n): sum over the clipped loop's edges of the angle the edge
+// subtends at x times the n-component of the edge plane's unit normal. Its
+// absolute value over 2 pi is the form factor from x to a planar polygon.
+// Signed (the sign follows the loop's orientation), so that the loops of a
+// polygon with holes can be summed one by one.
+double lambert_contour_sum(const Vec3& x, const Vec3& n, const Vec3* pts, size_t count);
+
 // Unoccluded form factor from a differential area at x with unit normal n to
-// a planar polygon (vertices pts[0..count), count <= 32) with unit normal
+// a planar polygon (vertices pts[0..count), any count) with unit normal
 // `poly_normal`. Only the front of the polygon (the side its normal points
 // to) emits; the part of the polygon behind x's tangent plane is clipped
 // away. Exact (Lambert's contour integral).
-double point_polygon_form_factor(const Vec3& x, const Vec3& n, const Vec3* pts, int count,
+double point_polygon_form_factor(const Vec3& x, const Vec3& n, const Vec3* pts, size_t count,
                                  const Vec3& poly_normal);
 
 // A flat triangle with its unit normal, area and radius (made by make_triangle,

@@ -4,12 +4,9 @@
 
 #include "meshing/errors.h"
 #include "radiosity/form_factor.h"
-#include "radiosity/occlusion.h"
-#include "radiosity/sampling.h"
-#include "radiosity/visibility.h"
+#include "radiosity/transport.h"
 
 #include <tbb/blocked_range.h>
-#include <tbb/global_control.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -17,7 +14,6 @@
 #include <cmath>
 #include <string>
 #include <limits>
-#include <optional>
 #include <set>
 #include <unordered_map>
 
@@ -29,11 +25,6 @@ double seconds_since(std::chrono::steady_clock::time_point t) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
 }
 double max3(const Rgb& c) { return std::max({c.x, c.y, c.z}); }
-
-// Shadow rays of one node pair: cast, or skipped because nothing can occlude.
-struct RayCount {
-  long long cast = 0, skipped = 0;
-};
 
 struct Link {
   int source = -1;
@@ -47,13 +38,12 @@ class Solver {
 public:
   // `out.tree` holds the roots (the initial mesh) on entry.
   Solver(const Scene& scene, const SolveOptions& opt, const HierarchicalOptions& hopt, HierarchicalSolution& out)
-      : scene_(scene), opt_(opt), hopt_(hopt), out_(out), visibility_(scene), occlusion_(scene) {
+      : scene_(scene), opt_(opt), hopt_(hopt), out_(out), visibility_(scene, opt.rays) {
     limit_ = memory_limit_bytes(opt);
     min_area_ = hopt.min_area > 0.0 ? hopt.min_area : 0.5 * std::pow(scene.diagonal() / 150.0, 2);
     out_.stats.min_area = min_area_;
     for (const Material& m : scene.materials) max_emission_ = std::max(max_emission_, max3(m.emission));
     scale_ = max_emission_;
-    side_ = strata_side(opt.rays);
     quadrature_ = opt.quadrature;
     quadrature_.max_level = std::max(quadrature_.max_level, 3);  // links of near elements: one link, many points
     grow();
@@ -71,7 +61,7 @@ public:
     double facing_pairs = 0.0;
     for (size_t a = 0; a < per_patch.size(); ++a)
       for (size_t b = 0; b < per_patch.size(); ++b)
-        if (a != b && occlusion_.facing(static_cast<int>(a), static_cast<int>(b)))
+        if (a != b && visibility_.facing(static_cast<int>(a), static_cast<int>(b)))
           facing_pairs += static_cast<double>(per_patch[a]) * static_cast<double>(per_patch[b]);
     if (facing_pairs * kLinkBytes > limit_)
       throw NumericalError(scene_.source + ": " + std::to_string(tree.root_count()) + " initial elements make " +
@@ -83,7 +73,7 @@ public:
     std::vector<std::pair<int, int>> pairs;
     for (int p = 0; p < tree.root_count(); ++p) {
       for (int q = 0; q < tree.root_count(); ++q)
-        if (p != q && occlusion_.facing(node_patch(p), node_patch(q))) pairs.emplace_back(p, q);
+        if (p != q && visibility_.facing(node_patch(p), node_patch(q))) pairs.emplace_back(p, q);
       if (pairs.size() >= (1u << 20) || p + 1 == tree.root_count()) {
         link_pairs(std::move(pairs));
         pairs.clear();
@@ -139,17 +129,12 @@ private:
   void grow() {
     const size_t n = out_.tree.nodes().size();
     while (tri_.size() < n) {
-      const int k = static_cast<int>(tri_.size());
-      const auto& node = out_.tree.node(k);
+      const auto& node = out_.tree.node(static_cast<int>(tri_.size()));
       const auto& pos = out_.tree.positions();
-      tri_.push_back(make_triangle(pos[static_cast<size_t>(node.v[0])], pos[static_cast<size_t>(node.v[1])],
-                                   pos[static_cast<size_t>(node.v[2])],
-                                   scene_.patches[static_cast<size_t>(node.patch)].normal));
-      const Material& m = scene_.materials[static_cast<size_t>(scene_.patches[static_cast<size_t>(node.patch)].material)];
-      rho_.push_back(m.reflectance);
-      emit_.push_back(m.emission);
+      el_.add(scene_, node.patch, pos[static_cast<size_t>(node.v[0])], pos[static_cast<size_t>(node.v[1])],
+              pos[static_cast<size_t>(node.v[2])]);
       // A new node starts from its parent's radiosity (or its emission).
-      B_.push_back(node.parent >= 0 ? B_[static_cast<size_t>(node.parent)] : m.emission);
+      B_.push_back(node.parent >= 0 ? B_[static_cast<size_t>(node.parent)] : emit_.back());
       links_.emplace_back();
       dirty_.push_back(1);
     }
@@ -196,32 +181,6 @@ private:
 
   bool splittable(int n) const { return tri_[static_cast<size_t>(n)].area > 4.0 * min_area_; }
 
-  // Visible fraction of the segments between stratified points of p and q.
-  // Thread-safe; counts the rays in `rays`.
-  double visible_fraction(int p, int q, RayCount& rays) const {
-    const Triangle& a = tri_[static_cast<size_t>(p)];
-    const Triangle& b = tri_[static_cast<size_t>(q)];
-    if (occlusion_.convex_enclosure() || !occlusion_.may_occlude(node_patch(p), node_patch(q), a, b)) {
-      rays.skipped += static_cast<long long>(side_) * side_;
-      return 1.0;
-    }
-    SplitMix rng(pair_seed(static_cast<uint64_t>(std::min(p, q)), static_cast<uint64_t>(std::max(p, q))));
-    int open = 0, total = 0;
-    for (int i = 0; i < side_; ++i)
-      for (int j = 0; j < side_; ++j) {
-        const double u = (i + rng.uniform()) / side_, v = (j + rng.uniform()) / side_;
-        const Vec3 x = triangle_point(a.v[0], a.v[1], a.v[2], u, v);
-        // Drawn in a fixed order (the order of evaluating function arguments
-        // is unspecified): the same rays whatever the compiler.
-        const double sv = rng.uniform(), su = rng.uniform();
-        const Vec3 y = triangle_point(b.v[0], b.v[1], b.v[2], su, sv);
-        open += visibility_.visible(x, y, node_patch(p), node_patch(q)) ? 1 : 0;
-        ++total;
-      }
-    rays.cast += total;
-    return static_cast<double>(open) / total;
-  }
-
   // F(p -> q) without occlusion, from points on p graded toward q.
   double form_factor_to(int p, int q) const {
     const Triangle& a = tri_[static_cast<size_t>(p)];
@@ -248,7 +207,9 @@ private:
           l.source = q;
           l.f = form_factor_to(p, q);
           if (l.f <= 0.0) continue;
-          l.visible = visible_fraction(p, q, rays[i]);
+          l.visible = visibility_.visible_fraction(tri_[static_cast<size_t>(p)], node_patch(p), static_cast<uint64_t>(p),
+                                                   tri_[static_cast<size_t>(q)], node_patch(q), static_cast<uint64_t>(q),
+                                                   rays[i]);
           l.spread = spread(p, q, l.f);
         }
       });
@@ -258,7 +219,7 @@ private:
         ++out_.stats.links_examined;
         out_.stats.rays_cast += rays[i].cast;
         out_.stats.rays_skipped += rays[i].skipped;
-        if (rays[i].skipped > 0) ++out_.stats.pairs_unoccludable;
+        out_.stats.pairs_unoccludable += rays[i].unoccludable;
         const Link& l = ev[i];
         if (!std::isfinite(l.f) || !std::isfinite(l.spread))
           throw NumericalError(scene_.source + ": link from node " + std::to_string(l.source) + " to node " +
@@ -581,35 +542,29 @@ private:
     st.elements = o.stats.leaves;
     o.stats.row_sum_min = 1e300;
     o.stats.row_sum_max = -1e300;
-    Rgb worst(0.0), largest(0.0);
+    BalanceAccumulator balance;
     for (size_t p = 0; p < B_.size(); ++p) {
       if (!o.tree.is_leaf(static_cast<int>(p))) continue;
       o.stats.row_sum_min = std::min(o.stats.row_sum_min, F_sum_[p]);
       o.stats.row_sum_max = std::max(o.stats.row_sum_max, F_sum_[p]);
-      const double a = tri_[p].area;
-      st.power_emitted += emit_[p] * a;
-      st.power_absorbed += (Rgb(1.0) - rho_[p]) * H_[p] * a;
-      st.power_escaped += B_[p] * a * (1.0 - F_sum_[p]);
-      worst = glm::max(worst, glm::abs(emit_[p] + rho_[p] * H_[p] - B_[p]));
-      largest = glm::max(largest, glm::abs(B_[p]));
+      balance.add(tri_[p].area, rho_[p], emit_[p], B_[p], H_[p], F_sum_[p]);
     }
-    for (int c = 0; c < 3; ++c) {
-      st.residual[static_cast<size_t>(c)] = largest[c] > 0.0 ? worst[c] / largest[c] : 0.0;
-      st.iterations[static_cast<size_t>(c)] = o.stats.sweeps;
-    }
+    balance.finish(st);
     st.rays_cast = o.stats.rays_cast;
     st.rays_skipped = o.stats.rays_skipped;
     st.pairs_unoccludable = o.stats.pairs_unoccludable;
+    st.convex_enclosure = visibility_.convex_enclosure();
     st.form_factors = count_links();
-    st.channels_solved = 3;
+    st.seconds_form_factors = o.stats.seconds_link;
+    st.seconds_solve = o.stats.seconds_solve;
+    report_visibility_skips(st, "node");
   }
 
   const Scene& scene_;
   const SolveOptions& opt_;
   HierarchicalOptions hopt_;
   HierarchicalSolution& out_;
-  Visibility visibility_;
-  Occlusion occlusion_;
+  VisibilityEstimator visibility_;
   double min_area_ = 0.0, max_emission_ = 0.0;
   double limit_ = 0.0;          // memory limit, bytes
   // A link's memory: the Link in its receiver's list, with the vector's slack.
@@ -620,9 +575,11 @@ private:
   // the last solve, so that a small bright lamp does not set the scale.
   double scale_ = 0.0;
   QuadratureOptions quadrature_;
-  int side_ = 4;
-  std::vector<Triangle> tri_;
-  std::vector<Rgb> rho_, emit_, B_, H_;
+  ElementSet el_;  // per tree node
+  std::vector<Triangle>& tri_ = el_.triangle;
+  std::vector<Rgb>& rho_ = el_.reflectance;
+  std::vector<Rgb>& emit_ = el_.emission;
+  std::vector<Rgb> B_, H_;
   std::vector<double> F_sum_;
   std::vector<std::vector<std::pair<int, double>>> terms_;  // per leaf: (source node, F x visibility at the leaf)
   std::vector<std::vector<Link>> links_;  // per receiver node
@@ -661,12 +618,11 @@ HierarchicalSolution solve_hierarchical(const Scene& scene, const Mesh& initial,
     throw InputError("minimum element area (--min-area) " + format_number(hopt.min_area) +
                      " is below 1e-8 of the scene diagonal squared (" + format_number(diag2) +
                      "): refinement to it would not end in time or memory");
-  std::optional<tbb::global_control> threads;
-  if (options.threads > 0)
-    threads.emplace(tbb::global_control::max_allowed_parallelism, static_cast<size_t>(options.threads));
   HierarchicalSolution out{ElementTree(initial), {}, {}, {}, {}, {}, {}, {}};
-  Solver solver(scene, options, hopt, out);
-  solver.run(on_round);
+  run_in_arena(options.threads, [&] {
+    Solver solver(scene, options, hopt, out);
+    solver.run(on_round);
+  });
   return out;
 }
 

@@ -1,26 +1,20 @@
 // The classic full-matrix radiosity solve.
 
 #include "meshing/errors.h"
-#include "radiosity/occlusion.h"
-#include "radiosity/sampling.h"
 #include "radiosity/solve.h"
-#include "radiosity/visibility.h"
+#include "radiosity/transport.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/combinable.h>
-#include <tbb/global_control.h>
 #include <tbb/parallel_for.h>
 
 #include <unistd.h>
 
 #include <algorithm>
-#include <atomic>
 #include <chrono>
+#include <cmath>
 #include <functional>
 #include <limits>
-#include <cmath>
-#include <numeric>
-#include <optional>
 #include <sstream>
 
 namespace radmesh {
@@ -39,54 +33,17 @@ double physical_memory_bytes() {
 }
 
 struct Counters {
-  long long form_factors = 0, zero_pairs = 0, rays_cast = 0, rays_skipped = 0, unoccludable = 0,
-            receiver_points = 0;
+  long long form_factors = 0, zero_pairs = 0, receiver_points = 0;
+  RayCount rays;
 };
 
-}  // namespace
-
-double matrix_bytes(long long n) { return static_cast<double>(n) * static_cast<double>(n) * 8.0; }
-
-void check_solve_options(const SolveOptions& o) {
-  auto bad = [](const std::string& what, double v, const std::string& range) {
-    std::ostringstream m;
-    m << what << " " << v << " is out of range: " << range;
-    throw InputError(m.str());
-  };
-  if (!(o.tolerance > 0.0 && o.tolerance < 1.0)) bad("--tolerance", o.tolerance, "(0, 1)");
-  if (o.max_iterations < 1) bad("max_iterations", o.max_iterations, ">= 1");
-  if (o.threads < 0) bad("--threads", o.threads, ">= 0 (0 = all cores)");
-  if (o.rays < 1 || o.rays > 4096) bad("--rays", o.rays, "[1, 4096]");
-  if (!(o.quadrature.closeness > 0.0)) bad("closeness", o.quadrature.closeness, "> 0");
-  if (o.quadrature.max_level < 0 || o.quadrature.max_level > 10)
-    bad("max_level", o.quadrature.max_level, "[0, 10]");
-  if (!(o.max_memory_gb >= 0.0)) bad("--max-memory", o.max_memory_gb, ">= 0 GiB");
-  if (!(o.crease_angle >= 0.0 && o.crease_angle <= 180.0)) bad("crease_angle", o.crease_angle, "[0, 180]");
-}
-
-std::vector<Triangle> element_triangles(const Scene& scene, const Mesh& mesh) {
-  std::vector<Triangle> tri;
-  tri.reserve(mesh.triangles.size());
-  for (size_t i = 0; i < mesh.triangles.size(); ++i) {
-    const auto& t = mesh.triangles[i];
-    const Patch& p = scene.patches[static_cast<size_t>(mesh.patch[i])];
-    tri.push_back(make_triangle(mesh.positions[static_cast<size_t>(t[0])], mesh.positions[static_cast<size_t>(t[1])],
-                                mesh.positions[static_cast<size_t>(t[2])], p.normal));
-  }
-  return tri;
-}
-
-std::vector<double> form_factor_matrix(const Scene& scene, const Mesh& mesh, const SolveOptions& options,
-                                       SolveStats& st, const ProgressFn& progress) {
-  const long long n = mesh.triangle_count();
-  const std::vector<Triangle> tri = element_triangles(scene, mesh);
+// The matrix, in the calling arena.
+std::vector<double> compute_matrix(const Scene& scene, const ElementSet& el, const SolveOptions& options,
+                                   SolveStats& st, const ProgressFn& progress) {
+  const long long n = static_cast<long long>(el.size());
   const auto t0 = Clock::now();
-  const Occlusion occlusion(scene);
-  st.convex_enclosure = occlusion.convex_enclosure();
-  std::optional<Visibility> vis;
-  if (!st.convex_enclosure) vis.emplace(scene);
-  const int side = strata_side(options.rays);
-  const int rays = side * side;
+  const VisibilityEstimator visibility(scene, options.rays);
+  st.convex_enclosure = visibility.convex_enclosure();
 
   std::vector<double> F(static_cast<size_t>(n * n), 0.0);
   tbb::combinable<Counters> counters;
@@ -114,49 +71,19 @@ std::vector<double> form_factor_matrix(const Scene& scene, const Mesh& mesh, con
   };
 
   // Pass 1, per unordered pair: zero when the elements face away or are
-  // coplanar; otherwise the visible fraction from stratified shadow rays (or 1
-  // when no patch can be in between). Stored in both F_ij and F_ji.
+  // coplanar; otherwise the visible fraction (VisibilityEstimator). Stored in
+  // both F_ij and F_ji.
   rows("form factors", 0.0, 0.5, [&](long long i) { return static_cast<double>(n - i); },
        [&](long long i, Counters& c) {
-    const Triangle& ti = tri[static_cast<size_t>(i)];
-    const int pi = mesh.patch[static_cast<size_t>(i)];
-    std::vector<int> perm(static_cast<size_t>(rays));
+    const size_t u = static_cast<size_t>(i);
     for (long long j = i + 1; j < n; ++j) {
-      const Triangle& tj = tri[static_cast<size_t>(j)];
-      if (facing_away(ti, tj)) {
+      const size_t w = static_cast<size_t>(j);
+      if (el.zero_area[u] || el.zero_area[w] || facing_away(el.triangle[u], el.triangle[w])) {
         ++c.zero_pairs;
         continue;
       }
-      const int pj = mesh.patch[static_cast<size_t>(j)];
-      double visible = 1.0;
-      if (vis && occlusion.may_occlude(pi, pj, ti, tj)) {
-        SplitMix rng(pair_seed(static_cast<uint64_t>(i), static_cast<uint64_t>(j)));
-        // Stratified on both triangles; the source strata are visited in a
-        // shuffled order so that receiver and source strata pair at random.
-        std::iota(perm.begin(), perm.end(), 0);
-        for (int k = rays - 1; k > 0; --k)
-          std::swap(perm[static_cast<size_t>(k)],
-                    perm[static_cast<size_t>(rng.next() % static_cast<uint64_t>(k + 1))]);
-        int hits = 0;
-        for (int k = 0; k < rays; ++k) {
-          const int a = k, b = perm[static_cast<size_t>(k)];
-          // Each point's second coordinate is drawn first: the order GCC
-          // evaluated the arguments in when they were written inline (that
-          // order is unspecified), kept so that results do not change.
-          const double xv = ((a / side) + rng.uniform()) / side;
-          const double xu = ((a % side) + rng.uniform()) / side;
-          const Vec3 x = triangle_point(ti.v[0], ti.v[1], ti.v[2], xu, xv);
-          const double yv = ((b / side) + rng.uniform()) / side;
-          const double yu = ((b % side) + rng.uniform()) / side;
-          const Vec3 y = triangle_point(tj.v[0], tj.v[1], tj.v[2], yu, yv);
-          if (vis->visible(x, y, pi, pj)) ++hits;
-        }
-        c.rays_cast += rays;
-        visible = static_cast<double>(hits) / rays;
-      } else {
-        c.rays_skipped += rays;
-        ++c.unoccludable;
-      }
+      const double visible = visibility.visible_fraction(el.triangle[u], el.patch[u], static_cast<uint64_t>(i),
+                                                         el.triangle[w], el.patch[w], static_cast<uint64_t>(j), c.rays);
       F[static_cast<size_t>(i * n + j)] = visible;
       F[static_cast<size_t>(j * n + i)] = visible;
     }
@@ -167,15 +94,15 @@ std::vector<double> form_factor_matrix(const Scene& scene, const Mesh& mesh, con
   std::vector<std::vector<int>> facing(scene.patches.size());
   for (size_t p = 0; p < scene.patches.size(); ++p)
     for (size_t q = 0; q < scene.patches.size(); ++q)
-      if (p != q && occlusion.facing(static_cast<int>(p), static_cast<int>(q)))
+      if (p != q && visibility.facing(static_cast<int>(p), static_cast<int>(q)))
         facing[p].push_back(static_cast<int>(q));
   rows("form factors", 0.5, 0.5, [&](long long) { return 1.0; }, [&](long long i, Counters& c) {
-    const int pi = mesh.patch[static_cast<size_t>(i)];
+    const int pi = el.patch[static_cast<size_t>(i)];
     const ReceiverPoints pts = receiver_points(
-        tri[static_cast<size_t>(i)],
+        el.triangle[static_cast<size_t>(i)],
         [&](const Vec3& x) {
           double d = std::numeric_limits<double>::infinity();
-          for (int q : facing[static_cast<size_t>(pi)]) d = std::min(d, occlusion.distance(q, x));
+          for (int q : facing[static_cast<size_t>(pi)]) d = std::min(d, visibility.distance_to_patch(q, x));
           return d;
         },
         options.quadrature);
@@ -183,70 +110,37 @@ std::vector<double> form_factor_matrix(const Scene& scene, const Mesh& mesh, con
     double* fi = &F[static_cast<size_t>(i * n)];
     for (long long j = 0; j < n; ++j) {
       if (fi[j] == 0.0) continue;
-      fi[j] *= form_factor(pts, tri[static_cast<size_t>(j)]);
+      fi[j] *= form_factor(pts, el.triangle[static_cast<size_t>(j)]);
       ++c.form_factors;
     }
   });
   counters.combine_each([&](const Counters& c) {
     st.form_factors += c.form_factors;
     st.form_factors_skipped += 2 * c.zero_pairs;
-    st.rays_cast += c.rays_cast;
-    st.rays_skipped += c.rays_skipped;
-    st.pairs_unoccludable += c.unoccludable;
+    st.rays_cast += c.rays.cast;
+    st.rays_skipped += c.rays.skipped;
+    st.pairs_unoccludable += c.rays.unoccludable;
     st.receiver_points += c.receiver_points;
   });
   st.seconds_form_factors = seconds_since(t0);
-  if (st.convex_enclosure)
-    st.skips.push_back("visibility: the scene is one convex enclosure, so no shadow ray was cast");
-  if (st.pairs_unoccludable > 0 && !st.convex_enclosure)
-    st.skips.push_back("visibility: " + std::to_string(st.pairs_unoccludable) +
-                       " element pairs have no patch in their shaft; their rays were not cast");
+  report_visibility_skips(st, "element");
   if (st.form_factors_skipped > 0)
     st.skips.push_back("form factors: " + std::to_string(st.form_factors_skipped) +
                        " entries are zero because the elements face away or are coplanar");
-
   return F;
 }
 
-double memory_limit_bytes(const SolveOptions& options) {
-  return options.max_memory_gb > 0.0 ? options.max_memory_gb * 1024.0 * 1024.0 * 1024.0
-                                     : 0.5 * physical_memory_bytes();
-}
-
-Solution solve_matrix(const Scene& scene, const Mesh& mesh, const SolveOptions& options,
-                      const ProgressFn& progress) {
-  check_solve_options(options);
-  const long long n = mesh.triangle_count();
-  const double limit = memory_limit_bytes(options);
-  if (matrix_bytes(n) > limit) {
-    std::ostringstream m;
-    m.precision(3);
-    m << scene.source << ": the full matrix of " << n << " elements needs "
-      << matrix_bytes(n) / (1024.0 * 1024.0 * 1024.0) << " GiB, more than the "
-      << limit / (1024.0 * 1024.0 * 1024.0)
-      << " GiB allowed; use a larger --max-edge (the element count falls with its square) "
-         "or raise --max-memory";
-    throw NumericalError(m.str());
-  }
-  std::optional<tbb::global_control> threads;
-  if (options.threads > 0)
-    threads.emplace(tbb::global_control::max_allowed_parallelism, static_cast<size_t>(options.threads));
-
+// Gauss-Seidel per distinct channel on a computed matrix, in the calling arena.
+Solution solve_with_matrix(const Scene& scene, const Mesh& mesh, const ElementSet& el, const std::vector<double>& F,
+                           const SolveStats& matrix_stats, const SolveOptions& options) {
+  const long long n = static_cast<long long>(el.size());
   Solution sol;
   SolveStats& st = sol.stats;
+  st = matrix_stats;
   st.elements = n;
+  const std::vector<Rgb>& rho = el.reflectance;
+  const std::vector<Rgb>& emit = el.emission;
 
-  // Element materials.
-  const std::vector<Triangle> tri = element_triangles(scene, mesh);
-  std::vector<Rgb> rho(static_cast<size_t>(n)), emit(static_cast<size_t>(n));
-  for (long long i = 0; i < n; ++i) {
-    const Patch& p = scene.patches[static_cast<size_t>(mesh.patch[static_cast<size_t>(i)])];
-    rho[static_cast<size_t>(i)] = scene.materials[static_cast<size_t>(p.material)].reflectance;
-    emit[static_cast<size_t>(i)] = scene.materials[static_cast<size_t>(p.material)].emission;
-  }
-  const std::vector<double> F = form_factor_matrix(scene, mesh, options, st, progress);
-
-  // ---- Solve, per distinct channel ----
   const auto t1 = Clock::now();
   int source_of[3] = {0, 1, 2};
   for (int c = 1; c < 3; ++c)
@@ -333,28 +227,131 @@ Solution solve_matrix(const Scene& scene, const Mesh& mesh, const SolveOptions& 
     }
   });
   sol.element.resize(static_cast<size_t>(n));
-  for (int c = 0; c < 3; ++c) {
-    double max_b = 0.0, max_r = 0.0;
-    for (long long i = 0; i < n; ++i) {
-      const size_t u = static_cast<size_t>(i);
-      const double b = B[static_cast<size_t>(c)][u];
-      sol.element[u][c] = b;
-      max_b = std::max(max_b, std::abs(b));
-      max_r = std::max(max_r, std::abs(emit[u][c] + rho[u][c] * H[u][c] - b));
-      const double a = tri[u].area;
-      st.power_emitted[c] += emit[u][c] * a;
-      st.power_absorbed[c] += (1.0 - rho[u][c]) * H[u][c] * a;
-      st.power_escaped[c] += b * a * (1.0 - row_sum[u]);
-    }
-    st.residual[static_cast<size_t>(c)] = max_b > 0.0 ? max_r / max_b : 0.0;
+  BalanceAccumulator balance;
+  for (long long i = 0; i < n; ++i) {
+    const size_t u = static_cast<size_t>(i);
+    for (int c = 0; c < 3; ++c) sol.element[u][c] = B[static_cast<size_t>(c)][u];
+    balance.add(el.triangle[u].area, rho[u], emit[u], sol.element[u], H[u], row_sum[u]);
   }
+  balance.finish(st);
   for (const Rgb& b : sol.element)
     if (!std::isfinite(b.x) || !std::isfinite(b.y) || !std::isfinite(b.z))
       throw NumericalError(scene.source + ": the solve produced a non-finite radiosity");
   st.seconds_solve = seconds_since(t1);
-  if (progress) progress("solve", 1.0);
 
   sol.nodal = compute_nodal(scene, mesh, sol.element, options.crease_angle, options.nodal);
+  return sol;
+}
+
+void check_matrix_memory(const Scene& scene, long long n, const SolveOptions& options) {
+  const double limit = memory_limit_bytes(options);
+  if (matrix_bytes(n) > limit) {
+    std::ostringstream m;
+    m.precision(3);
+    m << scene.source << ": the full matrix of " << n << " elements needs "
+      << matrix_bytes(n) / (1024.0 * 1024.0 * 1024.0) << " GiB, more than the "
+      << limit / (1024.0 * 1024.0 * 1024.0)
+      << " GiB allowed; use a larger --max-edge (the element count falls with its square) "
+         "or raise --max-memory";
+    throw NumericalError(m.str());
+  }
+}
+
+}  // namespace
+
+double matrix_bytes(long long n) { return static_cast<double>(n) * static_cast<double>(n) * 8.0; }
+
+void check_solve_options(const SolveOptions& o) {
+  auto bad = [](const std::string& what, double v, const std::string& range) {
+    std::ostringstream m;
+    m << what << " " << v << " is out of range: " << range;
+    throw InputError(m.str());
+  };
+  if (!(o.tolerance > 0.0 && o.tolerance < 1.0)) bad("--tolerance", o.tolerance, "(0, 1)");
+  if (o.max_iterations < 1) bad("max_iterations", o.max_iterations, ">= 1");
+  if (o.threads < 0) bad("--threads", o.threads, ">= 0 (0 = all cores)");
+  if (o.rays < 1 || o.rays > 4096) bad("--rays", o.rays, "[1, 4096]");
+  if (!(o.quadrature.closeness > 0.0)) bad("closeness", o.quadrature.closeness, "> 0");
+  if (o.quadrature.max_level < 0 || o.quadrature.max_level > 10)
+    bad("max_level", o.quadrature.max_level, "[0, 10]");
+  if (!(o.max_memory_gb >= 0.0)) bad("--max-memory", o.max_memory_gb, ">= 0 GiB");
+  if (!(o.crease_angle >= 0.0 && o.crease_angle <= 180.0)) bad("crease_angle", o.crease_angle, "[0, 180]");
+}
+
+double memory_limit_bytes(const SolveOptions& options) {
+  return options.max_memory_gb > 0.0 ? options.max_memory_gb * 1024.0 * 1024.0 * 1024.0
+                                     : 0.5 * physical_memory_bytes();
+}
+
+std::vector<double> form_factor_matrix(const Scene& scene, const Mesh& mesh, const SolveOptions& options,
+                                       SolveStats& st, const ProgressFn& progress) {
+  check_solve_options(options);
+  const ElementSet el = make_elements(scene, mesh);
+  std::vector<double> F;
+  run_in_arena(options.threads, [&] { F = compute_matrix(scene, el, options, st, progress); });
+  return F;
+}
+
+struct MatrixSolver::Impl {
+  const Scene& scene;
+  Mesh mesh;
+  SolveOptions options;
+  ElementSet elements;
+  std::vector<double> F;
+  SolveStats stats;  // of the matrix: counts, rays, skips
+};
+
+MatrixSolver::MatrixSolver(const Scene& scene, const Mesh& mesh, const SolveOptions& options,
+                           const ProgressFn& progress)
+    : impl_(std::make_unique<Impl>(Impl{scene, mesh, options, make_elements(scene, mesh), {}, {}})) {
+  check_solve_options(options);
+  check_matrix_memory(scene, mesh.triangle_count(), options);
+  Impl& m = *impl_;
+  run_in_arena(options.threads, [&] { m.F = compute_matrix(scene, m.elements, options, m.stats, progress); });
+}
+
+MatrixSolver::~MatrixSolver() = default;
+
+Solution MatrixSolver::solve() const {
+  const Impl& m = *impl_;
+  Solution sol;
+  run_in_arena(m.options.threads,
+               [&] { sol = solve_with_matrix(m.scene, m.mesh, m.elements, m.F, m.stats, m.options); });
+  return sol;
+}
+
+Solution MatrixSolver::solve(const std::vector<Material>& materials) const {
+  const Impl& m = *impl_;
+  if (materials.size() != m.scene.materials.size())
+    throw InputError("MatrixSolver::solve: " + std::to_string(materials.size()) + " materials given, the scene has " +
+                     std::to_string(m.scene.materials.size()));
+  for (const Material& mat : materials)
+    for (int c = 0; c < 3; ++c)
+      if (!(mat.reflectance[c] >= 0.0 && mat.reflectance[c] < 1.0) || !(mat.emission[c] >= 0.0) ||
+          !std::isfinite(mat.emission[c]))
+        throw InputError("MatrixSolver::solve: material '" + mat.name + "' has reflectance " +
+                         format_number(mat.reflectance[c]) + " or emission " + format_number(mat.emission[c]) +
+                         " out of range (reflectance in [0, 1), emission finite and >= 0)");
+  ElementSet relit = m.elements;
+  for (size_t i = 0; i < relit.size(); ++i) {
+    const Material& mat =
+        materials[static_cast<size_t>(m.scene.patches[static_cast<size_t>(relit.patch[i])].material)];
+    relit.reflectance[i] = mat.reflectance;
+    relit.emission[i] = mat.emission;
+  }
+  Solution sol;
+  run_in_arena(m.options.threads,
+               [&] { sol = solve_with_matrix(m.scene, m.mesh, relit, m.F, m.stats, m.options); });
+  return sol;
+}
+
+const std::vector<double>& MatrixSolver::form_factors() const { return impl_->F; }
+
+Solution solve_matrix(const Scene& scene, const Mesh& mesh, const SolveOptions& options,
+                      const ProgressFn& progress) {
+  const MatrixSolver solver(scene, mesh, options, progress);
+  Solution sol = solver.solve();
+  if (progress) progress("solve", 1.0);
   return sol;
 }
 

@@ -1,9 +1,7 @@
 #include "radiosity/probe.h"
 
 #include "meshing/errors.h"
-#include "radiosity/occlusion.h"
-#include "radiosity/sampling.h"
-#include "radiosity/visibility.h"
+#include "radiosity/transport.h"
 
 #include <tbb/parallel_for.h>
 
@@ -58,42 +56,28 @@ std::vector<ProbeResult> evaluate_probes(const Scene& scene, const Mesh& mesh,
     }
   }
 
-  const Occlusion occlusion(scene);
-  Visibility vis(scene);
-  const int side = strata_side(options.rays);
-  const int rays = side * side;
-  tbb::parallel_for(size_t(0), probes.size(), [&](size_t k) {
-    const Probe& pr = probes[k];
-    const int pp = out[k].patch;
-    const Triangle point = make_triangle(pr.point, pr.point, pr.point, pr.normal);
-    Rgb h(0.0);
-    for (int j = 0; j < n; ++j) {
-      const auto& tri = mesh.triangles[static_cast<size_t>(j)];
-      const int pj = mesh.patch[static_cast<size_t>(j)];
-      if (pj == pp || mesh.zero_area(j)) continue;  // zero-area triangles never enter a form factor
-      const Vec3 v[3] = {mesh.positions[tri[0]], mesh.positions[tri[1]], mesh.positions[tri[2]]};
-      const Vec3& nj = scene.patches[static_cast<size_t>(pj)].normal;
-      const double f = point_polygon_form_factor(pr.point, pr.normal, v, 3, nj);
-      if (f <= 0.0) continue;
-      double visible = 1.0;
-      const Triangle tj = make_triangle(v[0], v[1], v[2], nj);
-      if (occlusion.may_occlude(pp, pj, point, tj)) {
-        SplitMix rng(pair_seed(static_cast<uint64_t>(k) + (1ULL << 40), static_cast<uint64_t>(j)));
-        int hits = 0;
-        for (int r = 0; r < rays; ++r) {
-          // Second coordinate first: the order GCC evaluated the arguments in,
-          // fixed now that it is written out (argument order is unspecified).
-          const double sv = ((r / side) + rng.uniform()) / side;
-          const double su = ((r % side) + rng.uniform()) / side;
-          const Vec3 y = triangle_point(v[0], v[1], v[2], su, sv);
-          if (vis.visible(pr.point, y, pp, pj)) ++hits;
-        }
-        visible = static_cast<double>(hits) / rays;
+  const ElementSet el = make_elements(scene, mesh);
+  run_in_arena(options.threads, [&] {
+    const VisibilityEstimator visibility(scene, options.rays);
+    tbb::parallel_for(size_t(0), probes.size(), [&](size_t k) {
+      const Probe& pr = probes[k];
+      const int pp = out[k].patch;
+      const Triangle point = make_triangle(pr.point, pr.point, pr.point, pr.normal);
+      RayCount rays;
+      Rgb h(0.0);
+      for (size_t j = 0; j < el.size(); ++j) {
+        // Zero-area triangles never enter a form factor; a patch does not see itself.
+        if (el.patch[j] == pp || el.zero_area[j]) continue;
+        const Triangle& tj = el.triangle[j];
+        const double f = point_polygon_form_factor(pr.point, pr.normal, tj.v.data(), 3, tj.normal);
+        if (f <= 0.0) continue;
+        // Probe ids come after every element id: one stream per (probe, element).
+        const double visible = visibility.visible_fraction(point, pp, el.size() + k, tj, el.patch[j], j, rays);
+        h += f * visible * element_radiosity[j];
       }
-      h += f * visible * element_radiosity[static_cast<size_t>(j)];
-    }
-    const Material& m = scene.materials[static_cast<size_t>(scene.patches[static_cast<size_t>(pp)].material)];
-    out[k].radiosity = m.emission + m.reflectance * h;
+      const Material& m = scene.materials[static_cast<size_t>(scene.patches[static_cast<size_t>(pp)].material)];
+      out[k].radiosity = m.emission + m.reflectance * h;
+    });
   });
   return out;
 }

@@ -7,6 +7,9 @@
 #include "radiosity/form_factor.h"
 #include "radiosity/solution.h"
 
+#include <memory>
+#include <vector>
+
 namespace radmesh {
 
 enum class NodalMethod { mean, linear_fit };
@@ -45,17 +48,36 @@ double memory_limit_bytes(const SolveOptions& options);
 
 // Classic radiosity: every element-to-element form factor, then Gauss-Seidel
 // per colour channel. Refuses (NumericalError) a mesh whose matrix would not
-// fit in memory, before any work starts.
+// fit in memory, before any work starts. The one-off form of MatrixSolver.
 Solution solve_matrix(const Scene& scene, const Mesh& mesh, const SolveOptions& options,
                       const ProgressFn& progress = {});
+
+// The matrix method with its state: the form-factor matrix is computed once,
+// in the constructor, and each solve() reuses it. solve(materials) relights
+// the same geometry with other reflectances and emissions (one Material per
+// scene material, same order) without computing a form factor again.
+// `scene` must outlive the solver.
+class MatrixSolver {
+public:
+  MatrixSolver(const Scene& scene, const Mesh& mesh, const SolveOptions& options, const ProgressFn& progress = {});
+  ~MatrixSolver();
+  MatrixSolver(const MatrixSolver&) = delete;
+  MatrixSolver& operator=(const MatrixSolver&) = delete;
+
+  Solution solve() const;
+  Solution solve(const std::vector<Material>& materials) const;
+  // Row-major n x n: F[i*n + j] = F(element i -> j), occlusion included.
+  const std::vector<double>& form_factors() const;
+
+private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
 
 // The n x n form-factor matrix, row-major: F[i*n + j] = F(element i -> j),
 // occlusion included. Fills the form-factor and ray counters of `stats`.
 std::vector<double> form_factor_matrix(const Scene& scene, const Mesh& mesh, const SolveOptions& options,
                                        SolveStats& stats, const ProgressFn& progress = {});
-
-// Element triangles (vertices, patch normal, area) of a mesh.
-std::vector<Triangle> element_triangles(const Scene& scene, const Mesh& mesh);
 
 // Bytes the full matrix of n elements needs.
 double matrix_bytes(long long n);

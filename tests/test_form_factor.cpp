@@ -68,6 +68,69 @@ TEST(PointPolygon, HalfSpaceClippingOfAStraddlingSource) {
   EXPECT_NEAR(f, 0.5, 1e-6);
 }
 
+namespace {
+
+// A regular polygon of `count` vertices and circumradius r in the plane z =
+// h, centred on the z axis, facing down (-z): vertices clockwise seen from
+// above, counter-clockwise around its normal.
+std::vector<Vec3> regular_polygon(int count, double r, double h, double phase = 0.0) {
+  std::vector<Vec3> pts;
+  for (int k = 0; k < count; ++k) {
+    const double a = phase - 2.0 * std::numbers::pi * k / count;
+    pts.emplace_back(r * std::cos(a), r * std::sin(a), h);
+  }
+  return pts;
+}
+
+// F from x to the polygon as the sum over its triangle fan from vertex 0,
+// each triangle clipped on its own: an independent route to the same number
+// (clipping and the contour integral are both additive over a partition).
+double fan_form_factor(const Vec3& x, const Vec3& n, const std::vector<Vec3>& poly, const Vec3& normal) {
+  double f = 0.0;
+  for (size_t k = 1; k + 1 < poly.size(); ++k) {
+    const Vec3 tri[3] = {poly[0], poly[k], poly[k + 1]};
+    f += point_polygon_form_factor(x, n, tri, 3, normal);
+  }
+  return f;
+}
+
+}  // namespace
+
+TEST(PointPolygon, ThousandVertexPolygonMatchesFanAndCoaxialDisk) {
+  // Coaxial disk of radius r at height h: F = r^2 / (h^2 + r^2). The
+  // inscribed 1000-gon has (1 - 6.6e-6) of the disk's area.
+  for (double h : {0.5, 1.0, 3.0}) {
+    const double r = 1.0;
+    const auto poly = regular_polygon(1000, r, h);
+    const double f = point_polygon_form_factor(Vec3(0), Vec3(0, 0, 1), poly.data(), poly.size(), Vec3(0, 0, -1));
+    EXPECT_NEAR(f, fan_form_factor(Vec3(0), Vec3(0, 0, 1), poly, Vec3(0, 0, -1)), 1e-12) << "h = " << h;
+    EXPECT_NEAR(f, r * r / (h * h + r * r), 1e-5) << "h = " << h;
+  }
+}
+
+TEST(PointPolygon, ManyVertexPolygonStraddlingTheTangentPlaneIsClipped) {
+  // The polygon lies in the plane x = 1 (facing -x) and straddles the
+  // receiver's tangent plane z = 0: only its upper half may count. The old
+  // implementation kept 32 vertices and clipped into a fixed array (a
+  // 32-vertex polygon straddling the plane overflowed it).
+  for (int count : {32, 33, 100, 1000}) {
+    std::vector<Vec3> poly;
+    for (int k = 0; k < count; ++k) {
+      const double a = 2.0 * std::numbers::pi * k / count + 0.1;
+      poly.emplace_back(1.0, 0.8 * std::cos(a), 0.8 * std::sin(a));  // counter-clockwise around -x seen from x < 1
+    }
+    const Vec3 x(0.0), n(0, 0, 1), normal(-1, 0, 0);
+    const double f = point_polygon_form_factor(x, n, poly.data(), poly.size(), normal);
+    const double fan = fan_form_factor(x, n, poly, normal);
+    EXPECT_NEAR(f, fan, 1e-13) << count << " vertices";
+    // The clipped value is strictly between zero and the unclipped one
+    // (the same polygon seen by a receiver facing it, which clips nothing).
+    const double unclipped = point_polygon_form_factor(x, Vec3(1, 0, 0), poly.data(), poly.size(), normal);
+    EXPECT_GT(f, 0.05 * unclipped) << count;
+    EXPECT_LT(f, 0.95 * unclipped) << count;
+  }
+}
+
 TEST(ElementFormFactor, ParallelUnitSquaresHowellC11) {
   const auto bottom = quad({0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0});  // faces +z
   const auto top = quad({0, 0, 1}, {0, 1, 1}, {1, 1, 1}, {1, 0, 1});     // faces -z

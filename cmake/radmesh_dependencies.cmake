@@ -1,0 +1,24 @@
+# Every dependency, found once. RADMESH_PRIVATE_LIBRARIES: what libradmesh
+# links privately (a consumer of the static library needs them too: the
+# package config finds them again, see radmeshConfig.cmake.in).
+include(GNUInstallDirs)
+find_package(CGAL 5.5 REQUIRED)
+find_package(embree 3 REQUIRED)
+find_package(TBB REQUIRED)
+find_package(glm REQUIRED)
+find_package(tinyobjloader REQUIRED)
+find_package(nlohmann_json 3 REQUIRED)
+find_package(CLI11 REQUIRED)
+
+set(RADMESH_VTK_COMPONENTS CommonCore CommonDataModel CommonExecutionModel IOXML)
+if(RADMESH_WITH_RENDERING)
+  find_package(X11 REQUIRED)
+  list(APPEND RADMESH_VTK_COMPONENTS IOImage RenderingCore RenderingOpenGL2 RenderingFreeType
+       RenderingAnnotation InteractionStyle ChartsCore ViewsContext2D RenderingContextOpenGL2)
+endif()
+find_package(VTK 9 REQUIRED COMPONENTS ${RADMESH_VTK_COMPONENTS})
+
+set(RADMESH_PRIVATE_LIBRARIES CGAL::CGAL embree TBB::tbb tinyobjloader::tinyobjloader_double ${VTK_LIBRARIES})
+if(RADMESH_WITH_RENDERING)
+  list(APPEND RADMESH_PRIVATE_LIBRARIES X11::X11)
+endif()

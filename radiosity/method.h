@@ -1,0 +1,142 @@
+// The solver contract: every radiosity method is one entry of one table,
+// with its declared options, its recommended initial meshing and a solve
+// that returns a result on its own mesh with named counters. The CLI, the
+// summary, the benchmark and the conformance tests loop over this table.
+//
+// Adding a method: write its solver in its own files (a one-off
+// solve_x(...) and, where state lives between calls, a solver class), a
+// `Method make_x_method()` that declares its options and adapts its result
+// (see methods.cpp for the two that exist), and one line in `methods()`.
+#pragma once
+
+#include "meshing/mesh.h"
+#include "meshing/progress.h"
+#include "meshing/scene.h"
+#include "radiosity/solution.h"
+#include "radiosity/solve.h"
+
+#include <array>
+#include <functional>
+#include <map>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace radmesh {
+
+// One option a method takes. The name is the same everywhere: the CLI flag
+// is "--" + name with '_' written '-', the summary key is the name.
+struct OptionSpec {
+  enum class Kind { real, integer, choice, flag };
+  std::string name;
+  Kind kind = Kind::real;
+  std::string unit;   // "" when dimensionless
+  std::string help;   // one sentence, without the default
+  double default_value = 0.0;  // real, integer, flag (0 or 1)
+  double min = 0.0, max = 0.0;  // inclusive range (real, integer)
+  std::vector<std::string> choices;  // choice: the accepted values, the default first
+
+  std::string flag() const;  // "--min-area"
+  std::string default_text() const;
+};
+
+// "--" + name with '_' written '-': the command-line flag of an option.
+std::string option_flag(const std::string& name);
+
+// Option values as given (name -> text, e.g. from the command line). A
+// method's options not given take their defaults.
+using OptionValues = std::map<std::string, std::string>;
+
+// Values checked against a method's declarations: every declared option has
+// a value (given or default). Throws InputError naming the flag and value.
+class MethodOptions {
+public:
+  MethodOptions() = default;
+  MethodOptions(const std::vector<OptionSpec>& specs, const OptionValues& given, const std::string& method);
+
+  double number(const std::string& name) const;  // real, integer, flag (0/1)
+  const std::string& text(const std::string& name) const;  // every kind, as given or its default
+  // (name, value) in declaration order, numbers as numbers, for summaries.
+  const std::vector<std::pair<std::string, std::string>>& items() const { return items_; }
+  const std::vector<OptionSpec>& specs() const { return specs_; }
+
+private:
+  const OptionSpec& spec(const std::string& name) const;
+  std::vector<OptionSpec> specs_;
+  std::vector<std::pair<std::string, std::string>> items_;
+  std::map<std::string, double> numbers_;
+};
+
+// A count or measure a method publishes: the summary writes it under its
+// name, the benchmark and tests read it by name.
+struct Counter {
+  std::string name;
+  std::vector<double> values;  // one value, or a series (per round, per channel)
+  std::string unit;            // "" when a count
+  bool series = false;
+  bool integral = true;
+};
+Counter count(std::string name, double value, std::string unit = "");
+Counter measure(std::string name, double value, std::string unit = "");
+Counter count_series(std::string name, std::vector<double> values, std::string unit = "");
+
+// Line segments with cell fields (e.g. a hierarchy's links), written as
+// NAME.vtu by the CLI.
+struct LineSet {
+  std::vector<std::array<Vec3, 2>> segments;
+  std::vector<std::pair<std::string, std::vector<int>>> int_fields;
+  std::vector<std::pair<std::string, std::vector<double>>> real_fields;
+};
+
+// What a method returns: a solution on its own mesh (the initial mesh, or
+// one it refined), extra per-triangle integer fields for the .vtu, extra
+// line sets, counters and the wall time of its phases.
+struct MethodResult {
+  Mesh mesh;
+  Solution solution;  // per triangle of `mesh` and per vertex; common counts in solution.stats
+  std::vector<std::pair<std::string, std::vector<int>>> cell_fields;
+  std::vector<std::pair<std::string, LineSet>> line_sets;  // (file stem, lines)
+  std::vector<Counter> counters;
+  std::vector<std::pair<std::string, double>> seconds;  // phase -> wall seconds, in order
+  std::string report;  // one line for people ("24128 leaves, 493567 links, ...")
+
+  const Counter* counter(const std::string& name) const;  // nullptr when absent
+};
+
+struct SolveCallbacks {
+  ProgressFn progress;
+  // Called after every refinement round of a method that has rounds, with
+  // the result as it then stands (for a series of files).
+  std::function<void(const MethodResult&, int round)> on_round;
+};
+
+struct Method {
+  std::string name;
+  std::string help;  // one sentence for --help
+  std::vector<OptionSpec> options;
+  // Option values for a quick run (the conformance tests, the benchmark's
+  // --quick): coarser, the same physics.
+  OptionValues quick;
+  // The initial meshing this method works best from: the CLI and the bench
+  // start from these and apply what the user gave on top.
+  std::function<MeshingOptions(const Scene&)> meshing;
+  std::function<MethodResult(const Scene&, const Mesh&, const SolveOptions&, const MethodOptions&,
+                             const SolveCallbacks&)>
+      solve;
+};
+
+// The table. The first entry is the default method.
+const std::vector<Method>& methods();
+// The method called `name`; InputError listing the names otherwise.
+const Method& find_method(const std::string& name);
+
+// Every method's options, each name once (first declaration), with the
+// methods that take it: for a CLI that registers them all.
+std::vector<std::pair<OptionSpec, std::vector<std::string>>> all_method_options();
+
+// Checks `given` against the method (InputError for an option the method
+// does not take, naming the methods that do) and solves.
+MethodResult run_method(const Method& method, const Scene& scene, const Mesh& mesh, const SolveOptions& options,
+                        const OptionValues& given = {}, const SolveCallbacks& callbacks = {});
+
+}  // namespace radmesh

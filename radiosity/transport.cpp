@@ -1,0 +1,119 @@
+#include "radiosity/transport.h"
+
+#include "radiosity/occlusion.h"
+#include "radiosity/sampling.h"
+#include "radiosity/visibility.h"
+
+#include <tbb/task_arena.h>
+
+#include <array>
+#include <numeric>
+#include <optional>
+#include <string>
+
+namespace radmesh {
+
+void ElementSet::add(const Scene& scene, int p, const Vec3& a, const Vec3& b, const Vec3& c, bool zero_area_flag) {
+  const Patch& patch = scene.patches[static_cast<size_t>(p)];
+  const Material& m = scene.materials[static_cast<size_t>(patch.material)];
+  triangle.push_back(make_triangle(a, b, c, patch.normal));
+  this->patch.push_back(p);
+  reflectance.push_back(m.reflectance);
+  emission.push_back(m.emission);
+  zero_area.push_back(zero_area_flag ? 1 : 0);
+}
+
+ElementSet make_elements(const Scene& scene, const Mesh& mesh) {
+  ElementSet e;
+  const size_t n = mesh.triangles.size();
+  e.triangle.reserve(n);
+  for (size_t i = 0; i < n; ++i) {
+    const auto& t = mesh.triangles[i];
+    e.add(scene, mesh.patch[i], mesh.positions[static_cast<size_t>(t[0])], mesh.positions[static_cast<size_t>(t[1])],
+          mesh.positions[static_cast<size_t>(t[2])], mesh.zero_area(static_cast<int>(i)));
+  }
+  return e;
+}
+
+struct VisibilityEstimator::Impl {
+  explicit Impl(const Scene& scene) : occlusion(scene) {
+    if (!occlusion.convex_enclosure()) embree.emplace(scene);
+  }
+  Occlusion occlusion;
+  std::optional<Visibility> embree;  // none in a convex enclosure
+};
+
+VisibilityEstimator::VisibilityEstimator(const Scene& scene, int rays)
+    : impl_(std::make_unique<Impl>(scene)), side_(strata_side(rays)) {}
+
+VisibilityEstimator::~VisibilityEstimator() = default;
+
+bool VisibilityEstimator::convex_enclosure() const { return impl_->occlusion.convex_enclosure(); }
+bool VisibilityEstimator::facing(int p, int q) const { return impl_->occlusion.facing(p, q); }
+double VisibilityEstimator::distance_to_patch(int p, const Vec3& x) const { return impl_->occlusion.distance(p, x); }
+
+double VisibilityEstimator::visible_fraction(const Triangle& a, int pa, uint64_t id_a, const Triangle& b, int pb,
+                                             uint64_t id_b, RayCount& count) const {
+  const int rays = side_ * side_;
+  if (!impl_->embree || !impl_->occlusion.may_occlude(pa, pb, a, b)) {
+    count.skipped += rays;
+    ++count.unoccludable;
+    return 1.0;
+  }
+  // The pair in increasing id order: the same rays whichever asks.
+  const bool swap = id_b < id_a;
+  const Triangle& ti = swap ? b : a;
+  const Triangle& tj = swap ? a : b;
+  const int pi = swap ? pb : pa, pj = swap ? pa : pb;
+  SplitMix rng(pair_seed(swap ? id_b : id_a, swap ? id_a : id_b));
+  std::array<int, 4096> perm;  // rays <= 4096 (check_solve_options)
+  std::iota(perm.begin(), perm.begin() + rays, 0);
+  for (int k = rays - 1; k > 0; --k)
+    std::swap(perm[static_cast<size_t>(k)], perm[static_cast<size_t>(rng.next() % static_cast<uint64_t>(k + 1))]);
+  int open = 0;
+  for (int k = 0; k < rays; ++k) {
+    const int s = k, t = perm[static_cast<size_t>(k)];
+    // Each point's second coordinate is drawn first, in an order written out
+    // (the order of evaluating function arguments is unspecified).
+    const double xv = ((s / side_) + rng.uniform()) / side_;
+    const double xu = ((s % side_) + rng.uniform()) / side_;
+    const Vec3 x = triangle_point(ti.v[0], ti.v[1], ti.v[2], xu, xv);
+    const double yv = ((t / side_) + rng.uniform()) / side_;
+    const double yu = ((t % side_) + rng.uniform()) / side_;
+    const Vec3 y = triangle_point(tj.v[0], tj.v[1], tj.v[2], yu, yv);
+    if (impl_->embree->visible(x, y, pi, pj)) ++open;
+  }
+  count.cast += rays;
+  return static_cast<double>(open) / rays;
+}
+
+void BalanceAccumulator::add(double area, const Rgb& rho, const Rgb& emission, const Rgb& b, const Rgb& h,
+                             double row_sum) {
+  emitted_ += emission * area;
+  absorbed_ += (Rgb(1.0) - rho) * h * area;
+  escaped_ += b * area * (1.0 - row_sum);
+  worst_ = glm::max(worst_, glm::abs(emission + rho * h - b));
+  largest_ = glm::max(largest_, glm::abs(b));
+}
+
+void BalanceAccumulator::finish(SolveStats& st) const {
+  st.power_emitted = emitted_;
+  st.power_absorbed = absorbed_;
+  st.power_escaped = escaped_;
+  for (int c = 0; c < 3; ++c) st.residual[static_cast<size_t>(c)] = largest_[c] > 0.0 ? worst_[c] / largest_[c] : 0.0;
+}
+
+void run_in_arena(int threads, const std::function<void()>& f) {
+  tbb::task_arena arena(threads > 0 ? threads : tbb::task_arena::automatic);
+  arena.execute(f);
+}
+
+void report_visibility_skips(SolveStats& st, const char* pair_kind) {
+  if (st.convex_enclosure)
+    st.skips.push_back("visibility: the scene is one convex enclosure, so no shadow ray was cast");
+  else if (st.pairs_unoccludable > 0)
+    st.skips.push_back("visibility: " + std::to_string(st.pairs_unoccludable) + " " + pair_kind +
+                       " pairs have no patch in their shaft; their rays were not cast");
+}
+
+}  // namespace radmesh

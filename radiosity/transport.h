@@ -1,0 +1,104 @@
+// The transport core every solver and the probes share: the element set, the
+// visibility estimator, the energy balance and residual, and the thread arena
+// a call runs in. Lambert's contour sum is in form_factor.h.
+#pragma once
+
+#include "meshing/mesh.h"
+#include "meshing/scene.h"
+#include "radiosity/form_factor.h"
+#include "radiosity/solution.h"
+
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <vector>
+
+namespace radmesh {
+
+// Elements as the solvers see them: per element its triangle (vertices, the
+// patch normal, area), patch, material values and zero-area flag. A
+// zero-area element never enters a form factor, never receives or shoots.
+struct ElementSet {
+  std::vector<Triangle> triangle;
+  std::vector<int> patch;
+  std::vector<Rgb> reflectance, emission;
+  std::vector<char> zero_area;
+
+  size_t size() const { return triangle.size(); }
+  // Appends one element of patch `p` with corners a, b, c.
+  void add(const Scene& scene, int p, const Vec3& a, const Vec3& b, const Vec3& c, bool zero_area_flag = false);
+};
+
+// Every triangle of `mesh`, in order (zero-area ones flagged, Mesh::zero_area).
+ElementSet make_elements(const Scene& scene, const Mesh& mesh);
+
+// Shadow rays of one pair: cast, or skipped because nothing can occlude.
+struct RayCount {
+  long long cast = 0, skipped = 0;
+  long long unoccludable = 0;  // pairs whose rays were all skipped
+  RayCount& operator+=(const RayCount& o) {
+    cast += o.cast;
+    skipped += o.skipped;
+    unoccludable += o.unoccludable;
+    return *this;
+  }
+};
+
+// The visible fraction between two elements, from shadow rays between
+// stratified points of both (the source strata visited in a shuffled order,
+// so that receiver and source strata pair at random), cast only where the
+// shaft test finds a patch that could be in the way (none at all in a convex
+// enclosure: no Embree scene is then built). One random stream per pair,
+// seeded from the pair's two ids in increasing order, so the answer does not
+// depend on the thread that asks nor on which of the two is the receiver.
+class VisibilityEstimator {
+public:
+  // `rays` is rounded up to a perfect square (the strata).
+  VisibilityEstimator(const Scene& scene, int rays);
+  ~VisibilityEstimator();
+  VisibilityEstimator(const VisibilityEstimator&) = delete;
+  VisibilityEstimator& operator=(const VisibilityEstimator&) = delete;
+
+  // a, b: the two elements' triangles (a point is a triangle with three equal
+  // corners), pa, pb their patches, id_a, id_b their ids for the stream.
+  // Thread-safe; counts the rays in `count`.
+  double visible_fraction(const Triangle& a, int pa, uint64_t id_a, const Triangle& b, int pb, uint64_t id_b,
+                          RayCount& count) const;
+
+  bool convex_enclosure() const;
+  int rays() const { return side_ * side_; }
+  // Patches p and q can exchange light (Occlusion::facing).
+  bool facing(int p, int q) const;
+  // Lower bound of the distance from x to patch p.
+  double distance_to_patch(int p, const Vec3& x) const;
+
+private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+  int side_ = 4;
+};
+
+// Energy balance and residual of a solve, element by element: emitted
+// E a = absorbed (1 - rho) H a + escaped B a (1 - row sum), and the residual
+// max |E + rho H - B| / max |B| per channel, where H is the gathered
+// irradiance and the row sum the element's total form factor (1 in a
+// closed scene). Fills the power_* and residual fields of `stats`.
+class BalanceAccumulator {
+public:
+  void add(double area, const Rgb& reflectance, const Rgb& emission, const Rgb& radiosity, const Rgb& gathered,
+           double row_sum);
+  void finish(SolveStats& stats) const;
+
+private:
+  Rgb emitted_{0.0}, absorbed_{0.0}, escaped_{0.0}, worst_{0.0}, largest_{0.0};
+};
+
+// Runs f in a TBB arena of `threads` workers (0 = all cores): the thread
+// count is the call's own, never process-wide state.
+void run_in_arena(int threads, const std::function<void()>& f);
+
+// The skips every solver reports from its visibility counts (convex
+// enclosure, unoccludable pairs), appended to stats.skips.
+void report_visibility_skips(SolveStats& stats, const char* pair_kind);
+
+}  // namespace radmesh

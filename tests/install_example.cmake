@@ -1,0 +1,43 @@
+# Installs the build into a fresh prefix, then configures, builds and runs
+# examples/ against the installed package alone (find_package(radmesh)).
+# Fails when any step fails or the example's output lacks what it promises.
+file(REMOVE_RECURSE ${WORK_DIR})
+set(prefix ${WORK_DIR}/prefix)
+function(step)
+  execute_process(COMMAND ${ARGN} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+  if(NOT rc EQUAL 0)
+    message(FATAL_ERROR "failed (${rc}): ${ARGN}\n${out}\n${err}")
+  endif()
+  set(step_output "${out}" PARENT_SCOPE)
+endfunction()
+
+step(${CMAKE_COMMAND} --install ${BUILD_DIR} --prefix ${prefix})
+foreach(f lib/libradmesh.a bin/radmesh include/radmesh/radmesh.h include/radmesh/radiosity/method.h
+          lib/cmake/radmesh/radmeshConfig.cmake)
+  if(NOT EXISTS ${prefix}/${f})
+    message(FATAL_ERROR "not installed: ${prefix}/${f}")
+  endif()
+endforeach()
+# Nothing private or heavy in the installed headers.
+file(GLOB_RECURSE headers ${prefix}/include/radmesh/*.h)
+foreach(h ${headers})
+  file(STRINGS ${h} bad REGEX "#include *<(CGAL|embree|vtk|X11)")
+  if(bad)
+    message(FATAL_ERROR "${h} includes a private dependency: ${bad}")
+  endif()
+endforeach()
+
+step(${CMAKE_COMMAND} -S ${SOURCE_DIR}/examples -B ${WORK_DIR}/build -DCMAKE_PREFIX_PATH=${prefix}
+     -DCMAKE_BUILD_TYPE=Release)
+step(${CMAKE_COMMAND} --build ${WORK_DIR}/build)
+step(${WORK_DIR}/build/solve_scene ${SCENE} ${WORK_DIR}/out)
+message(STATUS "example output:\n${step_output}")
+if(NOT EXISTS ${WORK_DIR}/out/radiosity.vtu)
+  message(FATAL_ERROR "the example wrote no radiosity.vtu")
+endif()
+# Every patch of the Cornell box is printed with its mean radiosity.
+string(REGEX MATCHALL "\n[a-z_]+ +[0-9.e+-]+ [0-9.e+-]+ [0-9.e+-]+" rows "\n${step_output}")
+list(LENGTH rows n)
+if(NOT n EQUAL 21)
+  message(FATAL_ERROR "expected 21 patch rows from the example, got ${n}")
+endif()
