@@ -11,6 +11,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <memory>
 #include <cmath>
 #include <string>
 #include <limits>
@@ -49,10 +50,11 @@ public:
     grow();
   }
 
-  void run(const std::function<void(const HierarchicalSolution&, int)>& on_round) {
+  // The first linking (every pair of roots whose patches can see each
+  // other, refined by the oracle) and the first solve.
+  void start() {
     auto& st = out_.stats;
     const ElementTree& tree = out_.tree;
-    // First linking: every pair of roots whose patches can see each other.
     auto t0 = std::chrono::steady_clock::now();
     // Every root pair whose patches face each other becomes at least one
     // link: refuse at once when those alone would not fit the memory limit.
@@ -81,49 +83,64 @@ public:
     }
     close_t_vertices();
     st.seconds_link += seconds_since(t0);
-    std::vector<Rgb> previous;
-    for (int round = 0;; ++round) {
-      const auto t1 = std::chrono::steady_clock::now();
-      solve();
-      st.seconds_solve += seconds_since(t1);
-      double reflected = 0.0;
-      for (size_t n = 0; n < B_.size(); ++n) reflected = std::max(reflected, max3(B_[n] - emit_[n]));
-      if (reflected > 0.0) scale_ = reflected;
-      ++st.rounds;
-      publish();
-      st.links_per_round.push_back(count_links());
-      st.leaves_per_round.push_back(st.leaves);
-      if (on_round) on_round(out_, round);
-      // Change of the node field since the last round (a node made since is
-      // compared with its deepest ancestor that existed then).
-      if (!previous.empty()) {
-        double change = 0.0, top = 0.0;
-        for (size_t n = 0; n < B_.size(); ++n) {
-          const int old = nearest_old(static_cast<int>(n), previous.size());
-          change = std::max(change, max3(glm::abs(B_[n] - previous[static_cast<size_t>(old)])));
-          top = std::max(top, max3(B_[n]));
-        }
-        st.last_change = top > 0.0 ? change / top : 0.0;
-      }
-      if (round >= hopt_.max_rounds) break;
-      if (round > 0 && st.last_change < opt_.tolerance) break;
-      previous = B_;
-      const auto t2 = std::chrono::steady_clock::now();
-      const long long refined = refine_links();
-      const int baum = split_by_variation();
-      close_t_vertices();
-      st.seconds_link += seconds_since(t2);
-      if (refined == 0 && baum == 0) break;
-    }
-    st.links = count_links();
-    // The links as they stand at the end (they do not change after the last
-    // publish), copied once.
+    solve_round();
+  }
+
+  // One refinement round: refine the links where the current radiosity
+  // says it matters (and Baum's criterion), then solve again. False, with
+  // nothing changed, when the last round already met the stopping rule
+  // (max_rounds, a change below the tolerance) or nothing was refined.
+  bool step() {
+    auto& st = out_.stats;
+    if (st.rounds - 1 >= hopt_.max_rounds) return false;
+    if (st.rounds > 1 && st.last_change < opt_.tolerance) return false;
+    previous_ = B_;
+    const auto t2 = std::chrono::steady_clock::now();
+    const long long refined = refine_links();
+    const int baum = split_by_variation();
+    close_t_vertices();
+    st.seconds_link += seconds_since(t2);
+    if (refined == 0 && baum == 0) return false;
+    solve_round();
+    return true;
+  }
+
+  // The links as they stand (they do not change after the last publish),
+  // copied into the result.
+  void finish() {
+    out_.stats.links = count_links();
     out_.links.assign(links_.size(), {});
     for (size_t p = 0; p < links_.size(); ++p)
       for (const Link& l : links_[p]) out_.links[p].push_back({l.source, l.f * l.visible, l.visible});
   }
 
 private:
+  // Solve, publish, and the change of the node field since the last round
+  // (a node made since is compared with its deepest ancestor that existed then).
+  void solve_round() {
+    auto& st = out_.stats;
+    const auto t1 = std::chrono::steady_clock::now();
+    solve();
+    st.seconds_solve += seconds_since(t1);
+    double reflected = 0.0;
+    for (size_t n = 0; n < B_.size(); ++n) reflected = std::max(reflected, max3(B_[n] - emit_[n]));
+    if (reflected > 0.0) scale_ = reflected;
+    ++st.rounds;
+    publish();
+    st.links = count_links();
+    st.links_per_round.push_back(st.links);
+    st.leaves_per_round.push_back(st.leaves);
+    if (!previous_.empty()) {
+      double change = 0.0, top = 0.0;
+      for (size_t n = 0; n < B_.size(); ++n) {
+        const int old = nearest_old(static_cast<int>(n), previous_.size());
+        change = std::max(change, max3(glm::abs(B_[n] - previous_[static_cast<size_t>(old)])));
+        top = std::max(top, max3(B_[n]));
+      }
+      st.last_change = top > 0.0 ? change / top : 0.0;
+    }
+  }
+
   int node_patch(int n) const { return out_.tree.node(n).patch; }
   // Keeps the per-node arrays as long as the tree.
   void grow() {
@@ -580,6 +597,7 @@ private:
   std::vector<Rgb>& rho_ = el_.reflectance;
   std::vector<Rgb>& emit_ = el_.emission;
   std::vector<Rgb> B_, H_;
+  std::vector<Rgb> previous_;  // node radiosity of the round before (for last_change)
   std::vector<double> F_sum_;
   std::vector<std::vector<std::pair<int, double>>> terms_;  // per leaf: (source node, F x visibility at the leaf)
   std::vector<std::vector<Link>> links_;  // per receiver node
@@ -604,9 +622,9 @@ const char* to_string(TVertexMode mode) {
   return "?";
 }
 
-HierarchicalSolution solve_hierarchical(const Scene& scene, const Mesh& initial, const SolveOptions& options,
-                                        const HierarchicalOptions& hopt,
-                                        const std::function<void(const HierarchicalSolution&, int)>& on_round) {
+namespace {
+
+void check_hierarchical_options(const Scene& scene, const SolveOptions& options, const HierarchicalOptions& hopt) {
   check_solve_options(options);
   if (!(hopt.epsilon > 0.0) || !(hopt.min_area >= 0.0) || hopt.max_rounds < 0 || !(hopt.baum_relative >= 0.0) ||
       !(hopt.baum_absolute >= 0.0))
@@ -618,11 +636,57 @@ HierarchicalSolution solve_hierarchical(const Scene& scene, const Mesh& initial,
     throw InputError("minimum element area (--min-area) " + format_number(hopt.min_area) +
                      " is below 1e-8 of the scene diagonal squared (" + format_number(diag2) +
                      "): refinement to it would not end in time or memory");
-  HierarchicalSolution out{ElementTree(initial), {}, {}, {}, {}, {}, {}, {}};
-  run_in_arena(options.threads, [&] {
-    Solver solver(scene, options, hopt, out);
-    solver.run(on_round);
-  });
+}
+
+}  // namespace
+
+struct HierarchicalSolver::Impl {
+  Impl(const Scene& scene, const Mesh& initial, const SolveOptions& o, const HierarchicalOptions& h)
+      : options(o), out{ElementTree(initial), {}, {}, {}, {}, {}, {}, {}} {
+    run_in_arena(options.threads, [&] {
+      solver = std::make_unique<Solver>(scene, options, h, out);
+      solver->start();
+    });
+  }
+  SolveOptions options;
+  HierarchicalSolution out;
+  std::unique_ptr<Solver> solver;
+  bool links_current = false;  // out.links filled since the last round
+};
+
+HierarchicalSolver::HierarchicalSolver(const Scene& scene, const Mesh& initial, const SolveOptions& options,
+                                       const HierarchicalOptions& hopt) {
+  check_hierarchical_options(scene, options, hopt);
+  impl_ = std::make_unique<Impl>(scene, initial, options, hopt);
+}
+
+HierarchicalSolver::~HierarchicalSolver() = default;
+
+bool HierarchicalSolver::refine() {
+  bool changed = false;
+  run_in_arena(impl_->options.threads, [&] { changed = impl_->solver->step(); });
+  if (changed) impl_->links_current = false;
+  return changed;
+}
+
+const HierarchicalSolution& HierarchicalSolver::solution() const {
+  if (!impl_->links_current) {
+    impl_->solver->finish();
+    impl_->links_current = true;
+  }
+  return impl_->out;
+}
+
+int HierarchicalSolver::rounds() const { return impl_->out.stats.rounds; }
+
+HierarchicalSolution solve_hierarchical(const Scene& scene, const Mesh& initial, const SolveOptions& options,
+                                        const HierarchicalOptions& hopt,
+                                        const std::function<void(const HierarchicalSolution&, int)>& on_round) {
+  HierarchicalSolver solver(scene, initial, options, hopt);
+  if (on_round) on_round(solver.solution(), 0);
+  while (solver.refine())
+    if (on_round) on_round(solver.solution(), solver.rounds() - 1);
+  HierarchicalSolution out = solver.solution();
   return out;
 }
 

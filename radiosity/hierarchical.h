@@ -11,6 +11,7 @@
 #include "radiosity/solve.h"
 
 #include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -102,8 +103,34 @@ struct HierarchicalSolution {
   HierarchicalStats stats;
 };
 
-// `on_round(solution, round)` is called after every solve (for a series of
-// files); the solution passed has mesh, leaf_of and solution filled.
+// Hierarchical radiosity with its state: the element tree, the links and the
+// radiosity live between calls. The constructor links the initial mesh's
+// roots and solves once; each refine() is one refinement round (links
+// refined where the current radiosity says it matters, then solved again).
+// Every call runs in its own TBB arena of options.threads workers. `scene`
+// must outlive the solver.
+class HierarchicalSolver {
+public:
+  HierarchicalSolver(const Scene& scene, const Mesh& initial, const SolveOptions& options,
+                     const HierarchicalOptions& hopt);
+  ~HierarchicalSolver();
+  HierarchicalSolver(const HierarchicalSolver&) = delete;
+  HierarchicalSolver& operator=(const HierarchicalSolver&) = delete;
+
+  // False, changing nothing, once the stopping rule is met (max_rounds, a
+  // change below the tolerance, nothing left to refine).
+  bool refine();
+  // The solution as it stands (links included).
+  const HierarchicalSolution& solution() const;
+  int rounds() const;  // solves done
+
+private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+// The one-off form: refines until the stopping rule. `on_round(solution,
+// round)` is called after every solve (for a series of files).
 HierarchicalSolution solve_hierarchical(
     const Scene& scene, const Mesh& initial, const SolveOptions& options, const HierarchicalOptions& hopt,
     const std::function<void(const HierarchicalSolution&, int round)>& on_round = {});

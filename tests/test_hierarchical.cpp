@@ -297,3 +297,34 @@ TEST(HierarchicalStress, MemoryLimitIsAClearErrorBeforeAnyCrash) {
   EXPECT_NE(later.find("refinement reached"), std::string::npos) << later;
   EXPECT_NE(later.find("--epsilon"), std::string::npos) << later;
 }
+
+TEST(Hierarchical, SolverObjectStepsToTheOneOffResult) {
+  // The solver object keeps tree, links and radiosity between rounds:
+  // stepping it by hand ends where solve_hierarchical ends, round for round.
+  const Scene s = read_obj_scene(kData + "/box_on_floor/box_on_floor.obj");
+  const Mesh m = coarse_mesh(s, 1.0);
+  HierarchicalOptions ho;
+  ho.epsilon = 0.01;
+  std::vector<long long> links_seen;
+  const HierarchicalSolution once =
+      solve_hierarchical(s, m, {}, ho, [&](const HierarchicalSolution& h, int round) {
+        EXPECT_EQ(static_cast<int>(links_seen.size()), round);
+        links_seen.push_back(h.stats.links_per_round.back());
+      });
+  HierarchicalSolver solver(s, m, {}, ho);
+  EXPECT_EQ(solver.rounds(), 1);
+  while (solver.refine()) {
+  }
+  EXPECT_FALSE(solver.refine());  // done stays done
+  const HierarchicalSolution& stepped = solver.solution();
+  ASSERT_GT(stepped.stats.rounds, 1);
+  EXPECT_EQ(stepped.stats.rounds, once.stats.rounds);
+  EXPECT_EQ(stepped.stats.links_per_round, once.stats.links_per_round);
+  EXPECT_EQ(static_cast<long long>(links_seen.size()), once.stats.rounds);
+  ASSERT_EQ(stepped.solution.element.size(), once.solution.element.size());
+  for (size_t t = 0; t < once.solution.element.size(); ++t)
+    EXPECT_EQ(stepped.solution.element[t], once.solution.element[t]);
+  long long published = 0;
+  for (const auto& l : stepped.links) published += static_cast<long long>(l.size());
+  EXPECT_EQ(published, stepped.stats.links);
+}
