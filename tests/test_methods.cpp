@@ -8,12 +8,15 @@
 
 #include <gtest/gtest.h>
 
+#include "test_util.h"
+
 #include <cmath>
 #include <numbers>
 #include <string>
 #include <vector>
 
 using namespace radmesh;
+using radmesh::test::transformed;
 
 namespace {
 const std::string kData = RADMESH_TEST_DATA;
@@ -37,19 +40,6 @@ MethodResult solve(const std::string& method, const Scene& scene, double edge_fr
   return run_method(m, scene, mesh_scene(scene, mo), so, quick ? m.quick : OptionValues{});
 }
 
-// Rebuilds a scene with every point mapped by f.
-template <class Map>
-Scene transformed(const Scene& s, Map f) {
-  std::vector<RawFace> faces;
-  for (const Patch& patch : s.patches) {
-    RawFace face;
-    face.name = patch.name;
-    face.material = patch.material;
-    for (const Vec3& v : s.loop_points(patch.outer)) face.points.push_back(f(v));
-    faces.push_back(face);
-  }
-  return build_scene(faces, s.materials, "transformed");
-}
 
 class Conformance : public ::testing::TestWithParam<std::string> {};
 

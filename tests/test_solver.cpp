@@ -9,6 +9,8 @@
 
 #include <gtest/gtest.h>
 
+#include "test_util.h"
+
 #include <algorithm>
 #include <functional>
 #include <cmath>
@@ -18,6 +20,7 @@
 #include <random>
 
 using namespace radmesh;
+using radmesh::test::transformed;
 
 namespace {
 const std::string kData = RADMESH_TEST_DATA;
@@ -38,21 +41,6 @@ Solved solve_file(const std::string& rel, double max_edge, SolveOptions so = {})
   return s;
 }
 
-// Rebuilds a scene from its patches with every point mapped by f and the
-// faces in the order `order` (a permutation of the patch indices).
-template <class Map>
-Scene transformed(const Scene& s, Map f, const std::vector<int>& order) {
-  std::vector<RawFace> faces;
-  for (int p : order) {
-    const Patch& patch = s.patches[static_cast<size_t>(p)];
-    RawFace face;
-    face.name = patch.name;
-    face.material = patch.material;
-    for (const Vec3& v : s.loop_points(patch.outer)) face.points.push_back(f(v));
-    faces.push_back(face);
-  }
-  return build_scene(faces, s.materials, "transformed");
-}
 }  // namespace
 
 TEST(Furnace, ClosedCubeHalfReflectanceGivesTwo) {

@@ -23,4 +23,23 @@ inline std::vector<double> patch_areas(const Scene& s, const Mesh& m) {
   return area;
 }
 
+// Rebuilds a scene from its patches (outer loops) with every point mapped by
+// f, the faces in the order `order` (a permutation of the patch indices;
+// empty: as they are).
+template <class Map>
+Scene transformed(const Scene& s, Map f, std::vector<int> order = {}) {
+  if (order.empty())
+    for (size_t p = 0; p < s.patches.size(); ++p) order.push_back(static_cast<int>(p));
+  std::vector<RawFace> faces;
+  for (int p : order) {
+    const Patch& patch = s.patches[static_cast<size_t>(p)];
+    RawFace face;
+    face.name = patch.name;
+    face.material = patch.material;
+    for (const Vec3& v : s.loop_points(patch.outer)) face.points.push_back(f(v));
+    faces.push_back(face);
+  }
+  return build_scene(faces, s.materials, "transformed");
+}
+
 }  // namespace radmesh::test
