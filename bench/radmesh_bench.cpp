@@ -67,7 +67,7 @@ struct Scenario {
 std::vector<Rgb> furnace_reference(const Scene& s, const std::vector<SurfaceSample>& samples) {
   std::vector<Rgb> r;
   for (const auto& p : samples) {
-    const Material& m = s.materials[static_cast<size_t>(s.patches[static_cast<size_t>(p.patch)].material)];
+    const Material& m = s.material_of(p.patch);
     r.push_back(m.emission / (Rgb(1.0) - m.reflectance));
   }
   return r;
@@ -78,14 +78,14 @@ std::vector<Rgb> furnace_reference(const Scene& s, const std::vector<SurfaceSamp
 std::vector<Rgb> plates_reference(const Scene& s, const std::vector<SurfaceSample>& samples) {
   int emitter = -1;
   for (size_t p = 0; p < s.patches.size(); ++p)
-    if (s.materials[static_cast<size_t>(s.patches[p].material)].emission != Rgb(0.0)) emitter = static_cast<int>(p);
+    if (s.material_of(p).emission != Rgb(0.0)) emitter = static_cast<int>(p);
   const Patch& e = s.patches[static_cast<size_t>(emitter)];
   const std::vector<Vec3> poly = s.loop_points(e.outer);
-  const Rgb E = s.materials[static_cast<size_t>(e.material)].emission;
+  const Rgb E = s.material_of(e).emission;
   std::vector<Rgb> r;
   for (const auto& sp : samples) {
     const Patch& p = s.patches[static_cast<size_t>(sp.patch)];
-    const Material& m = s.materials[static_cast<size_t>(p.material)];
+    const Material& m = s.material_of(p);
     if (sp.patch == emitter) {
       r.push_back(m.emission);
       continue;
@@ -266,7 +266,7 @@ int make_reference(const std::string& data, double max_edge, int rays, const std
   std::vector<Rgb> indirect_source(sol.element.size());
   for (size_t t = 0; t < sol.element.size(); ++t) {
     const Patch& p = scene.patches[static_cast<size_t>(mesh.patch[t])];
-    indirect_source[t] = sol.element[t] - scene.materials[static_cast<size_t>(p.material)].emission;
+    indirect_source[t] = sol.element[t] - scene.material_of(p).emission;
   }
   std::vector<Probe> probes;
   for (const auto& s : samples) {

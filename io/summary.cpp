@@ -100,7 +100,7 @@ nlohmann::json make_summary(const RunInfo& info, const Scene& scene, const Mesh&
     const Patch& patch = scene.patches[p];
     json j = {{"id", p},
               {"name", patch.name},
-              {"material", scene.materials[static_cast<size_t>(patch.material)].name},
+              {"material", scene.material_of(patch).name},
               {"area", scene.patch_area(static_cast<int>(p))}};
     if (solution) j["mean_radiosity"] = rgb(mean[p]);
     patches.push_back(j);

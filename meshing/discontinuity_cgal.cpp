@@ -262,7 +262,7 @@ public:
     std::vector<std::pair<double, int>> emitters;
     double strongest = 0.0;
     for (int p = 0; p < np; ++p) {
-      const Rgb& e = scene_.materials[static_cast<size_t>(scene_.patches[static_cast<size_t>(p)].material)].emission;
+      const Rgb& e = scene_.material_of(p).emission;
       const double power = std::max({e.x, e.y, e.z}) * scene_.patch_area(p);
       if (power > 0.0) emitters.push_back({power, p});
       strongest = std::max(strongest, power);

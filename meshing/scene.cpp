@@ -11,6 +11,12 @@
 
 namespace radmesh {
 
+const Material& Scene::material_of(int patch) const {
+  return materials[static_cast<size_t>(patches[static_cast<size_t>(patch)].material)];
+}
+
+const Material& Scene::material_of(const Patch& patch) const { return materials[static_cast<size_t>(patch.material)]; }
+
 std::vector<Vec3> Scene::loop_points(const std::vector<int>& loop) const {
   std::vector<Vec3> pts;
   pts.reserve(loop.size());

@@ -56,6 +56,8 @@ struct Scene {
   SceneReport report;
 
   std::vector<Vec3> loop_points(const std::vector<int>& loop) const;
+  const Material& material_of(int patch) const;      // the material of patches[patch]
+  const Material& material_of(const Patch& patch) const;
   double patch_area(int p) const;          // outer area minus holes
   void bounds(Vec3& lo, Vec3& hi) const;   // bounding box of all vertices
   double diagonal() const;                 // bounding-box diagonal length

@@ -140,8 +140,7 @@ namespace radmesh {
 std::vector<Rgb> reflected_part(const Scene& scene, const std::vector<SurfaceSample>& samples,
                                 std::vector<Rgb> radiosity) {
   for (size_t k = 0; k < samples.size(); ++k)
-    radiosity[k] -= scene.materials[static_cast<size_t>(scene.patches[static_cast<size_t>(samples[k].patch)].material)]
-                        .emission;
+    radiosity[k] -= scene.material_of(samples[k].patch).emission;
   return radiosity;
 }
 

@@ -164,7 +164,7 @@ LineSet link_line_set(const Scene& scene, const HierarchicalSolution& h) {
   for (size_t r = 0; r < h.links.size(); ++r) {
     const int rn = static_cast<int>(r);
     const Patch& patch = scene.patches[static_cast<size_t>(h.tree.node(rn).patch)];
-    const Rgb& rho = scene.materials[static_cast<size_t>(patch.material)].reflectance;
+    const Rgb& rho = scene.material_of(patch).reflectance;
     for (const HierarchicalLink& l : h.links[r]) {
       out.segments.push_back({h.tree.centroid(rn), h.tree.centroid(l.source)});
       rl.push_back(h.tree.node(rn).level);

@@ -170,7 +170,7 @@ NodalField compute_nodal(const Scene& scene, const Mesh& mesh, const std::vector
       if (!value) continue;  // keep the mean
       // Radiosity is never below the surface's own emission.
       const Patch& patch = scene.patches[static_cast<size_t>(mesh.patch[static_cast<size_t>(tris[0])])];
-      const Rgb floor = scene.materials[static_cast<size_t>(patch.material)].emission;
+      const Rgb floor = scene.material_of(patch).emission;
       field.radiosity[static_cast<size_t>(display[static_cast<size_t>(i)])] = glm::max(*value, floor);
     }
   }

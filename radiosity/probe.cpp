@@ -75,7 +75,7 @@ std::vector<ProbeResult> evaluate_probes(const Scene& scene, const Mesh& mesh,
         const double visible = visibility.visible_fraction(point, pp, el.size() + k, tj, el.patch[j], j, rays);
         h += f * visible * element_radiosity[j];
       }
-      const Material& m = scene.materials[static_cast<size_t>(scene.patches[static_cast<size_t>(pp)].material)];
+      const Material& m = scene.material_of(pp);
       out[k].radiosity = m.emission + m.reflectance * h;
     });
   });

@@ -15,7 +15,7 @@ namespace radmesh {
 
 void ElementSet::add(const Scene& scene, int p, const Vec3& a, const Vec3& b, const Vec3& c, bool zero_area_flag) {
   const Patch& patch = scene.patches[static_cast<size_t>(p)];
-  const Material& m = scene.materials[static_cast<size_t>(patch.material)];
+  const Material& m = scene.material_of(patch);
   triangle.push_back(make_triangle(a, b, c, patch.normal));
   this->patch.push_back(p);
   reflectance.push_back(m.reflectance);

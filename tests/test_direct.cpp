@@ -85,8 +85,8 @@ TEST_F(BoxOnFloor, PenumbraMatchesTheHandComputedVisiblePart) {
   }
   // Reflected radiosity: rho * E * F.
   const Rgb b = direct.reflected(Vec3(0.75, 0.0, 0.0), floor);
-  const Material& white = s.materials[static_cast<size_t>(s.patches[static_cast<size_t>(floor)].material)];
-  const Material& lamp = s.materials[static_cast<size_t>(s.patches[static_cast<size_t>(light)].material)];
+  const Material& white = s.material_of(floor);
+  const Material& lamp = s.material_of(light);
   EXPECT_NEAR(b.x, white.reflectance.x * lamp.emission.x * f, 1e-13);
 }
 

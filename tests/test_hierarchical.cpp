@@ -39,7 +39,7 @@ TEST(Hierarchical, FurnaceIsUniform) {
   ho.epsilon = 0.02;
   ho.min_area = 2e-3;  // a few thousand leaves: the property does not depend on depth
   const HierarchicalSolution h = solve_hierarchical(s, m, {}, ho);
-  const Material& mat = s.materials[static_cast<size_t>(s.patches[0].material)];
+  const Material& mat = s.material_of(0);
   const double expected = mat.emission.x / (1.0 - mat.reflectance.x);
   double lo = 1e300, hi = 0.0, area = 0.0, mean = 0.0;
   for (size_t t = 0; t < h.solution.element.size(); ++t) {
@@ -259,7 +259,7 @@ TEST(Hierarchical, BaumCriterionSplitsWhereVertexValuesDiffer) {
   double top = 0.0;  // the largest reflected radiosity
   for (size_t n = 0; n < baum.node_radiosity.size(); ++n) {
     const Patch& patch = s.patches[static_cast<size_t>(baum.tree.node(static_cast<int>(n)).patch)];
-    top = std::max(top, baum.node_radiosity[n].x - s.materials[static_cast<size_t>(patch.material)].emission.x);
+    top = std::max(top, baum.node_radiosity[n].x - s.material_of(patch).emission.x);
   }
   for (size_t t = 0; t < baum.leaf_of.size(); ++t) {
     const int n = baum.leaf_of[t];
