@@ -677,17 +677,23 @@ const HierarchicalSolution& HierarchicalSolver::solution() const {
   return impl_->out;
 }
 
+HierarchicalSolution HierarchicalSolver::take_solution() {
+  solution();
+  return std::move(impl_->out);
+}
+
 int HierarchicalSolver::rounds() const { return impl_->out.stats.rounds; }
 
 HierarchicalSolution solve_hierarchical(const Scene& scene, const Mesh& initial, const SolveOptions& options,
                                         const HierarchicalOptions& hopt,
                                         const std::function<void(const HierarchicalSolution&, int)>& on_round) {
   HierarchicalSolver solver(scene, initial, options, hopt);
-  if (on_round) on_round(solver.solution(), 0);
+  // Each round's solution as it stands, without copying the links every
+  // round: they are published once, at the end.
+  if (on_round) on_round(solver.impl_->out, 0);
   while (solver.refine())
-    if (on_round) on_round(solver.solution(), solver.rounds() - 1);
-  HierarchicalSolution out = solver.solution();
-  return out;
+    if (on_round) on_round(solver.impl_->out, solver.rounds() - 1);
+  return solver.take_solution();
 }
 
 }  // namespace radmesh

@@ -122,9 +122,14 @@ public:
   bool refine();
   // The solution as it stands (links included).
   const HierarchicalSolution& solution() const;
+  // The solution moved out (links included); the solver is spent after it.
+  HierarchicalSolution take_solution();
   int rounds() const;  // solves done
 
 private:
+  friend HierarchicalSolution solve_hierarchical(const Scene&, const Mesh&, const SolveOptions&,
+                                                 const HierarchicalOptions&,
+                                                 const std::function<void(const HierarchicalSolution&, int)>&);
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };

@@ -182,20 +182,16 @@ LineSet link_line_set(const Scene& scene, const HierarchicalSolution& h) {
   return out;
 }
 
-// The conforming mesh of a hierarchical solution with its per-cell level,
-// zero_area flag and link count.
-MethodResult hierarchical_result(const HierarchicalSolution& h) {
-  MethodResult r;
-  r.mesh = h.mesh;
-  r.solution = h.solution;
+// The per-cell level, zero_area flag and link count of a hierarchical
+// solution's conforming mesh.
+std::vector<std::pair<std::string, std::vector<int>>> hierarchical_fields(const HierarchicalSolution& h) {
   std::vector<int> level, zero, links;
   for (int leaf : h.leaf_of) {
     level.push_back(leaf >= 0 ? h.tree.node(leaf).level : -1);
     zero.push_back(leaf < 0 ? 1 : 0);
     links.push_back(leaf >= 0 ? h.node_links[static_cast<size_t>(leaf)] : 0);
   }
-  r.cell_fields = {{"level", level}, {"zero_area", zero}, {"links", links}};
-  return r;
+  return {{"level", level}, {"zero_area", zero}, {"links", links}};
 }
 
 std::vector<double> as_doubles(const auto& v) { return std::vector<double>(v.begin(), v.end()); }
@@ -244,11 +240,18 @@ Method make_hierarchical_method() {
     ho.baum_relative = o.number("baum");
     std::function<void(const HierarchicalSolution&, int)> on_round;
     if (cb.on_round)
-      on_round = [&](const HierarchicalSolution& h, int round) { cb.on_round(hierarchical_result(h), round); };
+      on_round = [&](const HierarchicalSolution& h, int round) {
+        MethodResult snapshot;
+        snapshot.mesh = h.mesh;
+        snapshot.solution = h.solution;
+        snapshot.cell_fields = hierarchical_fields(h);
+        cb.on_round(snapshot, round);
+      };
     if (cb.progress) cb.progress("hierarchical", 0.0);
-    const HierarchicalSolution h = solve_hierarchical(scene, mesh, so, ho, on_round);
+    HierarchicalSolution h = solve_hierarchical(scene, mesh, so, ho, on_round);
     if (cb.progress) cb.progress("hierarchical", 1.0);
-    MethodResult r = hierarchical_result(h);
+    MethodResult r;
+    r.cell_fields = hierarchical_fields(h);
     if (o.number("export_links") != 0.0) r.line_sets.emplace_back("links", link_line_set(scene, h));
     const HierarchicalStats& hs = h.stats;
     r.counters = {count("rounds", hs.rounds),
@@ -271,6 +274,8 @@ Method make_hierarchical_method() {
     r.report = std::to_string(hs.leaves) + " leaves, " + std::to_string(hs.links) + " links, " +
                std::to_string(hs.zero_area_triangles) + " zero-area triangles, " + std::to_string(hs.rounds) +
                " rounds";
+    r.mesh = std::move(h.mesh);
+    r.solution = std::move(h.solution);
     return r;
   };
   return m;
