@@ -4,9 +4,10 @@
 // summary, the benchmark and the conformance tests loop over this table.
 //
 // Adding a method: write its solver in its own files (a one-off
-// solve_x(...) and, where state lives between calls, a solver class), a
-// `Method make_x_method()` that declares its options and adapts its result
-// (see methods.cpp for the two that exist), and one line in `methods()`.
+// solve_x(...) and, where state lives between calls, a solver class) and an
+// x_method.cpp whose `Method make_x_method()` declares its options and
+// adapts its result (matrix_method.cpp, hierarchical_method.cpp), then add
+// its line to `methods()` in methods.cpp.
 #pragma once
 
 #include "meshing/mesh.h"
