@@ -92,15 +92,20 @@ public:
   // (max_rounds, a change below the tolerance) or nothing was refined.
   bool step() {
     auto& st = out_.stats;
-    if (st.rounds - 1 >= hopt_.max_rounds) return false;
-    if (st.rounds > 1 && st.last_change < opt_.tolerance) return false;
+    if (done_ || st.rounds - 1 >= hopt_.max_rounds || (st.rounds > 1 && st.last_change < opt_.tolerance)) {
+      done_ = true;
+      return false;
+    }
     previous_ = B_;
     const auto t2 = std::chrono::steady_clock::now();
     const long long refined = refine_links();
     const int baum = split_by_variation();
     close_t_vertices();
     st.seconds_link += seconds_since(t2);
-    if (refined == 0 && baum == 0) return false;
+    if (refined == 0 && baum == 0) {
+      done_ = true;
+      return false;
+    }
     solve_round();
     return true;
   }
@@ -598,6 +603,7 @@ private:
   std::vector<Rgb>& emit_ = el_.emission;
   std::vector<Rgb> B_, H_;
   std::vector<Rgb> previous_;  // node radiosity of the round before (for last_change)
+  bool done_ = false;          // the stopping rule was met: step() changes nothing more
   std::vector<double> F_sum_;
   std::vector<std::vector<std::pair<int, double>>> terms_;  // per leaf: (source node, F x visibility at the leaf)
   std::vector<std::vector<Link>> links_;  // per receiver node

@@ -23,17 +23,20 @@ struct NodalField {
 
 struct SolveStats {
   long long elements = 0;
-  long long form_factors = 0;          // entries of F computed
+  long long form_factors = 0;          // entries of F computed (hierarchical: its links)
   long long form_factors_skipped = 0;  // entries never needed (rows of black receivers, ...)
   long long receiver_points = 0;       // quadrature points over all receivers
   long long rays_cast = 0;
   long long rays_skipped = 0;          // shadow rays not cast because nothing can occlude
   long long pairs_unoccludable = 0;    // element pairs that no patch can occlude
   bool convex_enclosure = false;       // the scene is one convex enclosure: no rays at all
-  int channels_solved = 0;             // distinct channels solved (identical ones are solved once)
+  // The matrix method's Gauss-Seidel: distinct channels solved (identical
+  // ones are solved once) and iterations per channel. Other methods leave
+  // them 0 and publish their own counts (e.g. hierarchical "sweeps").
+  int channels_solved = 0;
   std::array<int, 3> iterations{0, 0, 0};
   std::array<double, 3> residual{0, 0, 0};  // final relative residual per channel
-  double seconds_form_factors = 0.0;
+  double seconds_form_factors = 0.0;  // form factors (hierarchical: linking)
   double seconds_solve = 0.0;
   // Energy balance (per channel): emitted = absorbed + escaped.
   Rgb power_emitted{0.0};
