@@ -10,7 +10,7 @@ find_package(tinyobjloader REQUIRED)
 find_package(nlohmann_json 3 REQUIRED)
 find_package(CLI11 REQUIRED)
 
-set(RADMESH_VTK_COMPONENTS CommonCore CommonDataModel CommonExecutionModel IOXML)
+set(RADMESH_VTK_COMPONENTS CommonCore CommonDataModel CommonExecutionModel CommonMisc IOXML)
 if(RADMESH_WITH_RENDERING)
   find_package(X11 REQUIRED)
   list(APPEND RADMESH_VTK_COMPONENTS IOImage RenderingCore RenderingOpenGL2 RenderingFreeType
