@@ -24,6 +24,9 @@
 #include <iostream>
 #include <map>
 #include <optional>
+#include <regex>
+
+#include <unistd.h>
 
 namespace {
 
@@ -91,6 +94,42 @@ private:
   bool shown_ = false;
 };
 
+// The output directory can be made: it is a directory, or its nearest
+// existing ancestor is a writable directory. Checked before any work.
+void check_output_dir(const std::string& dir) {
+  std::error_code ec;
+  fs::path d = fs::absolute(dir, ec);
+  if (fs::exists(d, ec) && !fs::is_directory(d, ec)) throw InputError("-o " + dir + ": exists and is not a directory");
+  while (!d.empty() && !fs::exists(d, ec)) d = d.parent_path();
+  if (d.empty() || !fs::is_directory(d, ec))
+    throw InputError("-o " + dir + ": cannot be created (" + d.string() + " is not a directory)");
+  if (::access(d.c_str(), W_OK) != 0)
+    throw InputError("-o " + dir + ": cannot be created or written (" + d.string() + " is not writable)");
+}
+
+// What run and mesh write, and what quality writes.
+const char* const kRunOutputs =
+    R"((radiosity|mesh|links|discontinuities)\.vtu|radiosity_round_[0-9]+\.vtu|radiosity\.pvd|probes\.csv|)"
+    R"(radiosity\.png|summary\.json)";
+const char* const kQualityOutputs = R"(quality\.csv|quality_(min_angle|aspect_ratio)\.png)";
+
+// Makes the output directory (IoError naming it when that fails) and
+// removes what an earlier run of the same command left there (files whose
+// names match `outputs`) that this run does not write again (round files,
+// links, probes, pictures), so the directory holds one run's results.
+void prepare_output_dir(const std::string& dir, const char* outputs, const std::vector<std::string>& will_write) {
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  if (ec) throw IoError("-o " + dir + ": cannot create the output directory: " + ec.message());
+  const std::regex ours(outputs);
+  for (const fs::directory_entry& e : fs::directory_iterator(dir, ec)) {
+    const std::string name = e.path().filename().string();
+    if (e.is_regular_file() && std::regex_match(name, ours) &&
+        std::find(will_write.begin(), will_write.end(), name) == will_write.end())
+      fs::remove(e.path(), ec);
+  }
+}
+
 // Options that can be checked without reading anything: done before any work.
 void check_params(Params& p, bool solving) {
   if (solving) {
@@ -105,8 +144,7 @@ void check_params(Params& p, bool solving) {
   if (p.meshing.max_edge < 0.0 || !std::isfinite(p.meshing.max_edge))
     throw InputError("--max-edge " + std::to_string(p.meshing.max_edge) + " must be > 0 (or 0 for auto)");
   if (solving) check_solve_options(p.solve);
-  if (fs::exists(p.out_dir) && !fs::is_directory(p.out_dir))
-    throw InputError("-o " + p.out_dir + ": exists and is not a directory");
+  check_output_dir(p.out_dir);
   if (!p.probe_file.empty() && !fs::exists(p.probe_file))
     throw InputError("--probe " + p.probe_file + ": no such file");
 }
@@ -174,7 +212,15 @@ int run(Params& p, bool solving) {
   }
 
   // Everything is computed: only now is the output directory touched.
-  fs::create_directories(p.out_dir);
+  std::vector<std::string> outputs = {result ? "radiosity.vtu" : "mesh.vtu", "summary.json"};
+  if (!rounds.empty()) outputs.push_back("radiosity.pvd");
+  for (size_t r = 0; r < rounds.size(); ++r) outputs.push_back("radiosity_round_" + std::to_string(r) + ".vtu");
+  if (result)
+    for (const auto& ls : result->line_sets) outputs.push_back(ls.first + ".vtu");
+  if (!info.mesh_report.discontinuities.empty()) outputs.push_back("discontinuities.vtu");
+  if (!probes.empty()) outputs.push_back("probes.csv");
+  if (result && p.png) outputs.push_back("radiosity.png");
+  prepare_output_dir(p.out_dir, kRunOutputs, outputs);
   rep.begin("write");
   std::vector<std::string> written;
   auto path_in_out = [&](const std::string& name) { return (fs::path(p.out_dir) / name).string(); };
@@ -272,7 +318,7 @@ int quality(Params& p) {
                 (r.patch < 0 ? std::string("total") : names[static_cast<size_t>(r.patch)]).c_str(), r.triangles,
                 r.min_angle, r.max_angle, r.aspect_p50, r.aspect_p95, r.aspect_max, r.contact_segments,
                 r.d1_segments, r.d2_segments, r.zero_area);
-  fs::create_directories(p.out_dir);
+  prepare_output_dir(p.out_dir, kQualityOutputs, {"quality.csv", "quality_min_angle.png", "quality_aspect_ratio.png"});
   const std::string csv = (fs::path(p.out_dir) / "quality.csv").string();
   write_quality_csv(csv, names, rows);
   std::printf("%s\n", csv.c_str());
@@ -391,7 +437,10 @@ int main(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    // Usage errors (an unknown flag, a bad value, a missing argument) exit
+    // with 2; --help and --version with 0.
+    const int code = app.exit(e);
+    return code == 0 ? 0 : 2;
   }
   try {
     if (*run_cmd) {

@@ -163,7 +163,11 @@ void write_quality_csv(const std::string& path, const std::vector<std::string>& 
 }
 
 void write_json(const std::string& path, const nlohmann::json& doc) {
-  write_file_atomically(path, [&](std::ostream& out) { out << doc.dump(2) << '\n'; });
+  // Bytes that are not UTF-8 (a name from a file in another encoding) are
+  // written as U+FFFD instead of failing.
+  write_file_atomically(path, [&](std::ostream& out) {
+    out << doc.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) << '\n';
+  });
 }
 
 }  // namespace radmesh

@@ -13,6 +13,7 @@
 #include <iterator>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <cstdio>
@@ -373,4 +374,64 @@ TEST(Cli, QualityOfAWrittenMeshMatchesTheSceneRunWithShadowLines) {
   EXPECT_NE(bad_vtu.status, 0);
   EXPECT_NE(bad_vtu.err.find("discontinuities.vtu"), std::string::npos) << bad_vtu.err;
   for (const auto& d : {a, m, b}) fs::remove_all(d);
+}
+
+TEST(Cli, ASecondRunIntoTheSameDirectoryLeavesOnlyItsOwnFiles) {
+  // The first run writes links.vtu and three refinement rounds; the second
+  // (matrix) writes neither: nothing of the first may be left beside it.
+  const fs::path out = fresh_dir("rerun");
+  const std::string scene = kData + "/box_on_floor/box_on_floor.obj";
+  ASSERT_EQ(radmesh("run " + scene + " --no-png -q --export-links --epsilon 0.01 -o " + out.string()).status, 0);
+  ASSERT_TRUE(fs::exists(out / "links.vtu"));
+  ASSERT_TRUE(fs::exists(out / "radiosity_round_1.vtu"));
+  {
+    std::ofstream mine(out / "notes.txt");  // not ours: kept
+    mine << "user file\n";
+  }
+  ASSERT_EQ(radmesh("run " + scene + " --no-png -q --method matrix -o " + out.string()).status, 0);
+  std::vector<std::string> names;
+  for (const auto& e : fs::directory_iterator(out)) names.push_back(e.path().filename().string());
+  std::sort(names.begin(), names.end());
+  EXPECT_EQ(names, (std::vector<std::string>{"discontinuities.vtu", "notes.txt", "radiosity.vtu", "summary.json"}));
+  fs::remove_all(out);
+}
+
+TEST(Cli, NamesThatAreNotUtf8AreWrittenReplacedNotAnInternalError) {
+  const fs::path dir = fresh_dir("latin1");
+  fs::create_directories(dir);
+  const std::string src = kData + "/parallel_plates/parallel_plates";
+  fs::copy_file(src + ".mtl", dir / "parallel_plates.mtl");
+  std::ifstream in(src + ".obj");
+  std::ofstream obj(dir / "scene.obj");
+  for (std::string line; std::getline(in, line);)
+    obj << (line.rfind("o receiver", 0) == 0 ? std::string("o r\xE9\x63\x65pteur") : line) << '\n';  // Latin-1 e-acute
+  obj.close();
+  const Result r = radmesh("run " + (dir / "scene.obj").string() + " --no-png -q -o " + (dir / "out").string());
+  ASSERT_EQ(r.status, 0) << r.err;
+  const nlohmann::json s = read_summary(dir / "out");
+  int replaced = 0;
+  for (const auto& p : s["patches"])
+    if (p["name"].get<std::string>() == "r\xEF\xBF\xBD" "cepteur") ++replaced;  // U+FFFD in UTF-8
+  EXPECT_EQ(replaced, 1);
+  fs::remove_all(dir);
+}
+
+TEST(Cli, ExitCodesAreZeroOneAndTwo) {
+  // 0 success (and --help), 1 bad input, 2 usage (a flag or argument the
+  // program does not know or cannot parse).
+  EXPECT_EQ(radmesh("--help").status, 0);
+  EXPECT_EQ(radmesh("run --help").status, 0);
+  EXPECT_EQ(radmesh("run").status, 2);
+  EXPECT_EQ(radmesh("run " + kData + "/cornell_box/cornell_box.obj --bogus-flag").status, 2);
+  EXPECT_EQ(radmesh("run " + kData + "/cornell_box/cornell_box.obj --rays many").status, 2);
+  EXPECT_EQ(radmesh("frobnicate").status, 2);
+  const fs::path out = fresh_dir("exit1");
+  EXPECT_EQ(radmesh("run " + kData + "/bad/nan_coordinate.obj -o " + out.string()).status, 1);
+  // An output directory that cannot be made is bad input, found before any work.
+  const fs::path file = out.string() + "_file";
+  std::ofstream(file) << "x";
+  const Result r = radmesh("run " + kData + "/parallel_plates/parallel_plates.obj -o " + (file / "sub").string());
+  EXPECT_EQ(r.status, 1) << r.err;
+  EXPECT_NE(r.err.find("is not a directory"), std::string::npos) << r.err;
+  fs::remove(file);
 }
