@@ -41,11 +41,25 @@ std::string message_of(F f) {
 
 bool contains(const std::string& s, const std::string& part) { return s.find(part) != std::string::npos; }
 
-// A fresh directory per test.
+// A fresh directory per test, removed when the test program ends.
+std::vector<fs::path>& made_dirs() {
+  static std::vector<fs::path> dirs;
+  return dirs;
+}
+
+class RemoveMadeDirs : public ::testing::Environment {
+  void TearDown() override {
+    for (const fs::path& d : made_dirs()) fs::remove_all(d);
+  }
+};
+[[maybe_unused]] ::testing::Environment* const remove_made_dirs =
+    ::testing::AddGlobalTestEnvironment(new RemoveMadeDirs);
+
 fs::path fresh_dir(const std::string& name) {
   const fs::path d = fs::temp_directory_path() / ("radmesh_readers_" + name + "_" + std::to_string(::getpid()));
   fs::remove_all(d);
   fs::create_directories(d);
+  made_dirs().push_back(d);
   return d;
 }
 
@@ -618,9 +632,11 @@ TEST(Bunny, SceneStandsOnTheFloorOfItsRoom) {
   ASSERT_EQ(s.materials.size(), 5u);  // clay, then white, red, green, light from room.mtl
   EXPECT_EQ(s.materials[0].name, "clay");
   Vec3 lo(1e300), hi(-1e300);
+  double area = 0.0;
   for (size_t p = 10; p < s.patches.size(); ++p) {
     EXPECT_EQ(s.patches[p].name, "bunny");
     EXPECT_EQ(s.patches[p].material, 0);
+    area += s.patch_area(static_cast<int>(p));
     for (int v : s.patches[p].outer) {
       lo = glm::min(lo, s.vertices[static_cast<size_t>(v)]);
       hi = glm::max(hi, s.vertices[static_cast<size_t>(v)]);
@@ -631,6 +647,8 @@ TEST(Bunny, SceneStandsOnTheFloorOfItsRoom) {
   EXPECT_NEAR(hi.y, 9657897 * 5e-8, 1e-15);
   EXPECT_NEAR((lo.x + hi.x) / 2, 1.0, 1e-8);
   EXPECT_NEAR((lo.z + hi.z) / 2, 1.0, 1e-8);
+  // Its area, summed over the PLY's triangles scaled by 5e-8 (in Python, as a check).
+  EXPECT_NEAR(area, 0.5467231782172347, 1e-12);
 }
 
 TEST(Bunny, EveryFormatOfTheSameMeshGivesIdenticalPatches) {
@@ -693,10 +711,17 @@ TEST(Readers, MillionTrianglePlyLoadsInSeconds) {
   fs::remove_all(dir);
 }
 
-// Per-format load times of the million-triangle grid (not run by ctest):
+// Per-format load times of the million-triangle grid, and of a quarter of it
+// as binary PLY to see that time is linear (not run by ctest):
 //   build/tests/test_readers --gtest_also_run_disabled_tests --gtest_filter='*LoadTimes*'
 TEST(Readers, DISABLED_LoadTimesPerFormat) {
   const fs::path dir = fresh_dir("times");
+  test::write_ply(dir / "quarter.ply", grid(354), true);
+  write_text(dir / "quarter.json", grey_scene("quarter.ply"));
+  const auto t0 = std::chrono::steady_clock::now();
+  const Scene quarter = read_scene((dir / "quarter.json").string());
+  std::printf("%-16s %zu patches, %zu vertices: %.2f s\n", "quarter.ply", quarter.patches.size(),
+              quarter.vertices.size(), seconds_since(t0));
   const PolyMesh m = grid(708);
   const auto files = write_every_format(dir, m, "grid");
   for (const std::string& f : files) {
