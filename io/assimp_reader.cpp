@@ -92,8 +92,8 @@ struct Affine {
     const float r[3][4] = {{a.a1, a.a2, a.a3, a.a4}, {a.b1, a.b2, a.b3, a.b4}, {a.c1, a.c2, a.c3, a.c4}};
     for (int i = 0; i < 3; ++i)
       for (int j = 0; j < 4; ++j) t.m[i][j] = r[i][j];
-    t.identity = a.IsIdentity() && a.a1 == 1.0f && a.b2 == 1.0f && a.c3 == 1.0f && a.a4 == 0.0f &&
-                 a.b4 == 0.0f && a.c4 == 0.0f;
+    for (int i = 0; i < 3; ++i)  // exactly (assimp's IsIdentity() allows 1e-2)
+      for (int j = 0; j < 4; ++j) t.identity = t.identity && r[i][j] == (i == j ? 1.0f : 0.0f);
     return t;
   }
   Affine then(const Affine& child) const {  // this * child
@@ -214,7 +214,8 @@ GltfMaterials gltf_materials(const std::string& path, const Json& gltf) {
     std::vector<std::string> notes;
     if (pbr.contains("baseColorTexture"))
       notes.push_back(at + "baseColorTexture is ignored: the reflectance is baseColorFactor");
-    if (m.contains("emissiveTexture")) notes.push_back(at + "emissiveTexture is ignored: the emission is emissiveFactor");
+    if (m.contains("emissiveTexture"))
+      notes.push_back(at + "emissiveTexture is ignored: the emission is emissiveFactor");
     out.notes.push_back(std::move(notes));
     out.base_given.push_back(pbr.contains("baseColorFactor"));
     out.where.push_back(path + ": " + key + " '" + mat.name + "'");

@@ -209,7 +209,8 @@ SceneSource read_obj_source(const std::string& path) {
       }
       offset += nv;
       if (face.material < 0 && source.missing_material.empty())
-        source.missing_material = where(path, face.line) + "face '" + face.name + "' has no material (no usemtl before it)";
+        source.missing_material =
+            where(path, face.line) + "face '" + face.name + "' has no material (no usemtl before it)";
       faces.push_back(std::move(face));
     }
   }

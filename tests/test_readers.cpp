@@ -203,7 +203,8 @@ TEST(Readers, PolygonsStayPolygonsInPlyOffAndObj) {
   for (const Patch& p : scenes[0].patches) EXPECT_EQ(p.outer.size(), 4u);
   // Face 0 is x = 0, facing -x (outward).
   expect_point(scenes[0].patches[0].normal, {-1, 0, 0}, 0.0);
-  for (size_t i = 1; i < scenes.size(); ++i) expect_same_scene(scenes[0], scenes[i], 0.0, "format " + std::to_string(i));
+  for (size_t i = 1; i < scenes.size(); ++i)
+    expect_same_scene(scenes[0], scenes[i], 0.0, "format " + std::to_string(i));
 }
 
 TEST(Readers, ObjWithMtlAndGltfCarryTheSameMaterials) {
@@ -238,6 +239,16 @@ TEST(Readers, GltfNodeTransformIsAppliedAndAMirrorKeepsFacesFacingOut) {
   grey.emissive = {1, 1, 1};
   test::write_gltf(dir / "moved.gltf", m, "moved", false, &grey, "\"translation\": [10, 0, 0]");
   test::write_gltf(dir / "mirrored.gltf", m, "mirrored", false, &grey, "\"scale\": [-1, 1, 1]");
+  // A turn of 0.5 degrees about z, small enough for assimp's own identity test
+  // (entries within 1e-2 of the identity's off the diagonal): applied all the same.
+  const double half = 0.25 * 3.14159265358979323846 / 180.0;
+  std::ostringstream q;
+  q.precision(17);
+  q << "\"rotation\": [0, 0, " << std::sin(half) << ", " << std::cos(half) << "]";
+  test::write_gltf(dir / "turned.gltf", m, "turned", false, &grey, q.str());
+  const double c = std::cos(2 * half), sn = std::sin(2 * half);
+  expect_point(point(read_scene((dir / "turned.gltf").string()), 0, 0),
+               {1.75 * c - 0.25 * sn, 1.75 * sn + 0.25 * c, 0.5}, 1e-6);
   const Scene moved = read_scene((dir / "moved.gltf").string());
   const Scene mirrored = read_scene((dir / "mirrored.gltf").string());
   expect_point(point(moved, 0, 0), {11.75, 0.25, 0.5}, 0.0);
@@ -282,7 +293,8 @@ TEST(JsonScene, ScaleThenRotateXThenYThenZThenTranslate) {
              "{\"materials\": {\"m\": {\"reflectance\": [0.5, 0.5, 0.5], \"emission\": [1, 1, 1]}},\n"
              " \"objects\": [{\"file\": \"tri.ply\", \"material\": \"m\", \"transform\": {\"scale\": [1, 2, 3],"
              " \"rotate_deg\": [90, 90, 90], \"translate\": [10, 20, 30]}},\n"
-             "  {\"file\": \"tri.ply\", \"material\": \"m\", \"transform\": {\"scale\": 2, \"rotate_deg\": [0, 0, 30]}},\n"
+             "  {\"file\": \"tri.ply\", \"material\": \"m\",\n"
+             "   \"transform\": {\"scale\": 2, \"rotate_deg\": [0, 0, 30]}},\n"
              "  {\"file\": \"tri.ply\", \"material\": \"m\", \"transform\": {\"translate\": [0.5, 0, 0.5]}}]}\n");
   const Scene s = read_scene((dir / "s.json").string());
   ASSERT_EQ(s.patches.size(), 3u);
@@ -303,7 +315,8 @@ TEST(JsonScene, MirroringScaleReversesFacesSoTheyKeepFacingOut) {
   test::write_ply(dir / "octa.ply", octahedron(), false);
   write_text(dir / "s.json",
              "{\"materials\": {\"m\": {\"reflectance\": [0.5, 0.5, 0.5], \"emission\": [1, 1, 1]}},\n"
-             " \"objects\": [{\"file\": \"octa.ply\", \"material\": \"m\", \"transform\": {\"scale\": [-1, 1, 1]}}]}\n");
+             " \"objects\": [{\"file\": \"octa.ply\", \"material\": \"m\",\n"
+             "              \"transform\": {\"scale\": [-1, 1, 1]}}]}\n");
   const Scene s = read_scene((dir / "s.json").string());
   ASSERT_EQ(s.patches.size(), 8u);
   expect_point(point(s, 0, 0), {-1.75, 0.25, 0.5}, 0.0);
@@ -349,7 +362,8 @@ TEST(JsonScene, ObjectsKeepTheirFilesMaterialsUnlessTheyNameOne) {
              "{\"materials\": {\"clay\": {\"reflectance\": [0.6, 0.5, 0.4]}},\n"
              " \"objects\": [{\"file\": \"room.obj\"}, {\"file\": \"lamp.glb\"},\n"
              "             {\"file\": \"room.obj\", \"transform\": {\"translate\": [5, 0, 0]}},\n"
-             "             {\"file\": \"lamp.glb\", \"material\": \"clay\", \"transform\": {\"translate\": [9, 0, 0]}}]}\n");
+             "             {\"file\": \"lamp.glb\", \"material\": \"clay\",\n"
+             "              \"transform\": {\"translate\": [9, 0, 0]}}]}\n");
   const Scene s = read_scene((dir / "s.json").string());
   // clay (the JSON's), then white and lamp as the files carry them; the same
   // file twice adds nothing; "unused" is not taken.
@@ -409,7 +423,8 @@ INSTANTIATE_TEST_SUITE_P(
                       "{" GREY ", \"objects\": [{\"file\": \"room.obj\"}, {\"file\": \"octa.ply\", \"material\": "
                       "\"grey\", \"transform\": {\"scale\": \"big\"}}]}",
                       "objects[1].transform.scale: expected a number or 3 numbers, got \"big\""},
-        JsonErrorCase{"scale_two", "{" GREY ", \"objects\": [{\"file\": \"room.obj\", \"transform\": {\"scale\": [1, 2]}}]}",
+        JsonErrorCase{"scale_two",
+                      "{" GREY ", \"objects\": [{\"file\": \"room.obj\", \"transform\": {\"scale\": [1, 2]}}]}",
                       "objects[0].transform.scale: expected a number or 3 numbers, got [1,2]"},
         JsonErrorCase{"scale_zero", "{\"objects\": [{\"file\": \"room.obj\", \"transform\": {\"scale\": [1, 0, 1]}}]}",
                       "objects[0].transform.scale: [1,0,1] would flatten the mesh"},
