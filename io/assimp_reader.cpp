@@ -328,8 +328,11 @@ SceneSource read_assimp_source(const std::string& path, bool check_materials) {
   // Only validation: no step that triangulates, welds, reorders or splits.
   const aiScene* scene = importer.ReadFile(path, aiProcess_ValidateDataStructure);
   if (!scene) {
-    const std::string e = importer.GetErrorString();
-    throw InputError(path + ": " + (e.empty() ? "assimp cannot read it" : e));
+    std::string e = importer.GetErrorString();
+    if (e.empty()) e = "assimp cannot read it";
+    if (e.find("mIndices") != std::string::npos && e.find("out of range") != std::string::npos)
+      e += " (a face's vertex index is out of range: a bad index, or a truncated file)";
+    throw InputError(path + ": " + e);
   }
   if (!errors.messages().empty()) throw InputError(path + ": " + errors.messages().front());
   if ((scene->mFlags & AI_SCENE_FLAGS_INCOMPLETE) || !scene->mRootNode)
