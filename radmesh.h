@@ -18,6 +18,7 @@
 #include "radiosity/error_metric.h"
 
 #include "io/obj_reader.h"
+#include "io/scene_reader.h"
 #include "io/vtk_writer.h"
 #include "io/png_render.h"
 #include "io/summary.h"

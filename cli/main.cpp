@@ -3,7 +3,7 @@
 // printed as one line; the exit status is then non-zero.
 
 #include "io/histogram.h"
-#include "io/obj_reader.h"
+#include "io/scene_reader.h"
 #include "io/png_render.h"
 #include "io/probe_file.h"
 #include "io/summary.h"
@@ -172,7 +172,7 @@ int run(Params& p, bool solving) {
   info.solve = p.solve;
 
   rep.begin("read");
-  const Scene scene = read_obj_scene(p.scene);
+  const Scene scene = read_scene(p.scene);
   info.seconds.push_back({"read", rep.end()});
   for (const std::string& w : scene.report.warnings) rep.note("warning: " + w);
   std::vector<Probe> probes;
@@ -300,7 +300,7 @@ int quality(Params& p) {
     for (int q : mesh.patch) np = std::max(np, q + 1);
     for (int q = 0; q < np; ++q) names.push_back("patch_" + std::to_string(q));
   } else {
-    const Scene scene = read_obj_scene(p.scene);
+    const Scene scene = read_scene(p.scene);
     const MeshingOptions mo = resolve_meshing_options(scene, meshing_for(p, scene, nullptr));
     MeshReport report;
     mesh = mesh_scene(scene, mo, &report);
@@ -336,7 +336,8 @@ int quality(Params& p) {
   return 0;
 }
 
-void add_common(CLI::App* cmd, Params& p, const char* scene_help = "scene file (OBJ + MTL)") {
+void add_common(CLI::App* cmd, Params& p,
+                const char* scene_help = "scene file: .obj (+ .mtl), .ply, .stl, .off, .gltf, .glb, or a .json scene") {
   cmd->add_option("SCENE", p.scene, scene_help)->required()->check(CLI::ExistingFile);
   cmd->add_option("-o,--output", p.out_dir, "output directory (created; default radmesh-out)");
   cmd->add_option("--max-edge", p.meshing.max_edge,
@@ -432,7 +433,8 @@ int main(int argc, char** argv) {
   add_common(mesh_cmd, mesh_p);
   CLI::App* quality_cmd = app.add_subcommand(
       "quality", "mesh the scene; print per-patch and total mesh quality and write quality.csv");
-  add_common(quality_cmd, quality_p, "scene file (OBJ + MTL), or a mesh written by radmesh (.vtu)");
+  add_common(quality_cmd, quality_p,
+             "scene file (.obj, .ply, .stl, .off, .gltf, .glb, .json), or a mesh written by radmesh (.vtu)");
 
   try {
     app.parse(argc, argv);

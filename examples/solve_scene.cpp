@@ -12,7 +12,7 @@ int main(int argc, char** argv) {
     return 2;
   }
   try {
-    const radmesh::Scene scene = radmesh::read_obj_scene(argv[1]);
+    const radmesh::Scene scene = radmesh::read_scene(argv[1]);
     const radmesh::Method& method = radmesh::methods().front();  // the default: hierarchical
     const radmesh::Mesh mesh = radmesh::mesh_scene(scene, method.meshing(scene));
     radmesh::SolveOptions options;

@@ -4,6 +4,7 @@
 
 #include "io/obj_reader.h"
 
+#include "io/scene_sources.h"
 #include "meshing/errors.h"
 
 #include <tiny_obj_loader.h>
@@ -156,7 +157,9 @@ ObjScan scan_obj(const std::string& path) {
 
 }  // namespace
 
-Scene read_obj_scene(const std::string& path, const SceneOptions& options) {
+namespace detail {
+
+SceneSource read_obj_source(const std::string& path) {
   if (!fs::exists(path)) throw IoError(path + ": no such file");
   if (fs::is_directory(path)) throw IoError(path + ": is a directory, not an OBJ file");
   const ObjScan scan = scan_obj(path);
@@ -186,7 +189,8 @@ Scene read_obj_scene(const std::string& path, const SceneOptions& options) {
     materials.push_back(std::move(mat));
   }
 
-  std::vector<RawFace> faces;
+  SceneSource source;
+  std::vector<RawFace>& faces = source.faces;
   size_t face_no = 0;
   for (const auto& shape : shapes) {
     size_t offset = 0;
@@ -204,13 +208,24 @@ Scene read_obj_scene(const std::string& path, const SceneOptions& options) {
                                  attrib.vertices[3 * static_cast<size_t>(vi) + 2]);
       }
       offset += nv;
+      if (face.material < 0 && source.missing_material.empty())
+        source.missing_material =
+            where(path, face.line) + "face '" + face.name + "' has no material (no usemtl before it)";
       faces.push_back(std::move(face));
     }
   }
   if (faces.size() != scan.face_lines.size())
     throw InputError(path + ": read " + std::to_string(faces.size()) + " faces but the file has " +
                      std::to_string(scan.face_lines.size()) + " face lines");
-  return build_scene(faces, std::move(materials), path, options);
+  source.materials = std::move(materials);
+  return source;
+}
+
+}  // namespace detail
+
+Scene read_obj_scene(const std::string& path, const SceneOptions& options) {
+  detail::SceneSource source = detail::read_obj_source(path);
+  return build_scene(source.faces, std::move(source.materials), path, options);
 }
 
 }  // namespace radmesh

@@ -77,19 +77,34 @@ void check_material(const Material& m) {
   }
 }
 
-// Welds points closer than eps with a uniform hash grid of cell size eps.
+// Welds points closer than eps with a uniform hash grid of cell size eps: a
+// point takes the first earlier vertex within eps, scanning the 27 cells
+// around it in a fixed order and each cell in insertion order. Kept vertices
+// are more than eps apart, so a point equal to one of them can weld to no
+// other: that common case is one look-up in a map of exact positions.
 class Welder {
 public:
   explicit Welder(double eps) : eps_(eps > 0.0 ? eps : std::numeric_limits<double>::min()) {}
 
+  void reserve(size_t n) {
+    exact_.reserve(n);
+    grid_.reserve(n);
+    next_.reserve(n);
+  }
+
   int add(const Vec3& p, std::vector<Vec3>& out, bool* welded) {
+    const auto same = exact_.find(p);
+    if (same != exact_.end()) {
+      *welded = true;
+      return same->second;
+    }
     const long long cx = cell(p.x), cy = cell(p.y), cz = cell(p.z);
     for (long long dx = -1; dx <= 1; ++dx)
       for (long long dy = -1; dy <= 1; ++dy)
         for (long long dz = -1; dz <= 1; ++dz) {
           auto it = grid_.find(key(cx + dx, cy + dy, cz + dz));
           if (it == grid_.end()) continue;
-          for (int id : it->second)
+          for (int id = it->second.first; id >= 0; id = next_[static_cast<size_t>(id)])
             if (glm::length(out[static_cast<size_t>(id)] - p) <= eps_) {
               *welded = true;
               return id;
@@ -97,19 +112,33 @@ public:
         }
     const int id = static_cast<int>(out.size());
     out.push_back(p);
-    grid_[key(cx, cy, cz)].push_back(id);
+    next_.push_back(-1);
+    exact_.emplace(p, id);
+    auto [it, fresh] = grid_.try_emplace(key(cx, cy, cz), id, id);
+    if (!fresh) {  // append: the cell's list stays in insertion order
+      next_[static_cast<size_t>(it->second.second)] = id;
+      it->second.second = id;
+    }
     *welded = false;
     return id;
   }
 
 private:
+  struct ExactHash {
+    size_t operator()(const Vec3& v) const {
+      const std::hash<double> h;
+      return h(v.x) ^ (h(v.y) * 0x9E3779B97F4A7C15ULL) ^ (h(v.z) * 0xC2B2AE3D27D4EB4FULL);
+    }
+  };
   long long cell(double x) const { return static_cast<long long>(std::floor(x / eps_)); }
   static uint64_t key(long long x, long long y, long long z) {
     return (static_cast<uint64_t>(x) * 73856093ULL) ^ (static_cast<uint64_t>(y) * 19349663ULL) ^
            (static_cast<uint64_t>(z) * 83492791ULL);
   }
   double eps_;
-  std::unordered_map<uint64_t, std::vector<int>> grid_;
+  std::unordered_map<Vec3, int, ExactHash> exact_;                // kept vertex at exactly this position
+  std::unordered_map<uint64_t, std::pair<int, int>> grid_;  // cell -> first and last vertex in it
+  std::vector<int> next_;                                          // next vertex in the same cell, or -1
 };
 
 double diameter(const std::vector<Vec3>& pts) {
@@ -140,12 +169,12 @@ Scene build_scene(const std::vector<RawFace>& faces, std::vector<Material> mater
   // Every coordinate finite, every face with a material; bounding box for tolerances.
   Vec3 lo(std::numeric_limits<double>::infinity()), hi(-std::numeric_limits<double>::infinity());
   for (const RawFace& f : faces) {
-    const std::string at = where(f.file, f.line) + "face '" + f.name + "': ";
+    auto at = [&f] { return where(f.file, f.line) + "face '" + f.name + "': "; };
     if (f.material < 0 || f.material >= static_cast<int>(scene.materials.size()))
-      throw InputError(at + "has no material (use usemtl with a material from the MTL file)");
+      throw InputError(at() + "has no material (use usemtl with a material from the MTL file)");
     auto check = [&](const std::vector<Vec3>& loop) {
       for (const Vec3& p : loop) {
-        if (!finite(p)) throw InputError(at + "coordinate " + fmt(p) + " is not finite");
+        if (!finite(p)) throw InputError(at() + "coordinate " + fmt(p) + " is not finite");
         lo = glm::min(lo, p);
         hi = glm::max(hi, p);
       }
@@ -157,6 +186,7 @@ Scene build_scene(const std::vector<RawFace>& faces, std::vector<Material> mater
   }
   const double diag = faces.empty() ? 0.0 : glm::length(hi - lo);
   Welder welder(options.weld_tolerance * diag);
+  welder.reserve(static_cast<size_t>(scene.report.vertices_read));
 
   auto weld_loop = [&](const std::vector<Vec3>& pts) {
     std::vector<int> loop;
@@ -173,10 +203,10 @@ Scene build_scene(const std::vector<RawFace>& faces, std::vector<Material> mater
   };
 
   for (const RawFace& f : faces) {
-    const std::string at = where(f.file, f.line) + "face '" + f.name + "': ";
+    auto at = [&f] { return where(f.file, f.line) + "face '" + f.name + "': "; };
     std::vector<int> outer = weld_loop(f.points);
     if (distinct(outer) < 3)
-      throw InputError(at + "has " + std::to_string(distinct(outer)) +
+      throw InputError(at() + "has " + std::to_string(distinct(outer)) +
                        " distinct vertices; a face needs at least 3");
     std::vector<Vec3> pts = scene.loop_points(outer);
     const Vec3 newell = newell_normal(pts);
@@ -203,7 +233,7 @@ Scene build_scene(const std::vector<RawFace>& faces, std::vector<Material> mater
 
     if (deviation > options.planarity_tolerance * diam) {
       if (!f.holes.empty())
-        throw InputError(at + "is not planar (deviation " + format_number(deviation) +
+        throw InputError(at() + "is not planar (deviation " + format_number(deviation) +
                          ") and has holes; split it into planar faces");
       // Fan-split into triangles; each keeps the face's name and material.
       int made = 0;
@@ -233,11 +263,11 @@ Scene build_scene(const std::vector<RawFace>& faces, std::vector<Material> mater
     for (const auto& hp : f.holes) {
       std::vector<int> hole = weld_loop(hp);
       if (distinct(hole) < 3)
-        throw InputError(at + "has a hole with fewer than 3 distinct vertices");
+        throw InputError(at() + "has a hole with fewer than 3 distinct vertices");
       const std::vector<Vec3> hpts = scene.loop_points(hole);
       for (const Vec3& p : hpts)
         if (std::abs(glm::dot(p - centroid, n)) > options.planarity_tolerance * diam)
-          throw InputError(at + "hole vertex " + fmt(p) + " is not in the face's plane");
+          throw InputError(at() + "hole vertex " + fmt(p) + " is not in the face's plane");
       if (glm::dot(newell_normal(hpts), n) > 0.0) std::reverse(hole.begin(), hole.end());
       patch.holes.push_back(std::move(hole));
     }

@@ -8,7 +8,7 @@ packages=(
   libcgal-dev libgmp-dev libmpfr-dev libboost-dev
   libembree-dev libtbb-dev libglm-dev
   libvtk9-dev
-  libtinyobjloader-dev libcli11-dev nlohmann-json3-dev
+  libtinyobjloader-dev libassimp-dev libcli11-dev nlohmann-json3-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   libx11-dev xvfb xauth
 )

@@ -435,3 +435,39 @@ TEST(Cli, ExitCodesAreZeroOneAndTwo) {
   EXPECT_NE(r.err.find("is not a directory"), std::string::npos) << r.err;
   fs::remove(file);
 }
+
+TEST(Cli, MeshReadsTheJsonBunnySceneWithItsMaterials) {
+  const fs::path out = fresh_dir("bunny_mesh");
+  const std::string scene = kData + "/bunny/bunny_room.json";
+  const Result r = radmesh("mesh " + scene + " --max-edge 10 --discontinuity contacts -q -o " + out.string());
+  ASSERT_EQ(r.status, 0) << r.err;
+  const nlohmann::json s = read_summary(out);
+  // room.obj: floor, 4 walls, 4 ceiling pieces and the light; bunny.ply: 3674 triangles, 1839 vertices.
+  EXPECT_EQ(s["counts"]["faces_read"], 3684);
+  EXPECT_EQ(s["counts"]["patches"], 3684);
+  EXPECT_EQ(s["counts"]["materials"], 5);
+  EXPECT_EQ(s["counts"]["vertices_welded"], 3674 * 3 + 10 * 4 - (1839 + 16));
+  EXPECT_GE(s["counts"]["elements"].get<int>(), 3684);
+  // Per patch: the JSON's material for the bunny, the MTL's for the room; the
+  // bunny's area (0.48 m tall) as test_readers' Bunny tests compute it.
+  ASSERT_EQ(s["patches"].size(), 3684u);
+  double bunny_area = 0.0;
+  for (const auto& patch : s["patches"])
+    if (patch["name"] == "bunny") {
+      EXPECT_EQ(patch["material"], "clay");
+      bunny_area += patch["area"].get<double>();
+    }
+  EXPECT_EQ(s["patches"][0]["name"], "floor");
+  EXPECT_EQ(s["patches"][0]["material"], "white");
+  EXPECT_NEAR(bunny_area, 0.5467231782172347, 1e-12);
+  fs::remove_all(out);
+}
+
+TEST(Cli, APlyFileAloneIsRefusedWithTheWayToGiveItAMaterial) {
+  const fs::path out = fresh_dir("bunny_ply");
+  const Result r = radmesh("run " + kData + "/bunny/bunny.ply -o " + out.string());
+  EXPECT_NE(r.status, 0);
+  EXPECT_NE(r.err.find("bunny.ply: PLY files carry no materials"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("{\"file\": \"bunny.ply\", \"material\": \"grey\"}"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(out));
+}
