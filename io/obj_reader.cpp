@@ -10,6 +10,7 @@
 #include <tiny_obj_loader.h>
 
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -23,10 +24,26 @@ namespace {
 
 namespace fs = std::filesystem;
 
-std::vector<std::string> split_ws(const std::string& line) {
-  std::istringstream in(line);
+// Splits at spaces and tabs, the separators tinyobjloader knows. Any other
+// control character (vertical tab, form feed, NUL, ...) is an error naming
+// the line: tinyobjloader would not split there and would silently drop or
+// misread the statement, shifting later indices.
+std::vector<std::string> split_ws(const std::string& line, const std::string& path, int ln) {
+  for (const char c : line)
+    if (static_cast<unsigned char>(c) < 0x20 && c != '\t') {
+      char code[8];
+      std::snprintf(code, sizeof code, "0x%02X", static_cast<unsigned>(static_cast<unsigned char>(c)));
+      throw InputError(where(path, ln) + "control character " + code +
+                       " in the line (only spaces and tabs may separate values)");
+    }
   std::vector<std::string> out;
-  for (std::string t; in >> t;) out.push_back(t);
+  size_t i = 0;
+  while (i < line.size()) {
+    while (i < line.size() && (line[i] == ' ' || line[i] == '\t')) ++i;
+    const size_t start = i;
+    while (i < line.size() && line[i] != ' ' && line[i] != '\t') ++i;
+    if (i > start) out.push_back(line.substr(start, i - start));
+  }
   return out;
 }
 
@@ -56,10 +73,13 @@ std::vector<std::string> read_lines(const std::string& path) {
   return lines;
 }
 
-// Per material: where it and its Kd/Ke are in the MTL file.
+// Per material: where it and its Kd/Ke are in the MTL file, and their
+// values (read here, not by tinyobjloader, which reads "nan" as 0 and one
+// value "Kd 0.5" as (0.5, 0, 0) where the MTL format means (0.5, 0.5, 0.5)).
 struct MtlInfo {
   std::string file;
   int line = 0, kd_line = 0, ke_line = 0;
+  Rgb kd{0.0}, ke{0.0};
 };
 
 void scan_mtl(const std::string& path, std::map<std::string, MtlInfo>* info) {
@@ -67,22 +87,37 @@ void scan_mtl(const std::string& path, std::map<std::string, MtlInfo>* info) {
   std::string current;
   for (size_t i = 0; i < lines.size(); ++i) {
     const int ln = static_cast<int>(i) + 1;
-    const auto tok = split_ws(lines[i]);
+    const auto tok = split_ws(lines[i], path, ln);
     if (tok.empty() || tok[0][0] == '#') continue;
     if (tok[0] == "newmtl") {
       if (tok.size() < 2) throw InputError(where(path, ln) + "newmtl without a name");
       current = tok[1];
-      (*info)[current] = {path, ln, 0, 0};
+      const auto old = info->find(current);
+      if (old != info->end())
+        throw InputError(where(path, ln) + "material '" + current + "' is defined again (first at " +
+                         where(old->second.file, old->second.line) + "one name must mean one material)");
+      (*info)[current] = {path, ln, 0, 0, Rgb(0.0), Rgb(0.0)};
     } else if (tok[0] == "Kd" || tok[0] == "Ke") {
       if (current.empty()) throw InputError(where(path, ln) + tok[0] + " before any newmtl");
       if (tok.size() != 4 && tok.size() != 2)
         throw InputError(where(path, ln) + tok[0] + " needs 3 numbers (or 1), got '" + lines[i] + "'");
+      Rgb value(0.0);
       for (size_t k = 1; k < tok.size(); ++k) {
         double v;
         if (!parse_double(tok[k], &v))
           throw InputError(where(path, ln) + tok[0] + " value '" + tok[k] + "' is not a number");
+        if (!std::isfinite(v)) throw InputError(where(path, ln) + tok[0] + " value '" + tok[k] + "' is not finite");
+        value[static_cast<int>(k) - 1] = v;
       }
-      (tok[0] == "Kd" ? (*info)[current].kd_line : (*info)[current].ke_line) = ln;
+      if (tok.size() == 2) value = Rgb(value.x);  // one value: grey
+      MtlInfo& m = (*info)[current];
+      if (tok[0] == "Kd") {
+        m.kd_line = ln;
+        m.kd = value;
+      } else {
+        m.ke_line = ln;
+        m.ke = value;
+      }
     }
   }
 }
@@ -101,7 +136,7 @@ ObjScan scan_obj(const std::string& path) {
   std::map<std::string, int> used_line;
   for (size_t i = 0; i < lines.size(); ++i) {
     const int ln = static_cast<int>(i) + 1;
-    const auto tok = split_ws(lines[i]);
+    const auto tok = split_ws(lines[i], path, ln);
     if (tok.empty() || tok[0][0] == '#') continue;
     const std::string& key = tok[0];
     if (key == "v") {
@@ -173,23 +208,29 @@ SceneSource read_obj_source(const std::string& path) {
 
   const auto& attrib = reader.GetAttrib();
   const auto& shapes = reader.GetShapes();
+  // Materials in tinyobjloader's order (its faces index them), with the
+  // values our own scan read and checked.
+  SceneSource source;
   std::vector<Material> materials;
   for (const auto& m : reader.GetMaterials()) {
     Material mat;
     mat.name = m.name;
-    mat.reflectance = Rgb(m.diffuse[0], m.diffuse[1], m.diffuse[2]);
-    mat.emission = Rgb(m.emission[0], m.emission[1], m.emission[2]);
-    auto it = scan.materials.find(m.name);
-    if (it != scan.materials.end()) {
-      mat.file = it->second.file;
-      mat.line = it->second.line;
-      mat.reflectance_line = it->second.kd_line;
-      mat.emission_line = it->second.ke_line;
-    }
+    const auto it = scan.materials.find(m.name);
+    if (it == scan.materials.end())
+      throw InputError(path + ": material '" + m.name + "' was read but not found by the MTL scan");
+    const MtlInfo& info = it->second;
+    mat.file = info.file;
+    mat.line = info.line;
+    mat.reflectance_line = info.kd_line;
+    mat.emission_line = info.ke_line;
+    mat.reflectance = info.kd;
+    mat.emission = info.ke;
+    if (info.kd_line == 0)
+      source.warnings.push_back(where(info.file, info.line) + "material '" + m.name +
+                                "' has no Kd: reflectance 0 (it absorbs all light it receives)");
     materials.push_back(std::move(mat));
   }
 
-  SceneSource source;
   std::vector<RawFace>& faces = source.faces;
   size_t face_no = 0;
   for (const auto& shape : shapes) {
@@ -225,7 +266,9 @@ SceneSource read_obj_source(const std::string& path) {
 
 Scene read_obj_scene(const std::string& path, const SceneOptions& options) {
   detail::SceneSource source = detail::read_obj_source(path);
-  return build_scene(source.faces, std::move(source.materials), path, options);
+  Scene scene = build_scene(source.faces, std::move(source.materials), path, options);
+  scene.report.warnings.insert(scene.report.warnings.begin(), source.warnings.begin(), source.warnings.end());
+  return scene;
 }
 
 }  // namespace radmesh

@@ -5,9 +5,14 @@
 
 #include <gtest/gtest.h>
 
+#include <filesystem>
+#include <fstream>
 #include <string>
 
+#include <unistd.h>
+
 using namespace radmesh;
+namespace fs = std::filesystem;
 
 namespace {
 const std::string kData = RADMESH_TEST_DATA;
@@ -87,11 +92,34 @@ INSTANTIATE_TEST_SUITE_P(
                       BadCase{"missing_material.obj", "missing_material.obj:9", "no_such_material"},
                       BadCase{"missing_mtl_file.obj", "missing_mtl_file.obj:2", "does_not_exist.mtl"},
                       BadCase{"parse_error.obj", "parse_error.obj:7", "'x'"},
-                      BadCase{"bad_index.obj", "bad_index.obj:8", "9"}),
+                      BadCase{"bad_index.obj", "bad_index.obj:8", "9"},
+                      BadCase{"kd_nan.obj", "kd_nan.mtl:3", "'nan'"},
+                      BadCase{"ke_inf.obj", "ke_inf.mtl:4", "'inf'"},
+                      BadCase{"duplicate_material.obj", "duplicate_material.mtl:5", "'light'"},
+                      BadCase{"vertical_tab.obj", "vertical_tab.obj:6", "0x0B"}),
     [](const auto& info) {
       std::string n = info.param.file;
       return n.substr(0, n.find('.'));
     });
+
+TEST(Scene, OneValueKdIsGreyAndAMissingKdIsSaid) {
+  // The MTL format's one-value Kd means the same value in every channel.
+  const fs::path dir = fs::temp_directory_path() / ("radmesh_mtl_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  std::ofstream(dir / "s.mtl") << "newmtl lamp\nKd 0.25\nKe 2\nnewmtl dark\nKe 0 0 0\n";
+  std::ofstream(dir / "s.obj") << "mtllib s.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nusemtl lamp\nf 1 2 3\n"
+                                  "usemtl dark\nf 2 4 3\n";
+  const Scene s = read_obj_scene((dir / "s.obj").string());
+  ASSERT_EQ(s.patches.size(), 2u);
+  EXPECT_EQ(s.material_of(0).reflectance, Rgb(0.25));
+  EXPECT_EQ(s.material_of(0).emission, Rgb(2.0));
+  EXPECT_EQ(s.material_of(1).reflectance, Rgb(0.0));
+  int said = 0;
+  for (const std::string& w : s.report.warnings)
+    if (contains(w, "s.mtl:4") && contains(w, "'dark' has no Kd")) ++said;
+  EXPECT_EQ(said, 1);
+  fs::remove_all(dir);
+}
 
 TEST(Scene, UnreadableFileIsAnIoError) {
   const std::string msg = message_of<IoError>([&] { read_obj_scene(kData + "/no/such/file.obj"); });
