@@ -313,8 +313,7 @@ struct Walker {
 }  // namespace
 
 SceneSource read_assimp_source(const std::string& path, bool check_materials) {
-  if (!fs::exists(path)) throw IoError(path + ": no such file");
-  if (fs::is_directory(path)) throw IoError(path + ": is a directory, not a scene file");
+  check_input_file(path, "a scene file");
   const std::string ext = lower_extension(path);
   const bool gltf = ext == ".gltf" || ext == ".glb";
 

@@ -185,8 +185,7 @@ std::string material_where(const Material& m, const std::string& fallback) {
 }  // namespace
 
 Scene read_json_scene(const std::string& path, const SceneOptions& options) {
-  if (!fs::exists(path)) throw IoError(path + ": no such file");
-  if (fs::is_directory(path)) throw IoError(path + ": is a directory, not a scene file");
+  check_input_file(path, "a scene file");
   std::ifstream in(path);
   if (!in) throw IoError(path + ": cannot open for reading");
   Json doc;

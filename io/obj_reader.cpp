@@ -170,6 +170,11 @@ ObjScan scan_obj(const std::string& path) {
         if (!fs::exists(mtl))
           throw InputError(where(path, ln) + "material library '" + tok[k] + "' not found (looked for " +
                            mtl.string() + ")");
+        try {
+          detail::check_input_file(mtl.string(), "a material library");
+        } catch (const IoError& e) {
+          throw InputError(where(path, ln) + "material library '" + tok[k] + "': " + e.what());
+        }
         scan_mtl(mtl.string(), &scan.materials);
       }
     } else if (key == "usemtl") {
@@ -195,8 +200,7 @@ ObjScan scan_obj(const std::string& path) {
 namespace detail {
 
 SceneSource read_obj_source(const std::string& path) {
-  if (!fs::exists(path)) throw IoError(path + ": no such file");
-  if (fs::is_directory(path)) throw IoError(path + ": is a directory, not an OBJ file");
+  check_input_file(path, "an OBJ file");
   const ObjScan scan = scan_obj(path);
 
   tinyobj::ObjReaderConfig config;

@@ -1,6 +1,7 @@
 #include "io/probe_file.h"
 
 #include "io/atomic_file.h"
+#include "io/scene_sources.h"
 #include "meshing/errors.h"
 
 #include <cmath>
@@ -12,6 +13,7 @@
 namespace radmesh {
 
 std::vector<Probe> read_probes(const std::string& path) {
+  detail::check_input_file(path, "a probe file");
   std::ifstream in(path);
   if (!in) throw IoError(path + ": cannot open probe file");
   std::vector<Probe> probes;

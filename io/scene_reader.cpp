@@ -14,6 +14,26 @@ namespace radmesh {
 
 namespace detail {
 
+void check_input_file(const std::string& path, const std::string& what) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  const fs::file_status st = fs::status(path, ec);
+  if (!fs::exists(st)) throw IoError(path + ": no such file");
+  if (fs::is_directory(st)) throw IoError(path + ": is a directory, not " + what);
+  if (!fs::is_regular_file(st))
+    throw IoError(path + ": not a regular file (a device, pipe or socket), not " + what +
+                  "; radmesh reads regular files only");
+  const auto size = fs::file_size(path, ec);
+  if (!ec && static_cast<double>(size) > kMaxInputBytes)
+    throw IoError(path + ": " + std::to_string(size) + " bytes, more than the " +
+                  std::to_string(static_cast<long long>(kMaxInputBytes)) + " radmesh reads as " + what);
+}
+
+}  // namespace detail
+
+
+namespace detail {
+
 std::string lower_extension(const std::string& path) {
   std::string ext = std::filesystem::path(path).extension().string();
   std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });

@@ -31,6 +31,13 @@ SceneSource read_assimp_source(const std::string& path, bool check_materials);
 // The JSON scene file (io/scene_reader.h describes its keys).
 Scene read_json_scene(const std::string& path, const SceneOptions& options);
 
+// Checks that `path` names a regular file radmesh can read (IoError
+// otherwise: missing, a directory, a device or pipe such as /dev/zero that
+// would be read forever, or larger than kMaxInputBytes). `what` names the
+// file's role in the message ("OBJ file", "material library", ...).
+inline constexpr double kMaxInputBytes = 8.0 * 1024 * 1024 * 1024;
+void check_input_file(const std::string& path, const std::string& what);
+
 // The file name's extension, lower case, with its dot (".ply"); "" when none.
 std::string lower_extension(const std::string& path);
 

@@ -156,3 +156,19 @@ TEST(Scene, HolesAreOrientedAgainstTheOuterLoop) {
   EXPECT_DOUBLE_EQ(s.patch_area(0), 12.0);
   EXPECT_LT(glm::dot(newell_normal(s.loop_points(s.patches[0].holes[0])), s.patches[0].normal), 0.0);
 }
+
+TEST(Scene, DevicesAndDirectoriesAreRefusedNotReadForever) {
+  // /dev/zero as a material library would be read forever: only regular
+  // files are read, and the message names the library's line.
+  const fs::path dir = fs::temp_directory_path() / ("radmesh_dev_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  std::ofstream(dir / "s.obj") << "mtllib /dev/zero\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+  std::string msg = message_of<Error>([&] { read_obj_scene((dir / "s.obj").string()); });
+  EXPECT_TRUE(contains(msg, "s.obj:1")) << msg;
+  EXPECT_TRUE(contains(msg, "not a regular file")) << msg;
+  msg = message_of<IoError>([&] { read_obj_scene("/dev/zero"); });
+  EXPECT_TRUE(contains(msg, "/dev/zero: not a regular file")) << msg;
+  msg = message_of<IoError>([&] { read_obj_scene(dir.string()); });
+  EXPECT_TRUE(contains(msg, "is a directory")) << msg;
+  fs::remove_all(dir);
+}
