@@ -44,6 +44,10 @@ struct MeshingOptions {
   // 0); triangles with an edge shorter than this x max_edge are not refined
   // for their angle (small angles between input lines cannot be removed).
   double min_separation_fraction = 0.02;
+  // A bound on the work: a max_edge that would make more elements than this
+  // (estimated from the patch areas, before any meshing) is refused with a
+  // message naming the size that fits, instead of meshing for hours.
+  double max_elements = 2e7;
 };
 
 struct MeshReport {

@@ -686,6 +686,17 @@ MeshingOptions resolve_meshing_options(const Scene& scene, MeshingOptions option
     throw InputError("--min-angle " + std::to_string(options.min_angle) +
                      " must be in [0, 30] degrees (CGAL's mesher may not terminate above ~30)");
   if (options.max_edge == 0.0) options.max_edge = scene.diagonal() / 12.0;
+  // Equilateral triangles of side max_edge: the fewest the mesher can make.
+  double area = 0.0;
+  for (size_t p = 0; p < scene.patches.size(); ++p) area += scene.patch_area(static_cast<int>(p));
+  const double per_element = std::sqrt(3.0) / 4.0 * options.max_edge * options.max_edge;
+  const double estimate = area / per_element;
+  if (estimate > options.max_elements)
+    throw InputError("--max-edge " + format_number(options.max_edge) + " would make at least " +
+                     format_number(std::round(estimate)) + " elements (total area " + format_number(area) +
+                     "), more than the " + format_number(options.max_elements) +
+                     " allowed; use --max-edge " +
+                     format_number(std::sqrt(area / (options.max_elements * std::sqrt(3.0) / 4.0))) + " or more");
   return options;
 }
 
