@@ -59,7 +59,6 @@ public:
   const std::string& text(const std::string& name) const;  // every kind, as given or its default
   // (name, value) in declaration order, numbers as numbers, for summaries.
   const std::vector<std::pair<std::string, std::string>>& items() const { return items_; }
-  const std::vector<OptionSpec>& specs() const { return specs_; }
 
 private:
   const OptionSpec& spec(const std::string& name) const;

@@ -66,7 +66,6 @@ public:
                           RayCount& count) const;
 
   bool convex_enclosure() const;
-  int rays() const { return side_ * side_; }
   // Patches p and q can exchange light (Occlusion::facing).
   bool facing(int p, int q) const;
   // Lower bound of the distance from x to patch p.
