@@ -6,10 +6,13 @@
 //   radmesh_bench [--out DIR] [--scenes a,b] [--quick]
 //   radmesh_bench --direct [--out DIR] [--quick]   (meshing study: direct light only)
 //   radmesh_bench --make-reference [--max-edge L] [--rays N] [--reference-out F]   (Cornell box reference)
+//   radmesh_bench --load-times [--out DIR]   (scene loading per format, 10^6 triangles)
 
+#include "bench/mesh_writers.h"
 #include "bench/plot.h"
 #include "io/atomic_file.h"
 #include "io/obj_reader.h"
+#include "io/scene_reader.h"
 #include "meshing/errors.h"
 #include "radiosity/direct.h"
 #include "radiosity/error_metric.h"
@@ -28,6 +31,8 @@
 #include <iomanip>
 #include <map>
 #include <sstream>
+
+#include <unistd.h>
 #include <algorithm>
 #include <cstdlib>
 
@@ -362,6 +367,42 @@ int direct_study(const std::string& data, const std::string& out_dir, bool quick
   return 0;
 }
 
+// Scene loading, read to Scene (read_scene, build_scene included), per
+// format: a 10^6-triangle grid written in every format radmesh reads, and a
+// quarter of it as binary PLY to see that the time grows linearly. One row
+// per file in load.csv.
+int load_times(const std::string& out_dir) {
+  const fs::path dir = fs::temp_directory_path() / ("radmesh_bench_load_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  auto scene_of = [&](const std::string& file) {
+    const fs::path json = dir / (file + ".json");
+    std::ofstream(json) << "{\"materials\": {\"grey\": {\"reflectance\": [0.5, 0.5, 0.5], \"emission\": [1, 1, 1]}},"
+                           " \"objects\": [{\"file\": \"" << file << "\", \"material\": \"grey\"}]}\n";
+    return json.string();
+  };
+  std::vector<std::pair<std::string, std::string>> runs;  // (label, JSON scene)
+  test::write_ply(dir / "quarter_binary.ply", test::grid(354), true);
+  runs.emplace_back("quarter_binary.ply", scene_of("quarter_binary.ply"));
+  for (const std::string& f : test::write_every_format(dir, test::grid(708), "grid")) runs.emplace_back(f, scene_of(f));
+  std::ostringstream csv;
+  csv << "file,bytes,patches,vertices,seconds\n";
+  for (const auto& [file, json] : runs) {
+    const auto t0 = std::chrono::steady_clock::now();
+    const Scene s = read_scene(json);
+    const double sec = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    const auto bytes = fs::file_size(dir / file);
+    std::fprintf(stderr, "%-20s %10ju bytes %8zu patches %8zu vertices %7.2f s\n", file.c_str(),
+                 static_cast<uintmax_t>(bytes), s.patches.size(), s.vertices.size(), sec);
+    csv << file << ',' << bytes << ',' << s.patches.size() << ',' << s.vertices.size() << ',' << sec << '\n';
+  }
+  fs::remove_all(dir);
+  fs::create_directories(out_dir);
+  const std::string path = (fs::path(out_dir) / "load.csv").string();
+  write_file_atomically(path, [&](std::ostream& out) { out << csv.str(); });
+  std::printf("%s\n", path.c_str());
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -381,6 +422,10 @@ int main(int argc, char** argv) {
                  "method of radmesh run --method, default matrix; NAME=VALUE its options as in radmesh run, "
                  "e.g. 200:16:1:contacts:hierarchical:epsilon=0.001:tvertex=anchor)");
   app.add_flag("--make-reference", reference, "compute data/cornell_box/reference.csv and exit");
+  bool loads = false;
+  app.add_flag("--load-times", loads,
+               "scene loading instead: a 10^6-triangle grid in every format (and a quarter of it), read_scene "
+               "timed per file; writes load.csv");
   app.add_flag("--direct", direct,
                "meshing study instead: direct light only, exact at the triangle corners, for discontinuity "
                "off, contacts and full; writes direct.csv and direct.png");
@@ -392,6 +437,7 @@ int main(int argc, char** argv) {
   try {
     if (reference) return make_reference(data, ref_edge, ref_rays, ref_out);
     if (direct) return direct_study(data, out_dir, quick);
+    if (loads) return load_times(out_dir);
     fs::create_directories(out_dir);
     std::vector<Row> rows;
     std::vector<bench::Series> series;

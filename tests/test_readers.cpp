@@ -4,11 +4,10 @@
 
 #include "io/scene_reader.h"
 #include "meshing/errors.h"
-#include "mesh_writers.h"
+#include "bench/mesh_writers.h"
 
 #include <gtest/gtest.h>
 
-#include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -143,20 +142,6 @@ void expect_point(const Vec3& got, const Vec3& want, double tol) {
   EXPECT_NEAR(got.z, want.z, tol);
 }
 
-// Writes `m` as `stem.ext` in `dir` in every format; returns the file names.
-std::vector<std::string> write_every_format(const fs::path& dir, const PolyMesh& m, const std::string& stem) {
-  using namespace radmesh::test;
-  write_obj(dir / (stem + ".obj"), m, stem);
-  write_ply(dir / (stem + "_ascii.ply"), m, false);
-  write_ply(dir / (stem + "_binary.ply"), m, true);
-  write_off(dir / (stem + ".off"), m);
-  write_stl(dir / (stem + "_ascii.stl"), m, false, stem);
-  write_stl(dir / (stem + "_binary.stl"), m, true, stem);
-  write_gltf(dir / (stem + ".gltf"), m, stem, false);
-  write_gltf(dir / (stem + ".glb"), m, stem, true);
-  return {stem + ".obj",         stem + "_ascii.ply",  stem + "_binary.ply", stem + ".off",
-          stem + "_ascii.stl",   stem + "_binary.stl", stem + ".gltf",       stem + ".glb"};
-}
 }  // namespace
 
 // ---------------------------------------------------------------- formats
@@ -164,7 +149,7 @@ std::vector<std::string> write_every_format(const fs::path& dir, const PolyMesh&
 TEST(Readers, EveryFormatGivesTheSameSceneOfTriangles) {
   const fs::path dir = fresh_dir("formats");
   const PolyMesh m = octahedron();
-  const auto files = write_every_format(dir, m, "octa");
+  const auto files = test::write_every_format(dir, m, "octa");
   std::vector<Scene> scenes;
   for (const std::string& f : files) {
     write_text(dir / (f + ".json"), grey_scene(f));
@@ -671,7 +656,7 @@ TEST(Bunny, EveryFormatOfTheSameMeshGivesIdenticalPatches) {
   const PolyMesh bunny = read_bunny_ply();
   ASSERT_EQ(bunny.positions.size(), 1839u);
   ASSERT_EQ(bunny.faces.size(), 3674u);
-  const auto files = write_every_format(dir, bunny, "bunny");
+  const auto files = test::write_every_format(dir, bunny, "bunny");
   std::ifstream in(kData + "/bunny/bunny_room.json");
   const std::string json((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   const Scene ply = read_scene(kData + "/bunny/bunny_room.json");
@@ -687,65 +672,18 @@ TEST(Bunny, EveryFormatOfTheSameMeshGivesIdenticalPatches) {
 // ---------------------------------------------------------------- size
 
 namespace {
-// An n x n grid of quads over a bumpy height field, 2 triangles each.
-PolyMesh grid(int n) {
-  PolyMesh m;
-  for (int j = 0; j <= n; ++j)
-    for (int i = 0; i <= n; ++i)
-      m.positions.push_back({0.5f * static_cast<float>(i), 0.125f * static_cast<float>((i * 7 + j * 3) % 11),
-                             0.25f * static_cast<float>(j)});
-  for (int j = 0; j < n; ++j)
-    for (int i = 0; i < n; ++i) {
-      const auto a = static_cast<uint32_t>(j * (n + 1) + i), b = a + 1, c = a + static_cast<uint32_t>(n) + 2,
-                 d = a + static_cast<uint32_t>(n) + 1;
-      m.faces.push_back({a, c, b});
-      m.faces.push_back({a, d, c});
-    }
-  return m;
-}
-
-double seconds_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
 }  // namespace
 
-TEST(Readers, MillionTrianglePlyLoadsInSeconds) {
+TEST(Readers, MillionTrianglePlyLoadsWhole) {
+  // Nothing lost at scale: every face and vertex of a 10^6-triangle binary
+  // PLY. (Load times per format: radmesh_bench --load-times.)
   const fs::path dir = fresh_dir("million");
   const int n = 708;  // 2 * 708^2 = 1002528 triangles, 709^2 = 502681 vertices
-  test::write_ply(dir / "grid.ply", grid(n), true);
+  test::write_ply(dir / "grid.ply", test::grid(n), true);
   write_text(dir / "grid.json", grey_scene("grid.ply"));
-  const auto t0 = std::chrono::steady_clock::now();
   const Scene s = read_scene((dir / "grid.json").string());
-  const double t = seconds_since(t0);
   EXPECT_EQ(s.patches.size(), 1002528u);
   EXPECT_EQ(s.vertices.size(), 502681u);
   EXPECT_EQ(s.report.vertices_welded, 3 * 1002528 - 502681);
-  // Seconds, not minutes (about 2 s on the 2-core machine; generous for loaded machines).
-  EXPECT_LT(t, 60.0);
-  RecordProperty("seconds", std::to_string(t));
-  fs::remove_all(dir);
-}
-
-// Per-format load times of the million-triangle grid, and of a quarter of it
-// as binary PLY to see that time is linear (not run by ctest):
-//   build/tests/test_readers --gtest_also_run_disabled_tests --gtest_filter='*LoadTimes*'
-TEST(Readers, DISABLED_LoadTimesPerFormat) {
-  const fs::path dir = fresh_dir("times");
-  test::write_ply(dir / "quarter.ply", grid(354), true);
-  write_text(dir / "quarter.json", grey_scene("quarter.ply"));
-  const auto t0 = std::chrono::steady_clock::now();
-  const Scene quarter = read_scene((dir / "quarter.json").string());
-  std::printf("%-16s %zu patches, %zu vertices: %.2f s\n", "quarter.ply", quarter.patches.size(),
-              quarter.vertices.size(), seconds_since(t0));
-  const PolyMesh m = grid(708);
-  const auto files = write_every_format(dir, m, "grid");
-  for (const std::string& f : files) {
-    write_text(dir / (f + ".json"), grey_scene(f));
-    const auto t0 = std::chrono::steady_clock::now();
-    const Scene s = read_scene((dir / (f + ".json")).string());
-    std::printf("%-16s %zu patches, %zu vertices: %.2f s\n", f.c_str(), s.patches.size(), s.vertices.size(),
-                seconds_since(t0));
-    EXPECT_EQ(s.patches.size(), 1002528u);
-  }
   fs::remove_all(dir);
 }

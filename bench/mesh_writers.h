@@ -1,5 +1,5 @@
 // Plain writers of one polygon mesh in every format radmesh reads, for the
-// reader tests: the same positions (float, so that every reader, float or
+// reader tests and the load-time benchmark: the same positions (float, so that every reader, float or
 // double, sees the same numbers when they are exact in float) and the same
 // faces in the same order.
 #pragma once
@@ -197,6 +197,38 @@ inline void write_gltf(const std::filesystem::path& p, const PolyMesh& m, const 
   put(out, static_cast<uint32_t>(bin.size()));
   put(out, 0x004E4942u);
   out.write(bin.data(), static_cast<std::streamsize>(bin.size()));
+}
+
+// An n x n grid of quads over a bumpy height field, 2 triangles each.
+inline PolyMesh grid(int n) {
+  PolyMesh m;
+  for (int j = 0; j <= n; ++j)
+    for (int i = 0; i <= n; ++i)
+      m.positions.push_back({0.5f * static_cast<float>(i), 0.125f * static_cast<float>((i * 7 + j * 3) % 11),
+                             0.25f * static_cast<float>(j)});
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      const auto a = static_cast<uint32_t>(j * (n + 1) + i), b = a + 1, c = a + static_cast<uint32_t>(n) + 2,
+                 d = a + static_cast<uint32_t>(n) + 1;
+      m.faces.push_back({a, c, b});
+      m.faces.push_back({a, d, c});
+    }
+  return m;
+}
+
+// Writes `m` as `stem.ext` in `dir` in every format; returns the file names.
+inline std::vector<std::string> write_every_format(const std::filesystem::path& dir, const PolyMesh& m,
+                                                   const std::string& stem) {
+  write_obj(dir / (stem + ".obj"), m, stem);
+  write_ply(dir / (stem + "_ascii.ply"), m, false);
+  write_ply(dir / (stem + "_binary.ply"), m, true);
+  write_off(dir / (stem + ".off"), m);
+  write_stl(dir / (stem + "_ascii.stl"), m, false, stem);
+  write_stl(dir / (stem + "_binary.stl"), m, true, stem);
+  write_gltf(dir / (stem + ".gltf"), m, stem, false);
+  write_gltf(dir / (stem + ".glb"), m, stem, true);
+  return {stem + ".obj",         stem + "_ascii.ply",  stem + "_binary.ply", stem + ".off",
+          stem + "_ascii.stl",   stem + "_binary.stl", stem + ".gltf",       stem + ".glb"};
 }
 
 }  // namespace radmesh::test
