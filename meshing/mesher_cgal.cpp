@@ -458,6 +458,7 @@ private:
       vh->info().id = g;
       return vh;
     };
+    std::vector<CDT::Vertex_handle> boundary_vertices;
     for (size_t s : my_segments) {
       // Points sorted along the segment.
       std::vector<std::pair<double, int>> pts = {{0.0, segments_[s].a}, {1.0, segments_[s].b}};
@@ -468,8 +469,10 @@ private:
       }
       std::sort(pts.begin(), pts.end());
       CDT::Vertex_handle prev = insert_vertex(pts[0].second);
+      boundary_vertices.push_back(prev);
       for (size_t i = 1; i < pts.size(); ++i) {
         CDT::Vertex_handle cur = insert_vertex(pts[i].second);
+        boundary_vertices.push_back(cur);
         if (prev != cur) cdt.insert_constraint(prev, cur);
         prev = cur;
       }
@@ -487,6 +490,17 @@ private:
     if (!refine)
       for (const Steiner& st : steiner_[p])
         if (st.on_line) on_line.push_back(&st);
+    // Every other input point of the patch (boundary points, line ends) that
+    // lies on a line up to rounding is chained into it as well: a line end
+    // constructed on another line (a shadow boundary ending on a contact
+    // line) is rounded off it by 1e-15, and a constraint passing that close
+    // to a vertex is split by the mesher towards it without end (it crashed).
+    std::vector<std::pair<Point2, int>> ends;
+    for (const CDT::Vertex_handle& v : boundary_vertices) ends.push_back({v->point(), v->info().id});
+    for (const auto& [a, b, kind] : constraints_[static_cast<size_t>(p)]) {
+      (void)kind;
+      for (const int g : {a, b}) ends.push_back({frame.to2(positions_[static_cast<size_t>(g)]), g});
+    }
     const double on_tol = 100.0 * eps_;
     for (const auto& [a, b, kind] : constraints_[static_cast<size_t>(p)]) {
       CDT::Vertex_handle va = insert_vertex(a), vb = insert_vertex(b);
@@ -494,11 +508,19 @@ private:
       const CGAL::Bbox_2 sb = seg.bbox();
       const CGAL::Bbox_2 near(sb.xmin() - on_tol, sb.ymin() - on_tol, sb.xmax() + on_tol, sb.ymax() + on_tol);
       std::vector<std::pair<double, int>> chain;
-      for (const Steiner* sp : on_line)
-        if (const Steiner& st = *sp;
-            CGAL::do_overlap(st.q.bbox(), near) && CGAL::squared_distance(st.q, seg) <= on_tol * on_tol)
-          chain.push_back({std::sqrt(CGAL::squared_distance(st.q, va->point())), st.id});
+      auto chain_if_on = [&](const Point2& q, int g) {
+        if (g == a || g == b || !CGAL::do_overlap(q.bbox(), near) || CGAL::squared_distance(q, seg) > on_tol * on_tol)
+          return;
+        const double da = std::sqrt(CGAL::squared_distance(q, va->point()));
+        const double db = std::sqrt(CGAL::squared_distance(q, vb->point()));
+        if (da > on_tol && db > on_tol) chain.push_back({da, g});  // inside the line, not at an end
+      };
+      for (const Steiner* sp : on_line) chain_if_on(sp->q, sp->id);
+      for (const auto& [q, g] : ends) chain_if_on(q, g);
       std::sort(chain.begin(), chain.end());
+      chain.erase(std::unique(chain.begin(), chain.end(),
+                              [](const auto& x, const auto& y) { return x.second == y.second; }),
+                  chain.end());
       CDT::Vertex_handle prev = va;
       for (const auto& [d, g] : chain) {
         CDT::Vertex_handle cur = insert_vertex(g);

@@ -543,3 +543,44 @@ TEST(ShadowsStress, CoordinatesAroundAMillionWithFeaturesOfOne) {
   b.plate(0.5, 0.5, 1.0, 1.0, 1.5);
   check_full_mesh(b.build(0.2, 3.0, Vec3(1e6, 1e6, -1e6)), "coordinates around 1e6");
 }
+
+namespace {
+// Meshes with full discontinuity lines and checks the mesh covers every
+// patch exactly (triangle areas sum to the patch area) with no degenerate
+// triangle outside the zero-area test.
+void expect_full_mesh_covers(const Scene& s, double max_edge, const std::string& what) {
+  MeshingOptions mo;
+  mo.max_edge = max_edge;
+  mo.discontinuity = DiscontinuityMode::full;
+  MeshReport report;
+  const Mesh m = mesh_scene(s, mo, &report);
+  EXPECT_GT(report.shadow_segments, 0) << what;
+  const std::vector<double> area = patch_areas(s, m);
+  for (size_t p = 0; p < s.patches.size(); ++p)
+    EXPECT_NEAR(area[p] / s.patch_area(static_cast<int>(p)), 1.0, 1e-9) << what << ", patch " << s.patches[p].name;
+  for (int t = 0; t < m.triangle_count(); ++t) EXPECT_GT(m.area(t), 0.0) << what << ", triangle " << t;
+}
+}  // namespace
+
+TEST(DiscontinuityRegression, LineEndRoundedOffAnotherLineDoesNotCrashTheMesher) {
+  // Two emitting materials in the Cornell box (white and red walls emit):
+  // a shadow line ends on another line in exact arithmetic, 1e-15 off it
+  // after rounding, and CGAL's mesher split the line towards that end until
+  // it crashed (SIGSEGV in Delaunay_mesher_2). Now such an end is chained
+  // into the line.
+  Scene s = read_obj_scene(kData + "/cornell_box/cornell_box.obj");
+  for (Material& m : s.materials)
+    if (m.name == "white" || m.name == "red") m.emission = Rgb(1.0);
+  for (double edge : {40.0, 80.0, 300.0}) expect_full_mesh_covers(s, edge, "two emitters, max edge " + std::to_string(edge));
+}
+
+TEST(DiscontinuityRegression, FloorVertexOutOfPlaneDoesNotCrashTheMesher) {
+  // One floor corner moved 300 mm up: the floor is split into two
+  // triangles and the same rounded line end crashed the mesher at every
+  // --max-edge.
+  const Scene base = read_obj_scene(kData + "/cornell_box/cornell_box.obj");
+  const Scene s = test::transformed(base, [](const Vec3& v) {
+    return v == Vec3(552.8, 0.0, 0.0) ? Vec3(552.8, 300.0, 0.0) : v;
+  });
+  for (double edge : {40.0, 80.0, 300.0}) expect_full_mesh_covers(s, edge, "moved vertex, max edge " + std::to_string(edge));
+}
