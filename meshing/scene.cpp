@@ -274,6 +274,27 @@ Scene build_scene(const std::vector<RawFace>& faces, std::vector<Material> mater
     scene.patches.push_back(std::move(patch));
   }
 
+  // Two faces on the same vertices facing the same way (a face line written
+  // twice) would be two coincident patches: which one is lit, and which one
+  // meshes, is not defined. Refused, naming both. (Facing opposite ways they
+  // are the two sides of a thin panel, and fine.)
+  std::unordered_map<std::string, std::vector<size_t>> seen;
+  for (size_t p = 0; p < scene.patches.size(); ++p) {
+    const Patch& patch = scene.patches[p];
+    std::vector<int> ids = patch.outer;
+    for (const auto& h : patch.holes) ids.insert(ids.end(), h.begin(), h.end());
+    std::sort(ids.begin(), ids.end());
+    std::vector<size_t>& same = seen[std::string(reinterpret_cast<const char*>(ids.data()), ids.size() * sizeof(int))];
+    for (size_t q : same)
+      if (glm::dot(scene.patches[q].normal, patch.normal) > 0.0) {
+        const Patch& first = scene.patches[q];
+        throw InputError(where(patch.file, patch.line) + "face '" + patch.name +
+                         "' lies on the same vertices as face '" + first.name + "' (" + where(first.file, first.line) +
+                         "facing the same way: two coincident faces); remove one of them");
+      }
+    same.push_back(p);
+  }
+
   if (scene.report.zero_area_faces_dropped > 5)
     scene.report.warnings.push_back(source + ": dropped " +
                                     std::to_string(scene.report.zero_area_faces_dropped) +

@@ -172,3 +172,22 @@ TEST(Scene, DevicesAndDirectoriesAreRefusedNotReadForever) {
   EXPECT_TRUE(contains(msg, "is a directory")) << msg;
   fs::remove_all(dir);
 }
+
+TEST(Scene, AFaceWrittenTwiceIsAnErrorButTheTwoSidesOfAPanelAreNot) {
+  // A duplicated face line made two coincident patches; the mesher then
+  // crashed in run (issue 10's "two vertex lines swapped and one face line
+  // duplicated"). The same vertices in reverse order are a panel's back.
+  const fs::path dir = fs::temp_directory_path() / ("radmesh_dupface_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  std::ofstream(dir / "s.mtl") << "newmtl lamp\nKd 0.5 0.5 0.5\nKe 1 1 1\n";
+  const std::string head = "mtllib s.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nusemtl lamp\n";
+  std::ofstream(dir / "twice.obj") << head << "f 1 2 3 4\nf 2 3 4 1\n";
+  std::ofstream(dir / "panel.obj") << head << "f 1 2 3 4\nf 4 3 2 1\n";
+  const std::string msg = message_of<InputError>([&] { read_obj_scene((dir / "twice.obj").string()); });
+  EXPECT_TRUE(contains(msg, "twice.obj:8")) << msg;
+  EXPECT_TRUE(contains(msg, "twice.obj:7")) << msg;
+  const Scene panel = read_obj_scene((dir / "panel.obj").string());
+  ASSERT_EQ(panel.patches.size(), 2u);
+  EXPECT_EQ(glm::dot(panel.patches[0].normal, panel.patches[1].normal), -1.0);
+  fs::remove_all(dir);
+}
