@@ -8,6 +8,8 @@
 
 #include <gtest/gtest.h>
 
+#include "tests/test_util.h"
+
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -20,25 +22,12 @@ using namespace radmesh;
 using radmesh::test::GltfMaterial;
 using radmesh::test::PolyMesh;
 namespace fs = std::filesystem;
+using radmesh::test::contains;
+using radmesh::test::message_of;
 
 namespace {
 const std::string kData = RADMESH_TEST_DATA;
 
-template <class E, class F>
-std::string message_of(F f) {
-  try {
-    f();
-  } catch (const E& e) {
-    return e.what();
-  } catch (const std::exception& e) {
-    ADD_FAILURE() << "wrong exception type: " << e.what();
-    return {};
-  }
-  ADD_FAILURE() << "no exception";
-  return {};
-}
-
-bool contains(const std::string& s, const std::string& part) { return s.find(part) != std::string::npos; }
 
 // A fresh directory per test, removed when the test program ends.
 std::vector<fs::path>& made_dirs() {

@@ -5,6 +5,8 @@
 
 #include <gtest/gtest.h>
 
+#include "tests/test_util.h"
+
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -13,26 +15,12 @@
 
 using namespace radmesh;
 namespace fs = std::filesystem;
+using radmesh::test::contains;
+using radmesh::test::message_of;
 
 namespace {
 const std::string kData = RADMESH_TEST_DATA;
 
-// Runs f, expects it to throw E, returns the message.
-template <class E, class F>
-std::string message_of(F f) {
-  try {
-    f();
-  } catch (const E& e) {
-    return e.what();
-  } catch (const std::exception& e) {
-    ADD_FAILURE() << "wrong exception type: " << e.what();
-    return {};
-  }
-  ADD_FAILURE() << "no exception";
-  return {};
-}
-
-bool contains(const std::string& s, const std::string& part) { return s.find(part) != std::string::npos; }
 }  // namespace
 
 TEST(Scene, CornellBoxReadsWithItsPatchesAndOneSplitWall) {

@@ -4,10 +4,32 @@
 #include "meshing/mesh.h"
 #include "meshing/scene.h"
 
+#include <gtest/gtest.h>
+
+#include <exception>
+
 #include <string>
 #include <vector>
 
 namespace radmesh::test {
+
+// Runs f, expects it to throw E, returns the message (a test failure when it
+// throws nothing or something else).
+template <class E, class F>
+std::string message_of(F f) {
+  try {
+    f();
+  } catch (const E& e) {
+    return e.what();
+  } catch (const std::exception& e) {
+    ADD_FAILURE() << "wrong exception type: " << e.what();
+    return {};
+  }
+  ADD_FAILURE() << "no exception";
+  return {};
+}
+
+inline bool contains(const std::string& s, const std::string& part) { return s.find(part) != std::string::npos; }
 
 // Index of the first patch named `name`, or -1.
 inline int patch_named(const Scene& s, const std::string& name) {
