@@ -38,8 +38,9 @@ struct Link {
 class Solver {
 public:
   // `out.tree` holds the roots (the initial mesh) on entry.
-  Solver(const Scene& scene, const SolveOptions& opt, const HierarchicalOptions& hopt, HierarchicalSolution& out)
-      : scene_(scene), opt_(opt), hopt_(hopt), out_(out), visibility_(scene, opt.rays) {
+  Solver(const Scene& scene, const SolveOptions& opt, const HierarchicalOptions& hopt, HierarchicalSolution& out,
+         const ProgressFn& progress)
+      : scene_(scene), opt_(opt), hopt_(hopt), out_(out), progress_(progress), visibility_(scene, opt.rays) {
     limit_ = memory_limit_bytes(opt);
     min_area_ = hopt.min_area > 0.0 ? hopt.min_area : 0.5 * std::pow(scene.diagonal() / 150.0, 2);
     out_.stats.min_area = min_area_;
@@ -55,6 +56,7 @@ public:
   void start() {
     auto& st = out_.stats;
     const ElementTree& tree = out_.tree;
+    report("link", 0.0);
     auto t0 = std::chrono::steady_clock::now();
     // Every root pair whose patches face each other becomes at least one
     // link: refuse at once when those alone would not fit the memory limit.
@@ -79,6 +81,7 @@ public:
       if (pairs.size() >= (1u << 20) || p + 1 == tree.root_count()) {
         link_pairs(std::move(pairs));
         pairs.clear();
+        report("link", static_cast<double>(p + 1) / tree.root_count());
       }
     }
     close_t_vertices();
@@ -98,6 +101,7 @@ public:
     }
     previous_ = B_;
     const auto t2 = std::chrono::steady_clock::now();
+    report("refine", 0.0);
     const long long refined = refine_links();
     const int baum = split_by_variation();
     close_t_vertices();
@@ -409,6 +413,7 @@ private:
     const ElementTree& tree = out_.tree;
     const size_t n = tree.nodes().size();
     leaf_terms();
+    report("solve", 0.0);
     for (int sweep = 0;; ++sweep) {
       if (sweep >= opt_.max_iterations)
         throw NumericalError(scene_.source + ": hierarchical solve did not converge to tolerance " +
@@ -582,10 +587,17 @@ private:
     report_visibility_skips(st, "node");
   }
 
+  // Progress from the calling thread: the phase (link, solve, refine) and,
+  // for the first linking, the fraction of receivers linked.
+  void report(const char* phase, double fraction) const {
+    if (progress_) progress_(phase, fraction);
+  }
+
   const Scene& scene_;
   const SolveOptions& opt_;
   HierarchicalOptions hopt_;
   HierarchicalSolution& out_;
+  ProgressFn progress_;
   VisibilityEstimator visibility_;
   double min_area_ = 0.0, max_emission_ = 0.0;
   double limit_ = 0.0;          // memory limit, bytes
@@ -647,10 +659,11 @@ void check_hierarchical_options(const Scene& scene, const SolveOptions& options,
 }  // namespace
 
 struct HierarchicalSolver::Impl {
-  Impl(const Scene& scene, const Mesh& initial, const SolveOptions& o, const HierarchicalOptions& h)
+  Impl(const Scene& scene, const Mesh& initial, const SolveOptions& o, const HierarchicalOptions& h,
+       const ProgressFn& progress)
       : options(o), out{ElementTree(initial), {}, {}, {}, {}, {}, {}, {}} {
     run_in_arena(options.threads, [&] {
-      solver = std::make_unique<Solver>(scene, options, h, out);
+      solver = std::make_unique<Solver>(scene, options, h, out, progress);
       solver->start();
     });
   }
@@ -661,9 +674,9 @@ struct HierarchicalSolver::Impl {
 };
 
 HierarchicalSolver::HierarchicalSolver(const Scene& scene, const Mesh& initial, const SolveOptions& options,
-                                       const HierarchicalOptions& hopt) {
+                                       const HierarchicalOptions& hopt, const ProgressFn& progress) {
   check_hierarchical_options(scene, options, hopt);
-  impl_ = std::make_unique<Impl>(scene, initial, options, hopt);
+  impl_ = std::make_unique<Impl>(scene, initial, options, hopt, progress);
 }
 
 HierarchicalSolver::~HierarchicalSolver() = default;
@@ -692,8 +705,9 @@ int HierarchicalSolver::rounds() const { return impl_->out.stats.rounds; }
 
 HierarchicalSolution solve_hierarchical(const Scene& scene, const Mesh& initial, const SolveOptions& options,
                                         const HierarchicalOptions& hopt,
-                                        const std::function<void(const HierarchicalSolution&, int)>& on_round) {
-  HierarchicalSolver solver(scene, initial, options, hopt);
+                                        const std::function<void(const HierarchicalSolution&, int)>& on_round,
+                                        const ProgressFn& progress) {
+  HierarchicalSolver solver(scene, initial, options, hopt, progress);
   // Each round's solution as it stands, without copying the links every
   // round: they are published once, at the end.
   if (on_round) on_round(solver.impl_->out, 0);

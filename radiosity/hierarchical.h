@@ -111,8 +111,11 @@ struct HierarchicalSolution {
 // must outlive the solver.
 class HierarchicalSolver {
 public:
+  // `progress` (may be empty) is called from the calling thread with the
+  // phase ("link", "solve", "refine") and, while linking, the fraction done;
+  // it must outlive the solver.
   HierarchicalSolver(const Scene& scene, const Mesh& initial, const SolveOptions& options,
-                     const HierarchicalOptions& hopt);
+                     const HierarchicalOptions& hopt, const ProgressFn& progress = {});
   ~HierarchicalSolver();
   HierarchicalSolver(const HierarchicalSolver&) = delete;
   HierarchicalSolver& operator=(const HierarchicalSolver&) = delete;
@@ -129,7 +132,8 @@ public:
 private:
   friend HierarchicalSolution solve_hierarchical(const Scene&, const Mesh&, const SolveOptions&,
                                                  const HierarchicalOptions&,
-                                                 const std::function<void(const HierarchicalSolution&, int)>&);
+                                                 const std::function<void(const HierarchicalSolution&, int)>&,
+                                                 const ProgressFn&);
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };
@@ -138,6 +142,7 @@ private:
 // round)` is called after every solve (for a series of files).
 HierarchicalSolution solve_hierarchical(
     const Scene& scene, const Mesh& initial, const SolveOptions& options, const HierarchicalOptions& hopt,
-    const std::function<void(const HierarchicalSolution&, int round)>& on_round = {});
+    const std::function<void(const HierarchicalSolution&, int round)>& on_round = {},
+    const ProgressFn& progress = {});
 
 }  // namespace radmesh

@@ -107,9 +107,7 @@ Method make_hierarchical_method() {
         snapshot.cell_fields = hierarchical_fields(h);
         cb.on_round(snapshot, round);
       };
-    if (cb.progress) cb.progress("hierarchical", 0.0);
-    HierarchicalSolution h = solve_hierarchical(scene, mesh, so, ho, on_round);
-    if (cb.progress) cb.progress("hierarchical", 1.0);
+    HierarchicalSolution h = solve_hierarchical(scene, mesh, so, ho, on_round, cb.progress);
     MethodResult r;
     r.cell_fields = hierarchical_fields(h);
     if (o.number("export_links") != 0.0) r.line_sets.emplace_back("links", link_line_set(scene, h));

@@ -11,9 +11,11 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <map>
+#include <thread>
 
 using namespace radmesh;
 
@@ -327,4 +329,28 @@ TEST(Hierarchical, SolverObjectStepsToTheOneOffResult) {
   long long published = 0;
   for (const auto& l : stepped.links) published += static_cast<long long>(l.size());
   EXPECT_EQ(published, stepped.stats.links);
+}
+
+TEST(Hierarchical, ReportsProgressFromTheCallingThread) {
+  // Phases link, solve and refine, in that order of first appearance, the
+  // first linking's fraction rising to 1, every call on the caller's thread.
+  const Scene s = read_obj_scene(kData + "/box_on_floor/box_on_floor.obj");
+  HierarchicalOptions ho;
+  ho.epsilon = 0.01;
+  std::vector<std::string> phases;
+  double last_link = -1.0;
+  bool rising = true, same_thread = true;
+  const auto caller = std::this_thread::get_id();
+  solve_hierarchical(s, coarse_mesh(s, 1.0), {}, ho, {}, [&](const std::string& phase, double f) {
+    same_thread = same_thread && std::this_thread::get_id() == caller;
+    if (std::find(phases.begin(), phases.end(), phase) == phases.end()) phases.push_back(phase);
+    if (phase == "link") {
+      rising = rising && f >= last_link && f <= 1.0;
+      last_link = f;
+    }
+  });
+  EXPECT_EQ(phases, (std::vector<std::string>{"link", "solve", "refine"}));
+  EXPECT_EQ(last_link, 1.0);
+  EXPECT_TRUE(rising);
+  EXPECT_TRUE(same_thread);
 }
