@@ -202,8 +202,12 @@ Scene build_scene(const std::vector<RawFace>& faces, std::vector<Material> mater
     return static_cast<int>(std::unique(loop.begin(), loop.end()) - loop.begin());
   };
 
+  // Per patch: the centroid of its face's points as given, before welding.
+  std::vector<Vec3> raw_centroid;
   for (const RawFace& f : faces) {
     auto at = [&f] { return where(f.file, f.line) + "face '" + f.name + "': "; };
+    Vec3 given(0.0);
+    for (const Vec3& p : f.points) given += p / static_cast<double>(f.points.size());
     std::vector<int> outer = weld_loop(f.points);
     if (distinct(outer) < 3)
       throw InputError(at() + "has " + std::to_string(distinct(outer)) +
@@ -247,6 +251,7 @@ Scene build_scene(const std::vector<RawFace>& faces, std::vector<Material> mater
         t.outer = tri;
         t.normal = tn / (2.0 * ta);
         scene.patches.push_back(std::move(t));
+        raw_centroid.push_back(given);
         ++made;
       }
       ++scene.report.nonplanar_faces_split;
@@ -272,12 +277,15 @@ Scene build_scene(const std::vector<RawFace>& faces, std::vector<Material> mater
       patch.holes.push_back(std::move(hole));
     }
     scene.patches.push_back(std::move(patch));
+    raw_centroid.push_back(given);
   }
 
   // Two faces on the same vertices facing the same way (a face line written
   // twice) would be two coincident patches: which one is lit, and which one
-  // meshes, is not defined. Refused, naming both. (Facing opposite ways they
-  // are the two sides of a thin panel, and fine.)
+  // meshes, is not defined. Refused, naming both. Facing opposite ways they
+  // are the two sides of a thin panel, and fine, unless as given they faced
+  // each other across a gap that welding closed: then no light would pass
+  // between them, and that is refused too.
   std::unordered_map<std::string, std::vector<size_t>> seen;
   for (size_t p = 0; p < scene.patches.size(); ++p) {
     const Patch& patch = scene.patches[p];
@@ -285,13 +293,22 @@ Scene build_scene(const std::vector<RawFace>& faces, std::vector<Material> mater
     for (const auto& h : patch.holes) ids.insert(ids.end(), h.begin(), h.end());
     std::sort(ids.begin(), ids.end());
     std::vector<size_t>& same = seen[std::string(reinterpret_cast<const char*>(ids.data()), ids.size() * sizeof(int))];
-    for (size_t q : same)
-      if (glm::dot(scene.patches[q].normal, patch.normal) > 0.0) {
-        const Patch& first = scene.patches[q];
+    for (size_t q : same) {
+      const Patch& first = scene.patches[q];
+      if (glm::dot(first.normal, patch.normal) > 0.0)
         throw InputError(where(patch.file, patch.line) + "face '" + patch.name +
                          "' lies on the same vertices as face '" + first.name + "' (" + where(first.file, first.line) +
                          "facing the same way: two coincident faces); remove one of them");
-      }
+      const Vec3 gap = raw_centroid[p] - raw_centroid[q];
+      if (glm::dot(gap, first.normal) > 0.0 && glm::dot(-gap, patch.normal) > 0.0)
+        throw InputError(where(patch.file, patch.line) + "face '" + patch.name + "' and face '" + first.name + "' (" +
+                         where(first.file, first.line) + "face each other across a gap of " +
+                         format_number(std::abs(glm::dot(gap, first.normal))) +
+                         ", below the weld tolerance " + format_number(options.weld_tolerance * diag) +
+                         " (of the scene size " + format_number(diag) +
+                         "): welded, they would be one surface and no light would pass between them; "
+                         "move them further apart or remove one");
+    }
     same.push_back(p);
   }
 

@@ -94,6 +94,29 @@ TEST_P(Conformance, ParallelPlatesMatchHowellC11) {
   EXPECT_EQ(found, 1);
 }
 
+TEST_P(Conformance, NearlyTouchingPlatesExchangeAllTheirLight) {
+  // Two unit squares 1e-6 apart, front to front, the upper one a black
+  // emitter (E = 1): the lower one (rho = 0.5) sees it with F = 1 - O(1e-6),
+  // so B = 0.5, and nearly nothing escapes.
+  std::vector<RawFace> faces(2);
+  faces[0].name = "lower";
+  faces[0].material = 1;
+  faces[0].points = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}};
+  faces[1].name = "upper";
+  faces[1].material = 0;
+  faces[1].points = {{0, 0, 1e-6}, {0, 1, 1e-6}, {1, 1, 1e-6}, {1, 0, 1e-6}};
+  std::vector<Material> materials(2);
+  materials[0].name = "lamp";
+  materials[0].emission = Rgb(1.0);
+  materials[1].name = "grey";
+  materials[1].reflectance = Rgb(0.5);
+  const Scene scene = build_scene(faces, materials, "plates 1e-6 apart");
+  const MethodResult r = solve(GetParam(), scene, 0.0);
+  const auto means = patch_mean_radiosity(scene, r.mesh, r.solution.element);
+  EXPECT_NEAR(means[0].x, 0.5, 1e-3);
+  EXPECT_LT(r.solution.stats.power_escaped.x, 1e-3 * r.solution.stats.power_emitted.x);
+}
+
 TEST_P(Conformance, CornellBoxBalancesEnergy) {
   // Emitted = absorbed + escaped through the open front, per channel, and
   // the solve's own residual is below its tolerance.

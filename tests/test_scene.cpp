@@ -179,3 +179,20 @@ TEST(Scene, AFaceWrittenTwiceIsAnErrorButTheTwoSidesOfAPanelAreNot) {
   EXPECT_EQ(glm::dot(panel.patches[0].normal, panel.patches[1].normal), -1.0);
   fs::remove_all(dir);
 }
+
+TEST(Scene, FacesFacingEachOtherAcrossAWeldedGapAreRefused) {
+  // Two unit squares 1e-9 apart, front to front: welding (1e-9 of the scene
+  // size) made them one surface seen from both sides, and the lower one got
+  // no light at all while the summary said the light escaped.
+  const fs::path dir = fs::temp_directory_path() / ("radmesh_gap_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  std::ofstream(dir / "s.mtl") << "newmtl lamp\nKd 0 0 0\nKe 1 1 1\nnewmtl grey\nKd 0.5 0.5 0.5\n";
+  std::ofstream(dir / "s.obj") << "mtllib s.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n"
+                                  "v 0 0 1e-9\nv 1 0 1e-9\nv 1 1 1e-9\nv 0 1 1e-9\n"
+                                  "o lower\nusemtl grey\nf 1 2 3 4\no upper\nusemtl lamp\nf 5 8 7 6\n";
+  const std::string msg = message_of<InputError>([&] { read_obj_scene((dir / "s.obj").string()); });
+  EXPECT_TRUE(contains(msg, "s.obj:15")) << msg;
+  EXPECT_TRUE(contains(msg, "s.obj:12")) << msg;
+  EXPECT_TRUE(contains(msg, "gap of 1e-09")) << msg;
+  fs::remove_all(dir);
+}
