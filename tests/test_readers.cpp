@@ -186,11 +186,9 @@ TEST(Readers, ObjWithMtlAndGltfCarryTheSameMaterials) {
   const PolyMesh m = octahedron();
   test::write_obj(dir / "octa.obj", m, "octa", "octa.mtl", "lamp");
   write_text(dir / "octa.mtl", "newmtl lamp\nKd 0.5 0.25 0.125\nKe 8 4 2\n");
-  GltfMaterial lamp;
-  lamp.name = "lamp";
-  lamp.base = {0.5, 0.25, 0.125, 1.0};
-  lamp.emissive = {1.0, 0.5, 0.25};
-  lamp.strength = 8.0;  // KHR_materials_emissive_strength: emission = 8 * emissiveFactor
+  // KHR_materials_emissive_strength 8: emission = 8 * emissiveFactor.
+  const GltfMaterial lamp{
+      .name = "lamp", .base = {0.5, 0.25, 0.125, 1.0}, .emissive = {1.0, 0.5, 0.25}, .strength = 8.0};
   test::write_gltf(dir / "octa.gltf", m, "octa", false, &lamp);
   test::write_gltf(dir / "octa.glb", m, "octa", true, &lamp);
   const Scene obj = read_scene((dir / "octa.obj").string());
@@ -208,9 +206,7 @@ TEST(Readers, ObjWithMtlAndGltfCarryTheSameMaterials) {
 TEST(Readers, GltfNodeTransformIsAppliedAndAMirrorKeepsFacesFacingOut) {
   const fs::path dir = fresh_dir("gltf_nodes");
   const PolyMesh m = octahedron();
-  GltfMaterial grey;
-  grey.name = "grey";
-  grey.emissive = {1, 1, 1};
+  const GltfMaterial grey{.name = "grey", .emissive = {1, 1, 1}};
   test::write_gltf(dir / "moved.gltf", m, "moved", false, &grey, "\"translation\": [10, 0, 0]");
   test::write_gltf(dir / "mirrored.gltf", m, "mirrored", false, &grey, "\"scale\": [-1, 1, 1]");
   // A turn of 0.5 degrees about z, small enough for assimp's own identity test
@@ -237,9 +233,7 @@ TEST(Readers, GltfNodeTransformIsAppliedAndAMirrorKeepsFacesFacingOut) {
 
 TEST(Readers, GltfTextureIsNamedInAWarning) {
   const fs::path dir = fresh_dir("gltf_texture");
-  GltfMaterial grey;
-  grey.name = "grey";
-  grey.emissive = {1, 1, 1};
+  const GltfMaterial grey{.name = "grey", .emissive = {1, 1, 1}};
   test::write_gltf(dir / "t.gltf", octahedron(), "t", false, &grey);
   std::ifstream in(dir / "t.gltf");
   std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
@@ -326,11 +320,7 @@ TEST(JsonScene, ObjectsKeepTheirFilesMaterialsUnlessTheyNameOne) {
   const PolyMesh m = octahedron();
   test::write_obj(dir / "room.obj", m, "room", "room.mtl", "white");
   write_text(dir / "room.mtl", "newmtl white\nKd 0.7 0.7 0.7\nnewmtl unused\nKd 0.1 0.1 0.1\n");
-  GltfMaterial lamp;
-  lamp.name = "lamp";
-  lamp.base = {0, 0, 0, 1};
-  lamp.emissive = {1, 1, 1};
-  lamp.strength = 10;
+  const GltfMaterial lamp{.name = "lamp", .base = {0, 0, 0, 1}, .emissive = {1, 1, 1}, .strength = 10};
   test::write_gltf(dir / "lamp.glb", m, "lamp", true, &lamp);
   write_text(dir / "s.json",
              "{\"materials\": {\"clay\": {\"reflectance\": [0.6, 0.5, 0.4]}},\n"
