@@ -131,6 +131,15 @@ void expect_point(const Vec3& got, const Vec3& want, double tol) {
   EXPECT_NEAR(got.z, want.z, tol);
 }
 
+// Face 0 of octahedron() mirrored in x: its points' x negated and its last
+// two swapped, so that it still faces out of the (mirrored) octahedron.
+void expect_octahedron_face0_mirrored_in_x(const Scene& s) {
+  expect_point(point(s, 0, 0), {-1.75, 0.25, 0.5}, 0.0);
+  expect_point(point(s, 0, 1), {-0.25, 0.25, 1.25}, 0.0);
+  expect_point(point(s, 0, 2), {-0.25, 2.25, 0.5}, 0.0);
+  expect_point(s.patches[0].normal, glm::normalize(Vec3(-1 / 1.5, 1 / 2.0, 1 / 0.75)), 1e-15);
+}
+
 }  // namespace
 
 // ---------------------------------------------------------------- formats
@@ -225,10 +234,7 @@ TEST(Readers, GltfNodeTransformIsAppliedAndAMirrorKeepsFacesFacingOut) {
   expect_point(moved.patches[0].normal, glm::normalize(Vec3(1 / 1.5, 1 / 2.0, 1 / 0.75)), 1e-15);
   // Mirrored in x: face 0's points have x negated, and its last two are
   // swapped so that it still faces out of the (mirrored) octahedron.
-  expect_point(point(mirrored, 0, 0), {-1.75, 0.25, 0.5}, 0.0);
-  expect_point(point(mirrored, 0, 1), {-0.25, 0.25, 1.25}, 0.0);
-  expect_point(point(mirrored, 0, 2), {-0.25, 2.25, 0.5}, 0.0);
-  expect_point(mirrored.patches[0].normal, glm::normalize(Vec3(-1 / 1.5, 1 / 2.0, 1 / 0.75)), 1e-15);
+  expect_octahedron_face0_mirrored_in_x(mirrored);
 }
 
 TEST(Readers, GltfTextureIsNamedInAWarning) {
@@ -287,10 +293,7 @@ TEST(JsonScene, MirroringScaleReversesFacesSoTheyKeepFacingOut) {
              "              \"transform\": {\"scale\": [-1, 1, 1]}}]}\n");
   const Scene s = read_scene((dir / "s.json").string());
   ASSERT_EQ(s.patches.size(), 8u);
-  expect_point(point(s, 0, 0), {-1.75, 0.25, 0.5}, 0.0);
-  expect_point(point(s, 0, 1), {-0.25, 0.25, 1.25}, 0.0);
-  expect_point(point(s, 0, 2), {-0.25, 2.25, 0.5}, 0.0);
-  expect_point(s.patches[0].normal, glm::normalize(Vec3(-1 / 1.5, 1 / 2.0, 1 / 0.75)), 1e-15);
+  expect_octahedron_face0_mirrored_in_x(s);
 }
 
 TEST(JsonScene, PathsAreRelativeToTheJsonFile) {
@@ -324,7 +327,8 @@ TEST(JsonScene, ObjectsKeepTheirFilesMaterialsUnlessTheyNameOne) {
   test::write_gltf(dir / "lamp.glb", m, "lamp", true, &lamp);
   write_text(dir / "s.json",
              "{\"materials\": {\"clay\": {\"reflectance\": [0.6, 0.5, 0.4]}},\n"
-             " \"objects\": [{\"file\": \"room.obj\"}, {\"file\": \"lamp.glb\", \"transform\": {\"translate\": [2.5, 0, 0]}},\n"
+             " \"objects\": [{\"file\": \"room.obj\"},\n"
+             "             {\"file\": \"lamp.glb\", \"transform\": {\"translate\": [2.5, 0, 0]}},\n"
              "             {\"file\": \"room.obj\", \"transform\": {\"translate\": [5, 0, 0]}},\n"
              "             {\"file\": \"lamp.glb\", \"material\": \"clay\",\n"
              "              \"transform\": {\"translate\": [9, 0, 0]}}]}\n");
