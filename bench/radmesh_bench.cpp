@@ -34,7 +34,6 @@
 
 #include <unistd.h>
 #include <algorithm>
-#include <cstdlib>
 
 namespace {
 
@@ -182,16 +181,15 @@ struct Row {
   FieldError element;   // the per-element constant field
 };
 
-// The series a row belongs to: its method and the options that are not
-// numbers (a choice such as tvertex=split is another curve; a number such
-// as epsilon is what a curve sweeps).
+// The series a row belongs to: its method and the choice and flag options
+// it sets (tvertex=split is another curve; a number such as epsilon is what
+// a curve sweeps).
 std::string series_key(const Settings& set) {
+  const MethodOptions checked(find_method(set.method).options, set.options, set.method);
   std::string key = set.method;
-  for (const auto& [k, v] : set.options) {
-    char* end = nullptr;
-    std::strtod(v.c_str(), &end);
-    if (v.empty() || *end != '\0') key += " " + k + "=" + v;
-  }
+  for (const auto& [k, v] : set.options)
+    if (checked.spec(k).kind == OptionSpec::Kind::choice || checked.spec(k).kind == OptionSpec::Kind::flag)
+      key += " " + k + "=" + v;
   return key;
 }
 

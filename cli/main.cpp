@@ -180,7 +180,7 @@ int run(Params& p, bool solving) {
 
   info.meshing = resolve_meshing_options(scene, meshing_for(p, scene, method));
   info.method = method ? method->name : "none";
-  info.method_options = p.method_options.items();
+  info.method_options = p.method_options;
   rep.begin("mesh");
   const Mesh mesh = mesh_scene(scene, info.meshing, &info.mesh_report);
   info.seconds.push_back({"mesh", rep.end()});

@@ -5,7 +5,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdlib>
 
 namespace radmesh {
 
@@ -116,16 +115,15 @@ nlohmann::json make_summary(const RunInfo& info, const Scene& scene, const Mesh&
     doc["counts"]["rays_skipped"] = st.rays_skipped;
     doc["counts"]["pairs_unoccludable"] = st.pairs_unoccludable;
     doc["solver"] = {{"method", info.method}, {"residual", st.residual}, {"convex_enclosure", st.convex_enclosure}};
-    for (const auto& [name, text] : info.method_options) {
-      // Numbers as numbers, the rest (choices, flags) as written.
-      char* end = nullptr;
-      const double v = std::strtod(text.c_str(), &end);
-      if (!text.empty() && *end == '\0' && std::isfinite(v))
-        doc["solver"][name] = v;
-      else if (text == "true" || text == "false")
-        doc["solver"][name] = text == "true";
-      else
+    // Numbers as numbers, flags as booleans, choices as written.
+    for (const auto& [name, text] : info.method_options.items()) {
+      const OptionSpec::Kind kind = info.method_options.spec(name).kind;
+      if (kind == OptionSpec::Kind::choice)
         doc["solver"][name] = text;
+      else if (kind == OptionSpec::Kind::flag)
+        doc["solver"][name] = info.method_options.number(name) != 0.0;
+      else
+        doc["solver"][name] = info.method_options.number(name);
     }
     json units = json::object();
     for (const Counter& c : result->counters) {

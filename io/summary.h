@@ -23,7 +23,7 @@ struct RunInfo {
   MeshReport mesh_report;
   std::vector<std::pair<std::string, double>> seconds;  // phase -> wall seconds, in order
   std::string method = "none";  // the solver (methods() name), "none" for mesh only
-  std::vector<std::pair<std::string, std::string>> method_options;  // MethodOptions::items()
+  MethodOptions method_options;  // the method's options as solved with (empty for mesh only)
 };
 
 // Per patch: area-weighted mean of the element radiosity.

@@ -57,11 +57,11 @@ public:
 
   double number(const std::string& name) const;  // real, integer, flag (0/1)
   const std::string& text(const std::string& name) const;  // every kind, as given or its default
+  const OptionSpec& spec(const std::string& name) const;   // InputError when not declared
   // (name, value) in declaration order, numbers as numbers, for summaries.
   const std::vector<std::pair<std::string, std::string>>& items() const { return items_; }
 
 private:
-  const OptionSpec& spec(const std::string& name) const;
   std::vector<OptionSpec> specs_;
   std::vector<std::pair<std::string, std::string>> items_;
   std::map<std::string, double> numbers_;
