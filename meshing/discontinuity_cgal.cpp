@@ -439,7 +439,8 @@ private:
         if (const EK::Point_3* p = boost::get<EK::Point_3>(&*x)) cut_points.push_back(to_vec(*p));
     }
     const double piece_len = diag_ / 64.0;
-    for (const auto& [c, d] : clip(R, A, B, eps_)) {
+    for (const auto& piece : clip(R, A, B, eps_)) {
+      const Vec3 c = piece.first, d = piece.second;  // not bindings: a lambda below captures c
       const Vec3 cd = d - c;
       const double len2 = glm::dot(cd, cd), len = std::sqrt(len2);
       std::vector<std::pair<double, Vec3>> ts = {{0.0, c}, {1.0, d}};

@@ -502,7 +502,9 @@ private:
       for (const int g : {a, b}) ends.push_back({frame.to2(positions_[static_cast<size_t>(g)]), g});
     }
     const double on_tol = 100.0 * eps_;
-    for (const auto& [a, b, kind] : constraints_[static_cast<size_t>(p)]) {
+    for (const auto& constraint : constraints_[static_cast<size_t>(p)]) {
+      // Named copies: clang 14 cannot capture structured bindings in a lambda.
+      const int a = constraint[0], b = constraint[1];
       CDT::Vertex_handle va = insert_vertex(a), vb = insert_vertex(b);
       const K::Segment_2 seg(va->point(), vb->point());
       const CGAL::Bbox_2 sb = seg.bbox();
@@ -528,7 +530,7 @@ private:
         prev = cur;
       }
       if (prev != vb) cdt.insert_constraint(prev, vb);
-      lines2.push_back({seg, seg.bbox(), kind});
+      lines2.push_back({seg, seg.bbox(), constraint[2]});
     }
     if (!refine)
       for (const Steiner& st : steiner_[p])

@@ -77,6 +77,68 @@ void check_material(const Material& m) {
   }
 }
 
+// Finds two edges of a planar face's loops (outer first, then holes; vertex
+// ids into `vertices`) that cross: a proper crossing, or a collinear overlap
+// along a length. Edges meeting at a shared vertex, and a vertex touching
+// another edge, are not crossings. Orientations within a relative 1e-12 of
+// zero count as touching. Edges are swept in order of their smallest u
+// coordinate in the face's plane, so a face of many vertices costs about
+// n log n. Returns an empty string when the loops are simple and disjoint,
+// else which loops cross and where.
+std::string find_loop_crossing(const std::vector<std::vector<int>>& loops, const std::vector<Vec3>& vertices,
+                               const Vec3& n) {
+  const Vec3 helper = std::abs(n.x) < 0.6 ? Vec3(1, 0, 0) : Vec3(0, 1, 0);
+  const Vec3 u = glm::normalize(glm::cross(n, helper)), v = glm::cross(n, u);
+  struct Edge {
+    int loop, a, b;
+    double ua, va, ub, vb;
+  };
+  std::vector<Edge> edges;
+  for (size_t l = 0; l < loops.size(); ++l) {
+    const std::vector<int>& loop = loops[l];
+    for (size_t i = 0; i < loop.size(); ++i) {
+      const int a = loop[i], b = loop[(i + 1) % loop.size()];
+      const Vec3 &pa = vertices[static_cast<size_t>(a)], &pb = vertices[static_cast<size_t>(b)];
+      edges.push_back({static_cast<int>(l), a, b, glm::dot(pa, u), glm::dot(pa, v), glm::dot(pb, u), glm::dot(pb, v)});
+    }
+  }
+  std::sort(edges.begin(), edges.end(),
+            [](const Edge& x, const Edge& y) { return std::min(x.ua, x.ub) < std::min(y.ua, y.ub); });
+  // Orientation of r about the line p->q: +1, -1, or 0 within rounding.
+  auto orient = [](double pu, double pv, double qu, double qv, double ru, double rv) {
+    const double du = qu - pu, dv = qv - pv, eu = ru - pu, ev = rv - pv;
+    const double o = du * ev - dv * eu;
+    const double tol = 1e-12 * std::sqrt((du * du + dv * dv) * (eu * eu + ev * ev));
+    return o > tol ? 1 : (o < -tol ? -1 : 0);
+  };
+  auto describe = [&](const Edge& e) {
+    const std::string what = e.loop == 0 ? "outline" : "hole " + std::to_string(e.loop);
+    return "the " + what + " edge " + fmt(vertices[static_cast<size_t>(e.a)]) + " -> " +
+           fmt(vertices[static_cast<size_t>(e.b)]);
+  };
+  for (size_t i = 0; i < edges.size(); ++i) {
+    const Edge& e = edges[i];
+    const double e_hi = std::max(e.ua, e.ub);
+    for (size_t j = i + 1; j < edges.size() && std::min(edges[j].ua, edges[j].ub) <= e_hi; ++j) {
+      const Edge& f = edges[j];
+      if (e.a == f.a || e.a == f.b || e.b == f.a || e.b == f.b) continue;
+      if (std::max(f.va, f.vb) < std::min(e.va, e.vb) || std::max(e.va, e.vb) < std::min(f.va, f.vb)) continue;
+      const int o1 = orient(e.ua, e.va, e.ub, e.vb, f.ua, f.va), o2 = orient(e.ua, e.va, e.ub, e.vb, f.ub, f.vb);
+      const int o3 = orient(f.ua, f.va, f.ub, f.vb, e.ua, e.va), o4 = orient(f.ua, f.va, f.ub, f.vb, e.ub, e.vb);
+      bool crossing = o1 * o2 < 0 && o3 * o4 < 0;
+      if (!crossing && o1 == 0 && o2 == 0) {
+        // Collinear: crossing when they overlap along a length.
+        const double du = e.ub - e.ua, dv = e.vb - e.va, len2 = du * du + dv * dv;
+        const double t1 = ((f.ua - e.ua) * du + (f.va - e.va) * dv) / len2;
+        const double t2 = ((f.ub - e.ua) * du + (f.vb - e.va) * dv) / len2;
+        crossing = std::min(std::max(t1, t2), 1.0) - std::max(std::min(t1, t2), 0.0) > 1e-9;
+      }
+      if (crossing) return describe(e) + " crosses " + describe(f);
+    }
+  }
+  return {};
+}
+
 // Welds points closer than eps with a uniform hash grid of cell size eps: a
 // point takes the first earlier vertex within eps, scanning the 27 cells
 // around it in a fixed order and each cell in insertion order. Kept vertices
@@ -276,6 +338,15 @@ Scene build_scene(const std::vector<RawFace>& faces, std::vector<Material> mater
       if (glm::dot(newell_normal(hpts), n) > 0.0) std::reverse(hole.begin(), hole.end());
       patch.holes.push_back(std::move(hole));
     }
+    // A face whose outline crosses itself (a quad with its vertices out of
+    // order, a hole over the outline) has no inside: the mesher would
+    // invent a vertex at each crossing, and could refine towards one
+    // without end.
+    std::vector<std::vector<int>> loops = {patch.outer};
+    loops.insert(loops.end(), patch.holes.begin(), patch.holes.end());
+    if (const std::string crossing = find_loop_crossing(loops, scene.vertices, n); !crossing.empty())
+      throw InputError(at() + "is not a simple polygon: " + crossing +
+                       "; check the order of the face's vertices (radmesh needs faces whose edges do not cross)");
     scene.patches.push_back(std::move(patch));
     raw_centroid.push_back(given);
   }

@@ -73,7 +73,8 @@ double parse_value(const OptionSpec& s, const std::string& text, const std::stri
 MethodOptions::MethodOptions(const std::vector<OptionSpec>& specs, const OptionValues& given,
                              const std::string& method)
     : specs_(specs) {
-  for (const auto& [name, text] : given)
+  for (const auto& entry : given) {
+    const std::string& name = entry.first;  // not a binding: the lambda below captures it
     if (std::none_of(specs.begin(), specs.end(), [&](const OptionSpec& s) { return s.name == name; })) {
       std::string takers;
       for (const Method& m : methods())
@@ -83,6 +84,7 @@ MethodOptions::MethodOptions(const std::vector<OptionSpec>& specs, const OptionV
                        (takers.empty() ? std::string(" (no method takes it)")
                                        : " (it applies to --method " + takers + " only)"));
     }
+  }
   for (const OptionSpec& s : specs) {
     const auto it = given.find(s.name);
     const std::string text = it != given.end() ? it->second : s.default_text();

@@ -398,6 +398,28 @@ TEST(Cli, ASecondRunIntoTheSameDirectoryLeavesOnlyItsOwnFiles) {
   fs::remove_all(out);
 }
 
+// Guards the endless mesher loop of issue 10: one `v` line of the Cornell box
+// written twice shifts every later index, and the ceiling's quads became bow
+// ties that `mesh --max-edge 300` refined without end. Now refused at once.
+TEST(Cli, ADuplicatedVertexLineIsAnErrorNotAnEndlessMesh) {
+  const fs::path dir = fresh_dir("dup_v");
+  fs::create_directories(dir);
+  const std::string src = kData + "/cornell_box/cornell_box";
+  fs::copy_file(src + ".mtl", dir / "cornell_box.mtl");
+  std::ifstream in(src + ".obj");
+  std::ofstream obj(dir / "scene.obj");
+  int n = 0;
+  for (std::string line; std::getline(in, line);) {
+    obj << line << '\n';
+    if (++n == 7) obj << line << '\n';  // `sed 7p`
+  }
+  obj.close();
+  const Result r = radmesh("mesh " + (dir / "scene.obj").string() + " --max-edge 300 -q -o " + (dir / "out").string());
+  EXPECT_EQ(r.status, 1) << r.err;
+  EXPECT_NE(r.err.find("not a simple polygon"), std::string::npos) << r.err;
+  fs::remove_all(dir);
+}
+
 TEST(Cli, NamesThatAreNotUtf8AreWrittenReplacedNotAnInternalError) {
   const fs::path dir = fresh_dir("latin1");
   fs::create_directories(dir);

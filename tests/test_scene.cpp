@@ -84,7 +84,8 @@ INSTANTIATE_TEST_SUITE_P(
                       BadCase{"kd_nan.obj", "kd_nan.mtl:3", "'nan'"},
                       BadCase{"ke_inf.obj", "ke_inf.mtl:4", "'inf'"},
                       BadCase{"duplicate_material.obj", "duplicate_material.mtl:5", "'light'"},
-                      BadCase{"vertical_tab.obj", "vertical_tab.obj:6", "0x0B"}),
+                      BadCase{"vertical_tab.obj", "vertical_tab.obj:6", "0x0B"},
+                      BadCase{"self_crossing_face.obj", "self_crossing_face.obj:8", "not a simple polygon"}),
     [](const auto& info) {
       std::string n = info.param.file;
       return n.substr(0, n.find('.'));
@@ -143,6 +144,46 @@ TEST(Scene, HolesAreOrientedAgainstTheOuterLoop) {
   ASSERT_EQ(s.patches.size(), 1u);
   EXPECT_DOUBLE_EQ(s.patch_area(0), 12.0);
   EXPECT_LT(glm::dot(newell_normal(s.loop_points(s.patches[0].holes[0])), s.patches[0].normal), 0.0);
+}
+
+// Guards the mesher's endless refinement on a duplicated `v` line in the
+// Cornell box (issue 10): the shifted indices made planar ceiling quads whose
+// edges crossed, and CGAL refined towards the crossing it had to invent.
+TEST(Scene, FacesWhoseEdgesCrossAreRefusedAndSimpleOnesAreNot) {
+  Material m;
+  m.name = "m";
+  m.reflectance = Rgb(0.5);
+  m.emission = Rgb(1.0);
+  auto face = [](std::vector<Vec3> points, std::vector<std::vector<Vec3>> holes = {}) {
+    RawFace f;
+    f.name = "plate";
+    f.material = 0;
+    f.points = std::move(points);
+    f.holes = std::move(holes);
+    return f;
+  };
+  auto error = [&](const RawFace& f) { return message_of<InputError>([&] { build_scene({f}, {m}, "test"); }); };
+  // A bow tie (lopsided, so that its signed area is not zero): the edges
+  // (2 0 0)->(0 1 0) and (1 1.5 0)->(0 0 0) cross at (0.5 0.75 0).
+  const std::string bow = error(face({{0, 0, 0}, {2, 0, 0}, {0, 1, 0}, {1, 1.5, 0}}));
+  EXPECT_TRUE(contains(bow, "not a simple polygon")) << bow;
+  EXPECT_TRUE(contains(bow, "2 0 0 -> 0 1 0")) << bow;
+  // A hole over the outline.
+  const std::string hole = error(face({{0, 0, 0}, {4, 0, 0}, {4, 4, 0}, {0, 4, 0}},
+                                      {{{3, 1, 0}, {5, 1, 0}, {5, 3, 0}, {3, 3, 0}}}));
+  EXPECT_TRUE(contains(hole, "hole 1 edge")) << hole;
+  // An outline doubling back over itself along a line (collinear overlap).
+  const std::string back = error(face({{0, 0, 0}, {2, 0, 0}, {2, 1, 0}, {1, 1, 0}, {1, 0, 0}, {3, 0, 0},
+                                       {3, 2, 0}, {0, 2, 0}}));
+  EXPECT_TRUE(contains(back, "not a simple polygon")) << back;
+  // Concave outlines, and a hole touching the outline at a vertex, are simple.
+  EXPECT_EQ(build_scene({face({{0, 0, 0}, {2, 0, 0}, {2, 1, 0}, {1, 1, 0}, {1, 2, 0}, {0, 2, 0}})}, {m}, "test")
+                .patches.size(),
+            1u);
+  EXPECT_NEAR(build_scene({face({{0, 0, 0}, {4, 0, 0}, {4, 4, 0}, {0, 4, 0}}, {{{0, 0, 0}, {2, 1, 0}, {1, 2, 0}}})},
+                          {m}, "test")
+                  .patch_area(0),
+              16.0 - 1.5, 1e-12);
 }
 
 TEST(Scene, DevicesAndDirectoriesAreRefusedNotReadForever) {

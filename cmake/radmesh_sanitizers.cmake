@@ -1,0 +1,29 @@
+# RADMESH_SANITIZE: every target of the project built with AddressSanitizer and
+# UndefinedBehaviorSanitizer; any report aborts the program (so a test fails).
+# RADMESH_FUZZ: also the libFuzzer targets in fuzz/ (clang only), with the
+# whole project instrumented for coverage.
+option(RADMESH_SANITIZE "Build with AddressSanitizer and UndefinedBehaviorSanitizer" OFF)
+option(RADMESH_FUZZ "Build the libFuzzer targets in fuzz/ (clang; implies RADMESH_SANITIZE)" OFF)
+
+if(RADMESH_FUZZ)
+  if(NOT CMAKE_CXX_COMPILER_ID STREQUAL "Clang")
+    message(FATAL_ERROR "RADMESH_FUZZ needs clang (libFuzzer): configure with CC=clang-14 CXX=clang++-14")
+  endif()
+  set(RADMESH_SANITIZE ON CACHE BOOL "" FORCE)
+endif()
+
+if(RADMESH_SANITIZE)
+  set(radmesh_sanitizer_flags -fsanitize=address,undefined -fno-sanitize-recover=undefined
+      -fno-omit-frame-pointer)
+  if(CMAKE_CXX_COMPILER_ID STREQUAL "Clang")
+    # Line tables are enough for the reports and cheap on the CGAL files.
+    list(APPEND radmesh_sanitizer_flags -gline-tables-only)
+  else()
+    list(APPEND radmesh_sanitizer_flags -g1)
+  endif()
+  add_compile_options(${radmesh_sanitizer_flags})
+  add_link_options(-fsanitize=address,undefined)
+  if(RADMESH_FUZZ)
+    add_compile_options(-fsanitize=fuzzer-no-link)
+  endif()
+endif()

@@ -1,0 +1,102 @@
+// Shared by the libFuzzer targets: a scratch folder per process for the files
+// an input becomes, the rule for which exceptions are expected, and checks of
+// what a successful read or meshing must satisfy.
+#pragma once
+
+#include "meshing/errors.h"
+#include "meshing/mesh.h"
+#include "meshing/scene.h"
+
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <string_view>
+#include <unistd.h>
+#include <vector>
+
+namespace radmesh::fuzz {
+
+// A folder of this process's own, made once, removed at exit.
+inline const std::filesystem::path& scratch_dir() {
+  static const std::filesystem::path dir = [] {
+    const char* tmp = std::getenv("TMPDIR");
+    std::filesystem::path d = std::filesystem::path(tmp && *tmp ? tmp : "/tmp") /
+                              ("radmesh-fuzz-" + std::to_string(::getpid()));
+    std::filesystem::create_directories(d);
+    std::atexit([] { std::error_code ec; std::filesystem::remove_all(scratch_dir(), ec); });
+    return d;
+  }();
+  return dir;
+}
+
+inline std::string write_file(const std::string& name, std::string_view bytes) {
+  const std::filesystem::path p = scratch_dir() / name;
+  std::ofstream out(p, std::ios::binary | std::ios::trunc);
+  out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+  return p.string();
+}
+
+// Splits the input at the first line "#--MTL--": the part before is the OBJ,
+// the part after its material library (written as scene.mtl, which the OBJ
+// names with `mtllib scene.mtl`).
+inline std::pair<std::string_view, std::string_view> split_obj_mtl(const uint8_t* data, size_t size) {
+  const std::string_view all(reinterpret_cast<const char*>(data), size);
+  constexpr std::string_view marker = "\n#--MTL--\n";
+  const size_t at = all.find(marker);
+  if (at == std::string_view::npos) return {all, {}};
+  return {all.substr(0, at + 1), all.substr(at + marker.size())};
+}
+
+// A defect found: says what and aborts, which libFuzzer reports with the input.
+[[noreturn]] inline void defect(const std::string& what) {
+  std::fprintf(stderr, "radmesh fuzz: %s\n", what.c_str());
+  std::abort();
+}
+
+inline bool finite(const Vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
+
+// What a scene that read without error must be: finite coordinates, values in
+// the ranges build_scene promises, patches of positive finite area.
+inline void check_scene(const Scene& scene) {
+  for (const Vec3& v : scene.vertices)
+    if (!finite(v)) defect("scene vertex not finite");
+  for (const Material& m : scene.materials) {
+    for (int c = 0; c < 3; ++c) {
+      if (!(m.reflectance[c] >= 0.0 && m.reflectance[c] < 1.0)) defect("reflectance out of [0, 1)");
+      if (!(m.emission[c] >= 0.0 && std::isfinite(m.emission[c]))) defect("emission negative or not finite");
+    }
+  }
+  for (size_t p = 0; p < scene.patches.size(); ++p) {
+    const double a = scene.patch_area(static_cast<int>(p));
+    if (!(a > 0.0 && std::isfinite(a))) defect("patch " + std::to_string(p) + " area not positive and finite");
+  }
+}
+
+// What a mesh must be: indices in range, finite positions, and per patch the
+// triangles' total area equal to the patch's area (nothing lost or doubled).
+inline void check_mesh(const Scene& scene, const Mesh& mesh) {
+  const int nv = static_cast<int>(mesh.positions.size());
+  for (const Vec3& v : mesh.positions)
+    if (!finite(v)) defect("mesh position not finite");
+  if (mesh.patch.size() != mesh.triangles.size()) defect("mesh patch array size");
+  std::vector<double> area(scene.patches.size(), 0.0);
+  for (int t = 0; t < mesh.triangle_count(); ++t) {
+    for (const int i : mesh.triangles[static_cast<size_t>(t)])
+      if (i < 0 || i >= nv) defect("mesh vertex index out of range");
+    const int p = mesh.patch[static_cast<size_t>(t)];
+    if (p < 0 || p >= static_cast<int>(scene.patches.size())) defect("mesh patch index out of range");
+    area[static_cast<size_t>(p)] += mesh.area(t);
+  }
+  for (size_t p = 0; p < area.size(); ++p) {
+    const double want = scene.patch_area(static_cast<int>(p));
+    if (std::abs(area[p] - want) > 1e-6 * want)
+      defect("patch " + std::to_string(p) + ": mesh area " + std::to_string(area[p]) + " != patch area " +
+             std::to_string(want));
+  }
+}
+
+}  // namespace radmesh::fuzz

@@ -1,0 +1,158 @@
+#!/usr/bin/env python3
+"""Writes the fuzzers' seed corpora (fuzz/corpus/<target>/) and the files the
+JSON-scene target may name (fuzz/files/), from the bundled scenes and small
+hand-made meshes. Run from anywhere; the output is committed."""
+import base64
+import json
+import pathlib
+import re
+import shutil
+import struct
+
+here = pathlib.Path(__file__).resolve().parent
+data = here.parent / "data"
+corpus = here / "corpus"
+files = here / "files"
+MARK = b"\n#--MTL--\n"
+
+
+def obj_with_mtl(obj_path):
+    """The OBJ with its mtllib renamed to scene.mtl, the marker, then the MTL."""
+    obj = obj_path.read_bytes()
+    mtl_name = re.search(rb"^mtllib\s+(\S+)", obj, re.M).group(1).decode()
+    mtl = (obj_path.parent / mtl_name).read_bytes()
+    obj = re.sub(rb"^mtllib\s+\S+", b"mtllib scene.mtl", obj, flags=re.M)
+    return obj.rstrip(b"\n") + MARK + mtl
+
+
+def write(target, name, content):
+    d = corpus / target
+    d.mkdir(parents=True, exist_ok=True)
+    (d / name).write_bytes(content)
+
+
+# Small meshes: a tetrahedron in each assimp format.
+P = [(0, 0, 0), (1, 0, 0), (0, 1, 0), (0, 0, 1)]
+F = [(0, 2, 1), (0, 1, 3), (0, 3, 2), (1, 2, 3)]
+
+
+def ply_ascii():
+    s = "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n"
+    s += "element face 4\nproperty list uchar int vertex_indices\nend_header\n"
+    s += "".join("%g %g %g\n" % p for p in P) + "".join("3 %d %d %d\n" % f for f in F)
+    return s.encode()
+
+
+def ply_binary():
+    h = ("ply\nformat binary_little_endian 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"
+         "property float z\nelement face 4\nproperty list uchar int vertex_indices\nend_header\n").encode()
+    return h + b"".join(struct.pack("<3f", *p) for p in P) + b"".join(struct.pack("<B3i", 3, *f) for f in F)
+
+
+def normal(f):
+    a, b, c = (P[i] for i in f)
+    u = [b[k] - a[k] for k in range(3)]
+    v = [c[k] - a[k] for k in range(3)]
+    return (u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0])
+
+
+def stl_ascii():
+    s = "solid tet\n"
+    for f in F:
+        s += " facet normal %g %g %g\n  outer loop\n" % normal(f)
+        s += "".join("   vertex %g %g %g\n" % P[i] for i in f) + "  endloop\n endfacet\n"
+    return (s + "endsolid tet\n").encode()
+
+
+def stl_binary():
+    out = b"tet".ljust(80, b" ") + struct.pack("<I", len(F))
+    for f in F:
+        out += struct.pack("<3f", *normal(f)) + b"".join(struct.pack("<3f", *P[i]) for i in f) + b"\0\0"
+    return out
+
+
+def off():
+    return ("OFF\n4 4 6\n" + "".join("%g %g %g\n" % p for p in P) +
+            "".join("3 %d %d %d\n" % f for f in F)).encode()
+
+
+def gltf_parts(emissive):
+    pos = b"".join(struct.pack("<3f", *p) for p in P)
+    idx = b"".join(struct.pack("<3H", *f) for f in F)
+    buf = pos + idx
+    doc = {
+        "asset": {"version": "2.0"},
+        "scene": 0, "scenes": [{"nodes": [0]}],
+        "nodes": [{"mesh": 0, "translation": [0.5, 0, 0]}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1, "material": 0}]}],
+        "materials": [{"pbrMetallicRoughness": {"baseColorFactor": [0.5, 0.6, 0.7, 1]},
+                       "emissiveFactor": emissive}],
+        "buffers": [{"byteLength": len(buf)}],
+        "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": len(pos)},
+                        {"buffer": 0, "byteOffset": len(pos), "byteLength": len(idx)}],
+        "accessors": [{"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3",
+                       "min": [0, 0, 0], "max": [1, 1, 1]},
+                      {"bufferView": 1, "componentType": 5123, "count": 12, "type": "SCALAR"}],
+    }
+    return doc, buf
+
+
+def gltf():
+    doc, buf = gltf_parts([1, 1, 1])
+    doc["buffers"][0]["uri"] = "data:application/octet-stream;base64," + base64.b64encode(buf).decode()
+    return json.dumps(doc).encode()
+
+
+def glb():
+    doc, buf = gltf_parts([0, 0, 0])
+    js = json.dumps(doc).encode()
+    js += b" " * (-len(js) % 4)
+    buf += b"\0" * (-len(buf) % 4)
+    body = struct.pack("<II", len(js), 0x4E4F534A) + js + struct.pack("<II", len(buf), 0x004E4942) + buf
+    return struct.pack("<III", 0x46546C67, 2, 12 + len(body)) + body
+
+
+def main():
+    if corpus.exists():
+        shutil.rmtree(corpus)
+    if files.exists():
+        shutil.rmtree(files)
+    scenes = sorted(data.glob("*/*.obj"))
+    for obj in scenes:
+        write("fuzz_obj_reader", obj.stem, obj_with_mtl(obj))
+        write("fuzz_mesh", obj.stem, obj_with_mtl(obj))
+    # The stress scenes of issue 10, which crashed the mesher: two emitters,
+    # and a floor vertex moved out of its plane.
+    cornell = obj_with_mtl(data / "cornell_box" / "cornell_box.obj")
+    write("fuzz_mesh", "cornell_two_emitters",
+          cornell.replace(b"newmtl white\n", b"newmtl white\nKe 1 1 1\n")
+                 .replace(b"newmtl red\n", b"newmtl red\nKe 1 1 1\n"))
+    write("fuzz_mesh", "cornell_floor_vertex_moved", cornell.replace(b"v 552.8 0 0\n", b"v 552.8 300 0\n", 1))
+
+    formats = [(0, "ply_ascii", ply_ascii()), (0, "ply_binary", ply_binary()), (1, "stl_ascii", stl_ascii()),
+               (1, "stl_binary", stl_binary()), (2, "off", off()), (3, "gltf", gltf()), (4, "glb", glb())]
+    for selector, name, content in formats:
+        write("fuzz_assimp_reader", name, bytes([selector]) + content)
+
+    files.mkdir(parents=True)
+    (files / "room.obj").write_bytes((data / "bunny" / "room.obj").read_bytes())
+    (files / "room.mtl").write_bytes((data / "bunny" / "room.mtl").read_bytes())
+    (files / "tet.ply").write_bytes(ply_ascii())
+    (files / "tet.stl").write_bytes(stl_binary())
+    (files / "tet.off").write_bytes(off())
+    (files / "tet.gltf").write_bytes(gltf())
+    write("fuzz_json_scene", "room_and_tet", json.dumps({
+        "materials": {"clay": {"reflectance": [0.6, 0.5, 0.4]}},
+        "objects": [{"file": "room.obj"},
+                    {"file": "tet.ply", "material": "clay",
+                     "transform": {"scale": 0.2, "rotate_deg": [0, 90, 0], "translate": [0.5, 0, 0.5]}}]},
+        indent=1).encode())
+    write("fuzz_json_scene", "every_format", json.dumps({
+        "materials": {"grey": {"reflectance": [0.5, 0.5, 0.5]},
+                      "lamp": {"reflectance": [0, 0, 0], "emission": [10, 10, 10]}},
+        "objects": [{"file": "tet.stl", "material": "lamp", "transform": {"scale": [1, 2, -1]}},
+                    {"file": "tet.off", "material": "grey", "transform": {"translate": [3, 0, 0]}},
+                    {"file": "tet.gltf", "transform": {"translate": [0, 3, 0]}}]}, indent=1).encode())
+
+
+main()
