@@ -274,9 +274,14 @@ int run(Params& p, bool solving) {
 
   if (result && !p.quiet) {
     const SolveStats& st = result->solution.stats;
-    std::fprintf(stderr, "[radmesh] %lld form factors, %lld rays cast, %lld skipped; residual %.2g; energy imbalance %.2g\n",
+    const double bound = std::max({st.error_bound[0], st.error_bound[1], st.error_bound[2]});
+    const bool unbounded = std::min({st.error_bound[0], st.error_bound[1], st.error_bound[2]}) < 0.0;
+    std::fprintf(stderr,
+                 "[radmesh] %lld form factors, %lld rays cast, %lld skipped; residual %.2g (error at most %s); "
+                 "energy imbalance %.2g\n",
                  st.form_factors, st.rays_cast, st.rays_skipped,
                  std::max({st.residual[0], st.residual[1], st.residual[2]}),
+                 unbounded ? "unbounded: rho x row sum reaches 1" : format_number(bound).c_str(),
                  st.power_emitted.x > 0 ? (st.power_emitted.x - st.power_absorbed.x - st.power_escaped.x) / st.power_emitted.x : 0.0);
   }
   for (const std::string& w : written) std::printf("%s\n", w.c_str());

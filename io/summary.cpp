@@ -114,7 +114,14 @@ nlohmann::json make_summary(const RunInfo& info, const Scene& scene, const Mesh&
     doc["counts"]["rays_cast"] = st.rays_cast;
     doc["counts"]["rays_skipped"] = st.rays_skipped;
     doc["counts"]["pairs_unoccludable"] = st.pairs_unoccludable;
-    doc["solver"] = {{"method", info.method}, {"residual", st.residual}, {"convex_enclosure", st.convex_enclosure}};
+    // error_bound: per channel, null where the scene gives no bound (-1).
+    json bound = json::array();
+    for (const double b : st.error_bound) bound.push_back(b >= 0.0 ? json(b) : json(nullptr));
+    doc["solver"] = {{"method", info.method},
+                     {"residual", st.residual},
+                     {"error_bound", bound},
+                     {"extrapolations", st.extrapolations},
+                     {"convex_enclosure", st.convex_enclosure}};
     // Numbers as numbers, flags as booleans, choices as written.
     for (const auto& [name, text] : info.method_options.items()) {
       const OptionSpec::Kind kind = info.method_options.spec(name).kind;

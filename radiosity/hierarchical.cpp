@@ -414,18 +414,33 @@ private:
     const size_t n = tree.nodes().size();
     leaf_terms();
     report("solve", 0.0);
+    // The norm of rho F over the leaves, for the stopping rule.
+    double contraction = 0.0;
+    for (size_t x = 0; x < n; ++x)
+      if (tree.is_leaf(static_cast<int>(x))) contraction = std::max(contraction, max3(rho_[x]) * F_sum_[x]);
+    SweepMonitor monitor(opt_.tolerance, contraction);
+    std::vector<Rgb> before;
     for (int sweep = 0;; ++sweep) {
       if (sweep >= opt_.max_iterations)
         throw NumericalError(scene_.source + ": hierarchical solve did not converge to tolerance " +
                              std::to_string(opt_.tolerance) + " in " + std::to_string(opt_.max_iterations) +
                              " sweeps");
+      before = B_;
       double change = 0.0, top = 0.0;
       for (int r = 0; r < tree.root_count(); ++r) pull(r, change, top);
       ++out_.stats.sweeps;
       if (!std::isfinite(change))
         throw NumericalError(scene_.source + ": hierarchical solve produced a non-finite radiosity");
-      if (change <= opt_.tolerance * top) break;
+      const SweepMonitor::Action action = monitor.after_sweep(change, top);
+      if (action == SweepMonitor::Action::stop) break;
+      if (action == SweepMonitor::Action::extrapolate) {
+        // Every node at once: inner nodes are area means of their children,
+        // and the extrapolation is linear, so they stay consistent.
+        const double k = monitor.extrapolation_factor();
+        for (size_t x = 0; x < n; ++x) B_[x] += k * (B_[x] - before[x]);
+      }
     }
+    extrapolations_ += monitor.extrapolations();
     H_.assign(n, Rgb(0.0));
     for (size_t x = 0; x < n; ++x)
       for (const auto& [q, c] : terms_[x]) H_[x] += c * B_[static_cast<size_t>(q)];
@@ -577,6 +592,7 @@ private:
       balance.add(tri_[p].area, rho_[p], emit_[p], B_[p], H_[p], F_sum_[p]);
     }
     balance.finish(st);
+    st.extrapolations = extrapolations_;
     st.rays_cast = o.stats.rays_cast;
     st.rays_skipped = o.stats.rays_skipped;
     st.pairs_unoccludable = o.stats.pairs_unoccludable;
@@ -616,6 +632,7 @@ private:
   std::vector<Rgb> B_, H_;
   std::vector<Rgb> previous_;  // node radiosity of the round before (for last_change)
   bool done_ = false;          // the stopping rule was met: step() changes nothing more
+  int extrapolations_ = 0;     // Aitken steps of the sweeps, all rounds
   std::vector<double> F_sum_;
   std::vector<std::vector<std::pair<int, double>>> terms_;  // per leaf: (source node, F x visibility at the leaf)
   std::vector<std::vector<Link>> links_;  // per receiver node

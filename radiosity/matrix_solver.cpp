@@ -169,14 +169,32 @@ Solution solve_with_matrix(const Scene& scene, const Mesh& mesh, const ElementSe
     st.skips.push_back("solve: " + std::to_string(black) +
                        " elements with reflectance 0 take B = E without iterating");
 
+  // Row sums, and per channel the norm of rho F (the stopping rule's bound).
+  std::vector<double> row_sum(static_cast<size_t>(n), 0.0);
+  tbb::parallel_for(tbb::blocked_range<long long>(0, n), [&](const tbb::blocked_range<long long>& r) {
+    for (long long i = r.begin(); i != r.end(); ++i) {
+      const double* fi = &F[static_cast<size_t>(i * n)];
+      double s = 0.0;
+      for (long long j = 0; j < n; ++j) s += fi[j];
+      row_sum[static_cast<size_t>(i)] = s;
+    }
+  });
+  Rgb contraction(0.0);
+  for (long long i = 0; i < n; ++i)
+    contraction = glm::max(contraction, rho[static_cast<size_t>(i)] * row_sum[static_cast<size_t>(i)]);
+
   std::vector<std::vector<double>> B(3, std::vector<double>(static_cast<size_t>(n)));
+  std::vector<int> extrapolations(solve_channels.size(), 0);
   tbb::parallel_for(size_t(0), solve_channels.size(), [&](size_t k) {
     const int c = solve_channels[k];
     std::vector<double>& b = B[static_cast<size_t>(c)];
     for (long long i = 0; i < n; ++i) b[static_cast<size_t>(i)] = emit[static_cast<size_t>(i)][c];
     int it = 0;
     double max_b = 0.0;
+    SweepMonitor monitor(options.tolerance, contraction[c]);
+    std::vector<double> before;
     for (; it < options.max_iterations; ++it) {
+      before = b;
       double change = 0.0;
       max_b = 0.0;
       for (long long i = 0; i < n; ++i) {
@@ -192,13 +210,20 @@ Solution solve_with_matrix(const Scene& scene, const Mesh& mesh, const ElementSe
         b[static_cast<size_t>(i)] = value;
         max_b = std::max(max_b, std::abs(value));
       }
-      if (change <= options.tolerance * max_b) {
+      const SweepMonitor::Action action = monitor.after_sweep(change, max_b);
+      if (action == SweepMonitor::Action::stop) {
         ++it;
         break;
       }
+      if (action == SweepMonitor::Action::extrapolate) {
+        const double k = monitor.extrapolation_factor();
+        for (size_t i = 0; i < b.size(); ++i) b[i] += k * (b[i] - before[i]);
+      }
     }
     st.iterations[static_cast<size_t>(c)] = it;
+    extrapolations[k] = monitor.extrapolations();
   });
+  for (const int e : extrapolations) st.extrapolations += e;
   for (int c = 0; c < 3; ++c)
     if (source_of[c] != c) {
       B[static_cast<size_t>(c)] = B[static_cast<size_t>(source_of[c])];
@@ -212,18 +237,13 @@ Solution solve_with_matrix(const Scene& scene, const Mesh& mesh, const ElementSe
 
   // Residual and energy balance from H = F B (rows in parallel, each row summed in order).
   std::vector<Rgb> H(static_cast<size_t>(n), Rgb(0.0));
-  std::vector<double> row_sum(static_cast<size_t>(n), 0.0);
   tbb::parallel_for(tbb::blocked_range<long long>(0, n), [&](const tbb::blocked_range<long long>& r) {
     for (long long i = r.begin(); i != r.end(); ++i) {
       const double* fi = &F[static_cast<size_t>(i * n)];
       Rgb h(0.0);
-      double s = 0.0;
-      for (long long j = 0; j < n; ++j) {
-        s += fi[j];
+      for (long long j = 0; j < n; ++j)
         for (int c = 0; c < 3; ++c) h[c] += fi[j] * B[static_cast<size_t>(c)][static_cast<size_t>(j)];
-      }
       H[static_cast<size_t>(i)] = h;
-      row_sum[static_cast<size_t>(i)] = s;
     }
   });
   sol.element.resize(static_cast<size_t>(n));

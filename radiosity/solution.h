@@ -36,6 +36,11 @@ struct SolveStats {
   int channels_solved = 0;
   std::array<int, 3> iterations{0, 0, 0};
   std::array<double, 3> residual{0, 0, 0};  // final relative residual per channel
+  // What the residual guarantees: max |B - B_exact| / max |B| per channel is
+  // at most this (residual / (1 - max rho x row sum)); -1 where the scene's
+  // rho F gives no bound (a row sum times rho of 1 or more).
+  std::array<double, 3> error_bound{0, 0, 0};
+  int extrapolations = 0;  // Aitken steps of the iteration (SweepMonitor)
   double seconds_form_factors = 0.0;  // form factors (hierarchical: linking)
   double seconds_solve = 0.0;
   // Energy balance (per channel): emitted = absorbed + escaped.

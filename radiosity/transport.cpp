@@ -93,6 +93,7 @@ void BalanceAccumulator::add(double area, const Rgb& rho, const Rgb& emission, c
   absorbed_ += (Rgb(1.0) - rho) * h * area;
   escaped_ += b * area * (1.0 - row_sum);
   worst_ = glm::max(worst_, glm::abs(emission + rho * h - b));
+  contraction_ = glm::max(contraction_, rho * row_sum);
   largest_ = glm::max(largest_, glm::abs(b));
 }
 
@@ -100,7 +101,40 @@ void BalanceAccumulator::finish(SolveStats& st) const {
   st.power_emitted = emitted_;
   st.power_absorbed = absorbed_;
   st.power_escaped = escaped_;
-  for (int c = 0; c < 3; ++c) st.residual[static_cast<size_t>(c)] = largest_[c] > 0.0 ? worst_[c] / largest_[c] : 0.0;
+  for (int c = 0; c < 3; ++c) {
+    const double r = largest_[c] > 0.0 ? worst_[c] / largest_[c] : 0.0;
+    st.residual[static_cast<size_t>(c)] = r;
+    st.error_bound[static_cast<size_t>(c)] = contraction_[c] < 1.0 ? r / (1.0 - contraction_[c]) : -1.0;
+  }
+}
+
+SweepMonitor::Action SweepMonitor::after_sweep(double change, double top) {
+  if (change <= 0.0) return Action::stop;  // a fixed point
+  if (previous_ > 0.0) {
+    ratios_[static_cast<size_t>(count_ % 3)] = change / previous_;
+    ++count_;
+  }
+  previous_ = change;
+  const double allowed = tolerance_ * top;
+  if (change > allowed) return maybe_extrapolate();
+  if (contraction_ < 1.0 && change * contraction_ / (1.0 - contraction_) <= allowed) return Action::stop;
+  if (steady() && q_ < 1.0 && change * q_ / (1.0 - q_) <= allowed) return Action::stop;
+  return maybe_extrapolate();
+}
+
+bool SweepMonitor::steady() {
+  if (count_ < 3) return false;
+  const auto [lo, hi] = std::minmax_element(ratios_.begin(), ratios_.end());
+  q_ = *hi;
+  return *hi - *lo <= 0.01 * *hi;
+}
+
+SweepMonitor::Action SweepMonitor::maybe_extrapolate() {
+  if (!steady() || q_ <= 0.5 || q_ >= 1.0) return Action::go_on;
+  ++extrapolations_;
+  previous_ = 0.0;
+  count_ = 0;
+  return Action::extrapolate;
 }
 
 void run_in_arena(int threads, const std::function<void()>& f) {

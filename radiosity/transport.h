@@ -8,6 +8,7 @@
 #include "radiosity/form_factor.h"
 #include "radiosity/solution.h"
 
+#include <array>
 #include <cstdint>
 #include <functional>
 #include <memory>
@@ -81,7 +82,10 @@ private:
 // E a = absorbed (1 - rho) H a + escaped B a (1 - row sum), and the residual
 // max |E + rho H - B| / max |B| per channel, where H is the gathered
 // irradiance and the row sum the element's total form factor (1 in a
-// closed scene). Fills the power_* and residual fields of `stats`.
+// closed scene). Fills the power_* and residual fields of `stats`, and
+// error_bound: the residual over 1 - max(rho x row sum), which bounds the
+// error of B relative to max |B| (the Neumann series of rho F), or -1 when
+// rho F has no norm below 1 and so gives no bound.
 class BalanceAccumulator {
 public:
   void add(double area, const Rgb& reflectance, const Rgb& emission, const Rgb& radiosity, const Rgb& gathered,
@@ -90,6 +94,41 @@ public:
 
 private:
   Rgb emitted_{0.0}, absorbed_{0.0}, escaped_{0.0}, worst_{0.0}, largest_{0.0};
+  Rgb contraction_{0.0};  // max over elements of rho x row sum: the norm of rho F
+};
+
+// The stopping rule of a Gauss-Seidel solve, and its acceleration. The
+// change of one sweep says little about the error where the iteration
+// contracts slowly: with reflectance 0.999 in a closed room each sweep takes
+// off about 0.1% of the error, and a change of 1e-6 leaves an error near
+// 1e-3. The monitor estimates the contraction q per sweep from successive
+// changes. While q holds steady (the last three ratios within 1%), the error
+// is one mode decaying by q per sweep: the error left is change x q / (1 - q)
+// by the geometric series, and when that is above the tolerance the caller
+// extrapolates the mode away (Aitken): B += q / (1 - q) (B - B_before).
+// Otherwise the bound of the system itself holds: error <= change x k / (1 - k)
+// with k = max(rho x row sum), the norm of rho F (`contraction`; 1 or more
+// gives none, and then only a steady q can stop). A solve stops when the
+// change and the error left are both within tolerance x the largest value.
+class SweepMonitor {
+public:
+  enum class Action { go_on, extrapolate, stop };
+  SweepMonitor(double tolerance, double contraction) : tolerance_(tolerance), contraction_(contraction) {}
+  // After a sweep whose largest change was `change` and largest value `top`.
+  Action after_sweep(double change, double top);
+  // The factor q / (1 - q) to extrapolate with (after Action::extrapolate).
+  double extrapolation_factor() const { return q_ / (1.0 - q_); }
+  int extrapolations() const { return extrapolations_; }
+
+private:
+  bool steady();  // three ratios recorded and within 1% of each other (sets q_ to the largest)
+  Action maybe_extrapolate();
+  double tolerance_, contraction_;
+  double previous_ = 0.0;            // change of the sweep before (0: none since a reset)
+  std::array<double, 3> ratios_{};   // the last three change ratios
+  int count_ = 0;                    // ratios recorded since the last reset
+  double q_ = 0.0;
+  int extrapolations_ = 0;
 };
 
 // Runs f in a TBB arena of `threads` workers (0 = all cores): the thread

@@ -18,7 +18,7 @@ for t in "${targets[@]}"; do
   mkdir -p "$work/$t/corpus"
   cp "$root/fuzz/corpus/$t/"* "$work/$t/corpus/"
   log="$work/$t/log.txt"
-  if ASAN_OPTIONS=detect_leaks=1 "$build/fuzz/$t" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=4096 \
+  if "$build/fuzz/$t" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=4096 \
        -max_len=65536 -print_final_stats=1 -artifact_prefix="$work/$t/" "$work/$t/corpus" >"$log" 2>&1; then
     runs="$(sed -n 's/^stat::number_of_executed_units: *//p' "$log")"
     cov="$(grep -o 'cov: [0-9]*' "$log" | tail -1)"

@@ -79,6 +79,23 @@ TEST_P(Conformance, FurnaceGivesEOverOneMinusRhoEverywhere) {
   }
 }
 
+TEST_P(Conformance, ReflectanceNearOneConvergesAsFarAsItsStoppingRuleSays) {
+  // The furnace with rho = 0.999: B = E / (1 - rho) = 1000. Each sweep takes
+  // off about 0.1% of the error, so stopping at a sweep change of 1e-6 left
+  // B 0.05% low (and the solver said "residual 1e-6"). At the default
+  // tolerance the error must now be within it, and the reported bound must
+  // hold.
+  Scene scene = read_obj_scene(kData + "/furnace_cube/furnace_cube.obj");
+  for (Material& m : scene.materials) m.reflectance = Rgb(0.999);
+  const MethodResult r = solve(GetParam(), scene, 0.25);
+  double worst = 0.0;
+  for (const Rgb& b : r.solution.element) worst = std::max(worst, std::abs(b.x - 1000.0) / 1000.0);
+  EXPECT_LE(worst, 1e-5);
+  const double bound = r.solution.stats.error_bound[0];
+  EXPECT_GE(bound, worst);
+  EXPECT_LE(bound, 1e-4);
+}
+
 TEST_P(Conformance, ParallelPlatesMatchHowellC11) {
   // Unit squares one apart, the emitter black with E = 1, the receiver rho =
   // 0.5: its mean radiosity is rho F = 0.5 x 0.199825 (Howell C-11).
