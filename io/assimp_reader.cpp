@@ -26,12 +26,16 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <mutex>
 #include <optional>
 #include <regex>
+#include <vector>
+#include <sstream>
+#include <map>
 
 namespace radmesh::detail {
 
@@ -310,12 +314,98 @@ struct Walker {
   }
 };
 
+// Checks a PLY header before assimp sees it: assimp 5.2 loops without end on
+// some malformed headers (an unknown property type, no end_header), and
+// allocates what a header's element counts declare before reading a byte of
+// the body. So: known keywords and types only, end_header within the first
+// 64 KiB, and every element count within what the rest of the file can hold
+// (at least one byte per value in binary, two per value in ASCII: a digit and
+// a separator). Throws InputError naming the header line.
+void check_ply_header(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  const auto file_size = static_cast<double>(fs::file_size(path));
+  static const std::map<std::string, int> kTypeBytes = {
+      {"char", 1},   {"uchar", 1},   {"int8", 1},   {"uint8", 1},   {"short", 2},   {"ushort", 2},
+      {"int16", 2},  {"uint16", 2},  {"int", 4},    {"uint", 4},    {"int32", 4},   {"uint32", 4},
+      {"float", 4},  {"float32", 4}, {"double", 8}, {"float64", 8}};
+  // A word of the header as it may be printed: control bytes as \xNN, at most 40 characters.
+  auto shown = [](const std::string& word) {
+    std::string out;
+    for (const char c : word.substr(0, 40)) {
+      const auto u = static_cast<unsigned char>(c);
+      if (u < 0x20 || u == 0x7f) {
+        char hex[8];
+        std::snprintf(hex, sizeof hex, "\\x%02X", static_cast<unsigned>(u));
+        out += hex;
+      } else {
+        out += c;
+      }
+    }
+    return out;
+  };
+  auto bad = [&](int line, const std::string& what) {
+    throw InputError(path + ": PLY header line " + std::to_string(line) + ": " + what);
+  };
+  bool binary = false, ended = false;
+  double bytes_needed = 0.0, element_count = 0.0, element_bytes = 0.0;
+  auto close_element = [&] { bytes_needed += element_count * element_bytes; };
+  std::string line;
+  size_t read = 0;
+  int ln = 0;
+  while (!ended && read < 65536 && std::getline(in, line)) {
+    read += line.size() + 1;
+    ++ln;
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    std::istringstream words(line);
+    std::vector<std::string> w;
+    for (std::string x; words >> x;) w.push_back(x);
+    const std::string head = w.empty() ? "" : w[0];
+    if (ln == 1) {
+      if (head != "ply" || w.size() != 1) bad(1, "a PLY file starts with the line 'ply'");
+    } else if (head == "format") {
+      if (w.size() != 3 || (w[1] != "ascii" && w[1] != "binary_little_endian" && w[1] != "binary_big_endian"))
+        bad(ln, "expected 'format ascii|binary_little_endian|binary_big_endian 1.0'");
+      binary = w[1] != "ascii";
+    } else if (head == "comment" || head == "obj_info") {
+    } else if (head == "element") {
+      double count = -1.0;
+      if (w.size() == 3) {
+        char* end = nullptr;
+        count = std::strtod(w[2].c_str(), &end);
+        if (*end != '\0' || !(count >= 0.0) || count != std::floor(count)) count = -1.0;
+      }
+      if (count < 0.0) bad(ln, "expected 'element NAME COUNT' with a whole COUNT >= 0");
+      close_element();
+      element_count = count;
+      element_bytes = 0.0;
+    } else if (head == "property") {
+      const bool list = w.size() == 5 && w[1] == "list";
+      if (!(list || w.size() == 3)) bad(ln, "expected 'property TYPE NAME' or 'property list TYPE TYPE NAME'");
+      for (size_t i = list ? 2 : 1; i + 1 < w.size(); ++i)
+        if (!kTypeBytes.count(w[i])) bad(ln, "unknown property type '" + shown(w[i]) + "'");
+      element_bytes += binary ? kTypeBytes.at(w[list ? 2 : 1]) : 2.0;
+    } else if (head == "end_header") {
+      ended = true;
+    } else {
+      bad(ln, "unexpected '" + shown(line) + "'");
+    }
+  }
+  if (!ended) bad(ln, "no end_header line in the first 64 KiB");
+  close_element();
+  const double body = file_size - static_cast<double>(read);
+  if (bytes_needed > body)
+    throw InputError(path + ": the PLY header declares elements needing at least " +
+                     std::to_string(static_cast<long long>(std::min(bytes_needed, 9e18))) + " bytes, but the file has " +
+                     std::to_string(static_cast<long long>(body)) + " after its header (truncated, or a wrong count)");
+}
+
 }  // namespace
 
 SceneSource read_assimp_source(const std::string& path, bool check_materials) {
   check_input_file(path, "a scene file");
   const std::string ext = lower_extension(path);
   const bool gltf = ext == ".gltf" || ext == ".glb";
+  if (ext == ".ply") check_ply_header(path);
 
   SceneSource source;
   GltfMaterials gm;

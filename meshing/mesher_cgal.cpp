@@ -183,7 +183,16 @@ public:
         if (dirty[static_cast<size_t>(p)]) todo.push_back(p);
       std::fill(dirty.begin(), dirty.end(), 0);
       pending_.clear();
-      for (int p : todo) tris[static_cast<size_t>(p)] = mesh_patch(p, refine);
+      for (int p : todo) {
+        // The work bound: the mesher may add as many points to this patch
+        // as the other patches leave of max_elements (each point makes
+        // about two triangles).
+        double others = 0.0;
+        for (int q = 0; q < np; ++q)
+          if (q != p) others += static_cast<double>(tris[static_cast<size_t>(q)].size());
+        point_budget_ = opt_.max_elements - others;
+        tris[static_cast<size_t>(p)] = mesh_patch(p, refine);
+      }
       for (const Pending& pd : pending_) {
         const int same = find_point(pd.segment, positions_[static_cast<size_t>(pd.vertex)]);
         if (same >= 0) {
@@ -576,7 +585,21 @@ private:
       const double s = std::sin(opt_.min_angle * std::numbers::pi / 180.0);
       Mesher mesher(cdt, Criteria(s * s, opt_.max_edge, opt_.min_separation_fraction * opt_.max_edge));
       mesher.init(true);
-      mesher.refine_mesh();
+      // Step by step, so that a patch whose lines and points lie far closer
+      // together than the edge length (a vertex moved a millimetre off a
+      // plane makes near-coincident shadow lines) stops at the bound with
+      // an error instead of meshing for minutes.
+      double points = 0.0;
+      while (mesher.step_by_step_refine_mesh())
+        if (++points > point_budget_) {
+          std::ostringstream m;
+          m << where(patch.file, patch.line) << "face '" << patch.name << "': refining its mesh to --max-edge "
+            << format_number(opt_.max_edge) << " takes more than " << format_number(opt_.max_elements)
+            << " elements in all (the bound), far more than the edge length asks for: lines or vertices on it lie "
+               "much closer together than the edge length (near-coincident faces or shadow lines); check the "
+               "geometry near it, or try --discontinuity contacts or off";
+          throw GeometryError(m.str());
+        }
       mark_domain(cdt, on_boundary);
     }
 
@@ -691,6 +714,7 @@ private:
   std::map<int, std::vector<std::array<int, 2>>> features_;  // per patch: discontinuity edges
   int contact_count_ = 0, shadow_count_ = 0, crossings_ = 0;
   std::map<int, int> rounding_crossings_;
+  double point_budget_ = 0.0;  // points the mesher may add to the patch being meshed
   struct Steiner {
     int id;
     Point2 q;

@@ -26,7 +26,7 @@ for t in "${targets[@]}"; do
   else
     status=1
     echo "fuzz: $t FAILED; the input: $(ls "$work/$t"/crash-* "$work/$t"/timeout-* "$work/$t"/leak-* "$work/$t"/oom-* 2>/dev/null | tr '\n' ' ')"
-    grep -A25 -m1 "ERROR\|radmesh fuzz\|timeout\|deadly" "$log" | head -40
+    grep -A25 -m1 "ERROR\|radmesh fuzz\|timeout\|deadly" "$log" | head -40 | cut -c1-300
   fi
 done
 exit $status

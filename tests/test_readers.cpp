@@ -510,6 +510,20 @@ INSTANTIATE_TEST_SUITE_P(
                       ": OFF: Vertex index is out of range"},
         FileErrorCase{"ply_parse", "mesh.ply", PLY_HEAD(3, 1) "0 0 0\nx 0 0\n0 1 0\n3 0 1 2\n",
                       ": Cannot parse string \"x 0 0"},
+        // Headers assimp would loop on without end (found by fuzz_assimp_reader), or
+        // allocate for before reading the body: refused before assimp sees them.
+        FileErrorCase{"ply_unknown_type", "mesh.ply",
+                      "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+                      "element face 1\nproperty list u\x01" "char int vertex_indices\nend_header\n"
+                      "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n",
+                      ": PLY header line 8: unknown property type 'u\\x01char'"},
+        FileErrorCase{"ply_no_end_header", "mesh.ply",
+                      "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+                      "element face 1\nproperty list uchar int vertex_indices\nen'_header\n0 0 0\n",
+                      ": PLY header line 9: unexpected 'en'_header'"},
+        FileErrorCase{"ply_count_beyond_the_file", "mesh.ply", PLY_HEAD(3000000000, 1) "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n",
+                      ": the PLY header declares elements needing at least 18000000002 bytes, but the file has 26 "
+                      "after its header"},
         FileErrorCase{"gltf_base_colour", "tri.gltf",
                       GLTF_TRI(", \"materials\": [{\"name\": \"paint\", \"pbrMetallicRoughness\": {\"baseColorFactor\":"
                                " [1, 0.5, 0.5, 1]}}]", ", \"material\": 0"),
