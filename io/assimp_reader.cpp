@@ -323,7 +323,8 @@ struct Walker {
 // a separator). Throws InputError naming the header line.
 void check_ply_header(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
-  const auto file_size = static_cast<double>(fs::file_size(path));
+  std::error_code ec;
+  const auto file_size = static_cast<double>(fs::file_size(path, ec));
   static const std::map<std::string, int> kTypeBytes = {
       {"char", 1},   {"uchar", 1},   {"int8", 1},   {"uint8", 1},   {"short", 2},   {"ushort", 2},
       {"int16", 2},  {"uint16", 2},  {"int", 4},    {"uint", 4},    {"int32", 4},   {"uint32", 4},

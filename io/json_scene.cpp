@@ -233,7 +233,8 @@ Scene read_json_scene(const std::string& path, const SceneOptions& options) {
     if (ext != ".obj" && !is_assimp_extension(ext))
       ctx.fail(key + ".file", "'" + name + "': unknown extension '" + ext +
                                   "'; objects can be .obj, .ply, .stl, .off, .gltf or .glb files");
-    if (!fs::exists(file))
+    std::error_code ec;  // a name the system cannot look up (too long, ...) is not found, not an exception
+    if (!fs::exists(file, ec))
       throw IoError(path + ": " + key + ".file: '" + name + "' not found (looked for " + file + ")");
 
     int override_material = -1;

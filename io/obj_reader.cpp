@@ -167,7 +167,8 @@ ObjScan scan_obj(const std::string& path) {
     } else if (key == "mtllib") {
       for (size_t k = 1; k < tok.size(); ++k) {
         const fs::path mtl = dir / tok[k];
-        if (!fs::exists(mtl))
+        std::error_code ec;  // a name the system cannot look up (too long, ...) is not found, not an exception
+        if (!fs::exists(mtl, ec))
           throw InputError(where(path, ln) + "material library '" + tok[k] + "' not found (looked for " +
                            mtl.string() + ")");
         try {

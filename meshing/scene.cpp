@@ -60,6 +60,10 @@ namespace {
 
 std::string fmt(const Vec3& v) { return format_number(v.x) + " " + format_number(v.y) + " " + format_number(v.z); }
 
+// Coordinates beyond this are refused: distances to the fourth power stay
+// far inside double range.
+constexpr double kMaxCoordinate = 1e50;
+
 bool finite(const Vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
 
 void check_material(const Material& m) {
@@ -192,7 +196,9 @@ private:
       return h(v.x) ^ (h(v.y) * 0x9E3779B97F4A7C15ULL) ^ (h(v.z) * 0xC2B2AE3D27D4EB4FULL);
     }
   };
-  long long cell(double x) const { return static_cast<long long>(std::floor(x / eps_)); }
+  // Clamped into long long: far cells may share a key (the exact distance
+  // test still decides), never an overflowing conversion.
+  long long cell(double x) const { return static_cast<long long>(std::clamp(std::floor(x / eps_), -9e18, 9e18)); }
   static uint64_t key(long long x, long long y, long long z) {
     return (static_cast<uint64_t>(x) * 73856093ULL) ^ (static_cast<uint64_t>(y) * 19349663ULL) ^
            (static_cast<uint64_t>(z) * 83492791ULL);
@@ -203,11 +209,36 @@ private:
   std::vector<int> next_;                                          // next vertex in the same cell, or -1
 };
 
+// The largest distance between two points: exact for up to 64 points, else
+// the bounding box's diagonal (at most sqrt(3) times it), so that a face of a
+// million vertices costs a million steps, not 1e12.
 double diameter(const std::vector<Vec3>& pts) {
   double d = 0.0;
-  for (size_t i = 0; i < pts.size(); ++i)
-    for (size_t j = i + 1; j < pts.size(); ++j) d = std::max(d, glm::length(pts[i] - pts[j]));
-  return d;
+  if (pts.size() <= 64) {
+    for (size_t i = 0; i < pts.size(); ++i)
+      for (size_t j = i + 1; j < pts.size(); ++j) d = std::max(d, glm::length(pts[i] - pts[j]));
+    return d;
+  }
+  Vec3 lo = pts[0], hi = pts[0];
+  for (const Vec3& p : pts) {
+    lo = glm::min(lo, p);
+    hi = glm::max(hi, p);
+  }
+  return glm::length(hi - lo);
+}
+
+// How far the points reach off the line through the first point and the one
+// farthest from it: 0 when they all lie on one line.
+double off_line(const std::vector<Vec3>& pts) {
+  size_t far = 0;
+  for (size_t i = 1; i < pts.size(); ++i)
+    if (glm::length(pts[i] - pts[0]) > glm::length(pts[far] - pts[0])) far = i;
+  const Vec3 d = pts[far] - pts[0];
+  const double len = glm::length(d);
+  if (len == 0.0) return 0.0;
+  double off = 0.0;
+  for (const Vec3& p : pts) off = std::max(off, glm::length(glm::cross(p - pts[0], d)) / len);
+  return off;
 }
 
 // Removes consecutive repeated indices (cyclically).
@@ -237,6 +268,10 @@ Scene build_scene(const std::vector<RawFace>& faces, std::vector<Material> mater
     auto check = [&](const std::vector<Vec3>& loop) {
       for (const Vec3& p : loop) {
         if (!finite(p)) throw InputError(at() + "coordinate " + fmt(p) + " is not finite");
+        if (std::max({std::abs(p.x), std::abs(p.y), std::abs(p.z)}) > kMaxCoordinate)
+          throw InputError(at() + "coordinate " + fmt(p) + " is beyond +-" + format_number(kMaxCoordinate) +
+                           " (form factors take the fourth power of distances, which would overflow); "
+                           "use a smaller unit");
         lo = glm::min(lo, p);
         hi = glm::max(hi, p);
       }
@@ -279,6 +314,11 @@ Scene build_scene(const std::vector<RawFace>& faces, std::vector<Material> mater
     const double area = 0.5 * glm::length(newell);
     const double diam = diameter(pts);
     if (!(area > options.area_tolerance * diam * diam)) {
+      // Zero area with vertices off one line: the face's lobes cancel (a
+      // symmetric bow tie), and it has no inside to drop or keep.
+      if (off_line(pts) > options.planarity_tolerance * diam)
+        throw InputError(at() + "is not a simple polygon: its edges cross so that its signed area is zero, though "
+                                "its vertices do not lie on one line; check the order of the face's vertices");
       if (++scene.report.zero_area_faces_dropped <= 5)
         scene.report.warnings.push_back(where(f.file, f.line) + "face '" + f.name +
                                         "' has zero area: dropped");

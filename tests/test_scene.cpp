@@ -168,6 +168,10 @@ TEST(Scene, FacesWhoseEdgesCrossAreRefusedAndSimpleOnesAreNot) {
   const std::string bow = error(face({{0, 0, 0}, {2, 0, 0}, {0, 1, 0}, {1, 1.5, 0}}));
   EXPECT_TRUE(contains(bow, "not a simple polygon")) << bow;
   EXPECT_TRUE(contains(bow, "2 0 0 -> 0 1 0")) << bow;
+  // A symmetric bow tie: its two lobes cancel, so its signed area is zero,
+  // but it is not a zero-area face (its vertices are not on one line).
+  const std::string even = error(face({{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 0}}));
+  EXPECT_TRUE(contains(even, "not a simple polygon")) << even;
   // A hole over the outline.
   const std::string hole = error(face({{0, 0, 0}, {4, 0, 0}, {4, 4, 0}, {0, 4, 0}},
                                       {{{3, 1, 0}, {5, 1, 0}, {5, 3, 0}, {3, 3, 0}}}));
@@ -184,6 +188,32 @@ TEST(Scene, FacesWhoseEdgesCrossAreRefusedAndSimpleOnesAreNot) {
                           {m}, "test")
                   .patch_area(0),
               16.0 - 1.5, 1e-12);
+}
+
+// Found by fuzz_assimp_reader: a glTF translation of 2e307 overflowed the
+// welder's cell index (undefined behaviour); and fuzz_obj_reader: an mtllib
+// name longer than the system allows threw std::filesystem_error, an
+// internal error. Both are now InputErrors that say what is wrong.
+TEST(Scene, HugeCoordinatesAndOverlongLibraryNamesAreInputErrors) {
+  RawFace f;
+  f.name = "far";
+  f.material = 0;
+  f.points = {{0, 0, 0}, {1, 0, 0}, {2e307, 1, 0}};
+  Material m;
+  m.name = "m";
+  m.reflectance = Rgb(0.5);
+  m.emission = Rgb(1.0);
+  const std::string far = message_of<InputError>([&] { build_scene({f}, {m}, "test"); });
+  EXPECT_TRUE(contains(far, "is beyond +-1e+50")) << far;
+
+  const fs::path dir = fs::temp_directory_path() / ("radmesh_long_mtllib_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  const std::string name(300, 'a');
+  std::ofstream(dir / "scene.obj") << "mtllib " << name << ".mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+  const std::string lib = message_of<InputError>([&] { read_obj_scene((dir / "scene.obj").string()); });
+  EXPECT_TRUE(contains(lib, "scene.obj:1")) << lib;
+  EXPECT_TRUE(contains(lib, "not found")) << lib;
+  fs::remove_all(dir);
 }
 
 TEST(Scene, DevicesAndDirectoriesAreRefusedNotReadForever) {
