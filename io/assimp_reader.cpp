@@ -147,6 +147,10 @@ Json read_gltf_json(const std::string& path, bool binary) {
     std::memcpy(&type, header + 16, 4);
     if (magic != 0x46546C67u || type != 0x4E4F534Au)
       throw InputError(path + ": not a binary glTF file (no 'glTF' header and JSON chunk)");
+    std::error_code ec;
+    const auto size = fs::file_size(path, ec);
+    if (ec || 20.0 + length > static_cast<double>(size))  // not an allocation the header alone decides
+      throw InputError(path + ": JSON chunk of a stated " + std::to_string(length) + " bytes, longer than the file");
     text.resize(length);
     if (!in.read(text.data(), static_cast<std::streamsize>(length)))
       throw InputError(path + ": JSON chunk shorter than its stated " + std::to_string(length) + " bytes");

@@ -191,7 +191,7 @@ Scene read_json_scene(const std::string& path, const SceneOptions& options) {
   Json doc;
   try {
     doc = Json::parse(in);
-  } catch (const Json::parse_error& e) {
+  } catch (const Json::exception& e) {  // a syntax error, or a number beyond double (out_of_range.406)
     std::string m = e.what();
     const size_t close = m.find("] ");
     throw InputError(path + ": " + (close == std::string::npos ? m : m.substr(close + 2)));

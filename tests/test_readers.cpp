@@ -144,6 +144,15 @@ void expect_octahedron_face0_mirrored_in_x(const Scene& s) {
 
 // ---------------------------------------------------------------- formats
 
+TEST(Readers, AGlbHeaderCannotAskForMoreThanTheFileHolds) {
+  // The JSON chunk's length is a 4-byte field: 0xFFFFFFF0 must not allocate 4 GiB.
+  const fs::path dir = fresh_dir("glb_length");
+  const uint32_t words[5] = {0x46546C67u, 2u, 40u, 0xFFFFFFF0u, 0x4E4F534Au};
+  std::ofstream(dir / "big.glb", std::ios::binary).write(reinterpret_cast<const char*>(words), sizeof words);
+  const std::string msg = message_of<InputError>([&] { read_scene((dir / "big.glb").string()); });
+  EXPECT_TRUE(contains(msg, "JSON chunk of a stated 4294967280 bytes, longer than the file")) << msg;
+}
+
 TEST(Readers, EveryFormatGivesTheSameSceneOfTriangles) {
   const fs::path dir = fresh_dir("formats");
   const PolyMesh m = octahedron();
@@ -512,6 +521,11 @@ INSTANTIATE_TEST_SUITE_P(
                       ": Cannot parse string \"x 0 0"},
         // Headers assimp would loop on without end (found by fuzz_assimp_reader), or
         // allocate for before reading the body: refused before assimp sees them.
+        // Found by fuzz_json_scene: a number beyond double threw nlohmann's
+        // out_of_range, an internal error.
+        FileErrorCase{"json_number_beyond_double", "scene.json", "{\"objects\": [{\"file\": \"a.obj\", "
+                      "\"transform\": {\"scale\": 7E777}}]}",
+                      ": number overflow parsing '7E777'"},
         FileErrorCase{"ply_unknown_type", "mesh.ply",
                       "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
                       "element face 1\nproperty list u\x01" "char int vertex_indices\nend_header\n"
