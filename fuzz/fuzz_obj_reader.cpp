@@ -8,9 +8,7 @@
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   using namespace radmesh;
-  const auto [obj, mtl] = fuzz::split_obj_mtl(data, size);
-  fuzz::write_file("scene.mtl", mtl);
-  const std::string path = fuzz::write_file("scene.obj", obj);
+  const std::string path = fuzz::write_obj_input(data, size);
   try {
     fuzz::check_scene(read_scene(path));
   } catch (const Error&) {

@@ -51,6 +51,14 @@ inline std::pair<std::string_view, std::string_view> split_obj_mtl(const uint8_t
   return {all.substr(0, at + 1), all.substr(at + marker.size())};
 }
 
+// Writes the input as scene.obj and scene.mtl (see split_obj_mtl); returns
+// the OBJ's path.
+inline std::string write_obj_input(const uint8_t* data, size_t size) {
+  const auto [obj, mtl] = split_obj_mtl(data, size);
+  write_file("scene.mtl", mtl);
+  return write_file("scene.obj", obj);
+}
+
 // A defect found: says what and aborts, which libFuzzer reports with the input.
 [[noreturn]] inline void defect(const std::string& what) {
   std::fprintf(stderr, "radmesh fuzz: %s\n", what.c_str());

@@ -1,6 +1,8 @@
 // The radmesh program end to end: outputs on success, one-line errors and no
 // output on bad input.
 
+#include "tests/edited_obj.h"
+
 #include <gtest/gtest.h>
 
 #include <vtkCellData.h>
@@ -403,18 +405,11 @@ TEST(Cli, ASecondRunIntoTheSameDirectoryLeavesOnlyItsOwnFiles) {
 // ties that `mesh --max-edge 300` refined without end. Now refused at once.
 TEST(Cli, ADuplicatedVertexLineIsAnErrorNotAnEndlessMesh) {
   const fs::path dir = fresh_dir("dup_v");
-  fs::create_directories(dir);
-  const std::string src = kData + "/cornell_box/cornell_box";
-  fs::copy_file(src + ".mtl", dir / "cornell_box.mtl");
-  std::ifstream in(src + ".obj");
-  std::ofstream obj(dir / "scene.obj");
-  int n = 0;
-  for (std::string line; std::getline(in, line);) {
-    obj << line << '\n';
-    if (++n == 7) obj << line << '\n';  // `sed 7p`
-  }
-  obj.close();
-  const Result r = radmesh("mesh " + (dir / "scene.obj").string() + " --max-edge 300 -q -o " + (dir / "out").string());
+  const std::string scene = test_files::write_edited_obj(kData + "/cornell_box/cornell_box", dir,
+                                                   [](const std::string& line, int n) {
+                                                     return n == 7 ? line + '\n' + line : line;  // `sed 7p`
+                                                   });
+  const Result r = radmesh("mesh " + scene + " --max-edge 300 -q -o " + (dir / "out").string());
   EXPECT_EQ(r.status, 1) << r.err;
   EXPECT_NE(r.err.find("not a simple polygon"), std::string::npos) << r.err;
   fs::remove_all(dir);
@@ -422,15 +417,11 @@ TEST(Cli, ADuplicatedVertexLineIsAnErrorNotAnEndlessMesh) {
 
 TEST(Cli, NamesThatAreNotUtf8AreWrittenReplacedNotAnInternalError) {
   const fs::path dir = fresh_dir("latin1");
-  fs::create_directories(dir);
-  const std::string src = kData + "/parallel_plates/parallel_plates";
-  fs::copy_file(src + ".mtl", dir / "parallel_plates.mtl");
-  std::ifstream in(src + ".obj");
-  std::ofstream obj(dir / "scene.obj");
-  for (std::string line; std::getline(in, line);)
-    obj << (line.rfind("o receiver", 0) == 0 ? std::string("o r\xE9\x63\x65pteur") : line) << '\n';  // Latin-1 e-acute
-  obj.close();
-  const Result r = radmesh("run " + (dir / "scene.obj").string() + " --no-png -q -o " + (dir / "out").string());
+  const std::string scene = test_files::write_edited_obj(
+      kData + "/parallel_plates/parallel_plates", dir, [](const std::string& line, int) {
+        return line.rfind("o receiver", 0) == 0 ? std::string("o r\xE9\x63\x65pteur") : line;  // Latin-1 e-acute
+      });
+  const Result r = radmesh("run " + scene + " --no-png -q -o " + (dir / "out").string());
   ASSERT_EQ(r.status, 0) << r.err;
   const nlohmann::json s = read_summary(dir / "out");
   int replaced = 0;

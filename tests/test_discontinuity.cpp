@@ -9,6 +9,7 @@
 #include "radiosity/error_metric.h"
 #include "radiosity/solve.h"
 
+#include "tests/edited_obj.h"
 #include "tests/test_util.h"
 
 #include <gtest/gtest.h>
@@ -24,7 +25,6 @@
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <map>
 #include <set>
 #include <unistd.h>
@@ -597,14 +597,10 @@ TEST(DiscontinuityRegression, NearCoincidentShadowLinesStopAtTheElementBoundNotM
   // at the bound with a message naming a face, long before.
   const std::string src = kData + "/cornell_box/cornell_box";
   const fs::path dir = fs::temp_directory_path() / ("radmesh_ceiling_1mm_" + std::to_string(::getpid()));
-  fs::create_directories(dir);
-  fs::copy_file(src + ".mtl", dir / "cornell_box.mtl", fs::copy_options::overwrite_existing);
-  std::ifstream in(src + ".obj");
-  std::ofstream obj(dir / "scene.obj");
-  for (std::string line; std::getline(in, line);) obj << (line == "v 0 548.8 332" ? "v 0 547.8 332" : line) << '\n';
-  obj.close();
   Scene base = read_obj_scene(src + ".obj");
-  Scene s = read_obj_scene((dir / "scene.obj").string());
+  Scene s = read_obj_scene(test_files::write_edited_obj(src, dir, [](const std::string& line, int) {
+    return line == "v 0 548.8 332" ? std::string("v 0 547.8 332") : line;
+  }));
   fs::remove_all(dir);
   for (Scene* scene : {&base, &s})
     for (Material& m : scene->materials)
