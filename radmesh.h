@@ -13,6 +13,7 @@
 #include "radiosity/solve.h"
 #include "radiosity/hierarchical.h"
 #include "radiosity/method.h"
+#include "radiosity/field.h"
 #include "radiosity/direct.h"
 #include "radiosity/probe.h"
 #include "radiosity/error_metric.h"

@@ -16,9 +16,10 @@
 #include "meshing/errors.h"
 #include "radiosity/direct.h"
 #include "radiosity/error_metric.h"
+#include "radiosity/field.h"
 #include "radiosity/method.h"
-#include "radiosity/probe.h"
 #include "radiosity/solve.h"
+#include "radiosity/transport.h"
 
 #include <CLI/CLI.hpp>
 #include <tbb/parallel_for.h>
@@ -49,6 +50,7 @@ struct Settings {
   DiscontinuityMode discontinuity = DiscontinuityMode::contacts;
   std::string method = "matrix";  // a name in methods()
   OptionValues options = {};      // the method's options (the rest take defaults)
+  FieldMode field = FieldMode::gather;  // "field=MODE" in --settings
 };
 
 // "epsilon=0.001;tvertex=split": the options of a row, in the CSV and series names.
@@ -186,7 +188,7 @@ struct Row {
 // a curve sweeps).
 std::string series_key(const Settings& set) {
   const MethodOptions checked(find_method(set.method).options, set.options, set.method);
-  std::string key = set.method;
+  std::string key = set.method + " field=" + to_string(set.field);
   for (const auto& [k, v] : set.options)
     if (checked.spec(k).kind == OptionSpec::Kind::choice || checked.spec(k).kind == OptionSpec::Kind::flag)
       key += " " + k + "=" + v;
@@ -200,7 +202,8 @@ Settings parse_settings(const std::string& text) {
   for (std::string x; std::getline(ss, x, ':');) f.push_back(x);
   auto bad = [&](const std::string& why) {
     return InputError("--settings '" + text + "': " + why +
-                      " (expected EDGE:RAYS:QUAD_LEVEL[:off|contacts|full[:METHOD[:NAME=VALUE]...]])");
+                      " (expected EDGE:RAYS:QUAD_LEVEL[:off|contacts|full[:METHOD[:NAME=VALUE]...]]; NAME=VALUE a method option "
+                      "or field=gather|fit|mean)");
   };
   if (f.size() < 3) throw bad("too few fields");
   Settings set{};
@@ -218,7 +221,10 @@ Settings parse_settings(const std::string& text) {
     if (eq == std::string::npos) throw bad("'" + f[k] + "' is not NAME=VALUE");
     std::string name = f[k].substr(0, eq);
     std::replace(name.begin(), name.end(), '-', '_');
-    set.options[name] = f[k].substr(eq + 1);
+    if (name == "field")
+      set.field = parse_field_mode(f[k].substr(eq + 1));
+    else
+      set.options[name] = f[k].substr(eq + 1);
   }
   // Checked now, before any run: unknown options and bad values are errors.
   MethodOptions(find_method(set.method).options, set.options, set.method);
@@ -236,6 +242,7 @@ Row run_one(const Scenario& sc, const Scene& scene, const std::vector<SurfaceSam
   SolveOptions so;
   so.rays = set.rays;
   so.quadrature.max_level = set.quad_level;
+  so.field = set.field;
   const MethodResult r = run_method(method, scene, mesh, so, set.options);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   const Solution& sol = r.solution;
@@ -246,6 +253,169 @@ Row run_one(const Scenario& sc, const Scene& scene, const std::vector<SurfaceSam
           sol.stats.form_factors, sol.stats.rays_cast, seconds,
           field_error(samples, reflected_part(scene, samples, values), ref),
           field_error(samples, reflected_part(scene, samples, flat), ref)};
+}
+
+// The brute-force final gather at surface samples: H = sum over every
+// element j of F(x -> j) V(x, j) source_j, Lambert's exact point form factor
+// and options.rays shadow rays per element; returns rho H per sample. The
+// reference's indirect part, and the yardstick of the tree gather.
+std::vector<Rgb> brute_gather(const Scene& scene, const Mesh& mesh, const std::vector<Rgb>& source,
+                              const std::vector<SurfaceSample>& samples, const SolveOptions& options) {
+  const ElementSet el = make_elements(scene, mesh);
+  std::vector<Rgb> out(samples.size());
+  run_in_arena(options.threads, [&] {
+    const VisibilityEstimator visibility(scene, options.rays);
+    tbb::parallel_for(size_t(0), samples.size(), [&](size_t k) {
+      const int pp = samples[k].patch;
+      const Vec3 n = scene.patches[static_cast<size_t>(pp)].normal;
+      const Triangle point = make_triangle(samples[k].x, samples[k].x, samples[k].x, n);
+      RayCount rays;
+      Rgb h(0.0);
+      for (size_t j = 0; j < el.size(); ++j) {
+        if (el.patch[j] == pp || el.zero_area[j]) continue;
+        const Triangle& tj = el.triangle[j];
+        const double f = point_polygon_form_factor(samples[k].x, n, tj.v.data(), 3, tj.normal);
+        if (f <= 0.0) continue;
+        h += f * visibility.visible_fraction(point, pp, el.size() + k, tj, el.patch[j], j, rays) * source[j];
+      }
+      out[k] = scene.material_of(pp).reflectance * h;
+    });
+  });
+  return out;
+}
+
+// Where the field's error comes from: the exact direct part and the
+// gathered indirect part evaluated at the samples themselves (no
+// interpolation), each against its share of the reference, per patch.
+int field_parts(const Scenario& sc, const Scene& scene, const std::vector<SurfaceSample>& samples,
+                const std::vector<Rgb>& reference, Settings set) {
+  set.field = FieldMode::fit;
+  const Method& method = find_method(set.method);
+  MeshingOptions mo = method.meshing(scene);
+  mo.max_edge = set.max_edge;
+  mo.discontinuity = set.discontinuity;
+  const Mesh mesh = mesh_scene(scene, mo);
+  SolveOptions so;
+  so.rays = set.rays;
+  so.quadrature.max_level = set.quad_level;
+  so.field = set.field;
+  const MethodResult r = run_method(method, scene, mesh, so, set.options);
+  const FieldEvaluator ev(scene, r.mesh, r.solution.element, so);
+  std::vector<Rgb> direct(samples.size()), indirect(samples.size()), ref_direct(samples.size()),
+      ref_indirect(samples.size());
+  FieldReport rep;
+  for (size_t k = 0; k < samples.size(); ++k) {
+    direct[k] = ev.direct(samples[k].x, samples[k].patch, rep);
+    indirect[k] = ev.indirect(samples[k].x, samples[k].patch, k, rep);
+    ref_direct[k] = direct[k];
+    ref_indirect[k] = reference[k] - scene.material_of(samples[k].patch).emission - direct[k];
+  }
+  // The brute-force gather of the same element values.
+  std::vector<Rgb> source(r.solution.element.size());
+  for (size_t t = 0; t < source.size(); ++t)
+    source[t] = r.solution.element[t] - scene.material_of(r.mesh.patch[t]).emission;
+  const std::vector<Rgb> flat_indirect = brute_gather(scene, r.mesh, source, samples, so);
+  const auto ref = reflected_part(scene, samples, reference);
+  std::vector<Rgb> total(samples.size());
+  for (size_t k = 0; k < samples.size(); ++k) total[k] = direct[k] + indirect[k];
+  const FieldError et = field_error(samples, total, ref);
+  const FieldError ei = field_error(samples, indirect, ref_indirect);
+  std::printf("%s: point values: L2 %.3e patch %.3e; indirect alone L2 %.3e patch %.3e\n", sc.name.c_str(), et.l2,
+              et.patch_mean, ei.l2, ei.patch_mean);
+  so.field = FieldMode::gather;
+  const NodalField gathered = compute_field(scene, r.mesh, r.solution.element, so);
+  const auto interp = reflected_part(scene, samples, interpolate_nodal(scene, r.mesh, gathered, samples));
+  const FieldError eg = field_error(samples, interp, ref);
+  std::printf("interpolated: L2 %.3e patch %.3e\n", eg.l2, eg.patch_mean);
+  {
+    std::vector<std::pair<double, size_t>> worst;
+    for (size_t k = 0; k < samples.size(); ++k) worst.emplace_back(std::abs(interp[k].x - total[k].x), k);
+    std::sort(worst.rbegin(), worst.rend());
+    for (size_t i = 0; i < 12; ++i) {
+      const size_t k = worst[i].second;
+      std::printf("  sample %zu %s (%.1f %.1f %.1f): interp %.4f point %.4f (direct %.4f indirect %.4f) ref %.4f\n", k,
+                  scene.patches[static_cast<size_t>(samples[k].patch)].name.c_str(), samples[k].x.x, samples[k].x.y,
+                  samples[k].x.z, interp[k].x, total[k].x, direct[k].x, indirect[k].x, ref[k].x);
+    }
+  }
+  {
+    const DirectIllumination exact_direct(scene);
+    const auto dv = interpolate_nodal(scene, r.mesh, direct_field(exact_direct, r.mesh), samples);
+    const FieldError ed = field_error(samples, dv, direct);
+    std::vector<Rgb> mixed(samples.size());
+    for (size_t k = 0; k < samples.size(); ++k) mixed[k] = dv[k] + indirect[k];
+    const FieldError em = field_error(samples, mixed, ref);
+    std::vector<std::pair<double, std::string>> diffs;
+    for (int t = 0; t < r.mesh.triangle_count(); ++t) {
+      if (r.mesh.zero_area(t)) continue;
+      for (int k = 0; k < 3; ++k) {
+        const int d = gathered.corners[static_cast<size_t>(t)][static_cast<size_t>(k)];
+        const Vec3 x = gathered.points[static_cast<size_t>(d)];
+        const Vec3 c = r.mesh.centroid(t);
+        const int pt = r.mesh.patch[static_cast<size_t>(t)];
+        const Rgb hair = exact_direct.reflected(x + 1e-7 * (c - x), pt);
+        const Rgb at = exact_direct.reflected(x, pt);
+        const double diff = std::abs(hair.x - at.x);
+        if (diff > 1e-3 * std::max(1.0, hair.x)) {
+          char buf[300];
+          std::snprintf(buf, sizeof buf, "patch %s x %.3f %.3f %.3f hair %.4f at %.4f", scene.patches[pt].name.c_str(), x.x, x.y, x.z, hair.x, at.x);
+          diffs.emplace_back(diff, buf);
+        }
+      }
+    }
+    std::sort(diffs.rbegin(), diffs.rend());
+    std::printf("%zu corners differ\n", diffs.size());
+    for (size_t i = 0; i < std::min<size_t>(diffs.size(), 15); ++i) std::printf("  %s\n", diffs[i].second.c_str());
+    {
+      NodalField ind = gathered, dir = gathered;
+      FieldReport rp;
+      std::vector<int> pp(gathered.points.size(), -1);
+      std::vector<Vec3> inw(gathered.points.size(), Vec3(0.0));
+      for (int t = 0; t < r.mesh.triangle_count(); ++t)
+        for (int d : gathered.corners[static_cast<size_t>(t)]) {
+          pp[static_cast<size_t>(d)] = r.mesh.patch[static_cast<size_t>(t)];
+          inw[static_cast<size_t>(d)] += r.mesh.area(t) * (r.mesh.centroid(t) - gathered.points[static_cast<size_t>(d)]);
+        }
+      for (size_t d = 0; d < ind.points.size(); ++d) {
+        ind.radiosity[d] = ev.indirect(ind.points[d], pp[d], d, rp);
+        const Vec3 at = ev.evaluation_point(ind.points[d], pp[d], inw[d], rp);
+        ind.radiosity[d] = ev.indirect(at, pp[d], d, rp);
+        dir.radiosity[d] = ev.direct(at, pp[d], rp);
+      }
+      const auto iv = interpolate_nodal(scene, r.mesh, ind, samples);
+      const auto dv2 = interpolate_nodal(scene, r.mesh, dir, samples);
+      const FieldError ei2 = field_error(samples, iv, indirect);
+      const FieldError ed2 = field_error(samples, dv2, direct);
+      std::printf("my vertices: indirect interpolated vs indirect at points: L2 %.3e patch %.3e; direct: L2 %.3e patch %.3e\n", ei2.l2, ei2.patch_mean, ed2.l2, ed2.patch_mean);
+    }
+    std::printf("direct alone interpolated (corners per triangle): L2 %.3e patch %.3e; with exact-point indirect: L2 %.3e\n", ed.l2, ed.patch_mean, em.l2);
+  }
+  for (size_t p = 0; p < scene.patches.size(); ++p) {
+    Rgb a(0.0), b(0.0), c(0.0);
+    double worst = 0.0;
+    for (size_t k = 0; k < samples.size(); ++k)
+      if (samples[k].patch == static_cast<int>(p)) {
+        a += samples[k].weight * interp[k];
+        b += samples[k].weight * total[k];
+        c += samples[k].weight * ref[k];
+        worst = std::max(worst, std::abs(interp[k].x - total[k].x));
+      }
+    std::printf("  %-18s interpolated %.4e points %.4e ref %.4e (%.2f%% %.2f%%) worst %.3e\n", scene.patches[p].name.c_str(),
+                a.x, b.x, c.x, 100.0 * (a.x / c.x - 1.0), 100.0 * (b.x / c.x - 1.0), worst);
+  }
+  for (size_t p = 0; p < scene.patches.size(); ++p) {
+    Rgb a(0.0), b(0.0), c(0.0), d(0.0);
+    for (size_t k = 0; k < samples.size(); ++k)
+      if (samples[k].patch == static_cast<int>(p)) {
+        a += samples[k].weight * indirect[k];
+        b += samples[k].weight * ref_indirect[k];
+        c += samples[k].weight * ref_direct[k];
+        d += samples[k].weight * flat_indirect[k];
+      }
+    std::printf("  %-18s indirect %.4e ref %.4e (%.2f%%)  brute %.4e (%.2f%%)  direct %.4e\n",
+                scene.patches[p].name.c_str(), a.x, b.x, 100.0 * (a.x / b.x - 1.0), d.x, 100.0 * (d.x / b.x - 1.0), c.x);
+  }
+  return 0;
 }
 
 // The Cornell box reference: at every sample, the exact direct light
@@ -271,20 +441,13 @@ int make_reference(const std::string& data, double max_edge, int rays, const std
     const Patch& p = scene.patches[static_cast<size_t>(mesh.patch[t])];
     indirect_source[t] = sol.element[t] - scene.material_of(p).emission;
   }
-  std::vector<Probe> probes;
-  for (const auto& s : samples) {
-    Probe p;
-    p.label = "s";
-    p.point = s.x;
-    p.normal = scene.patches[static_cast<size_t>(s.patch)].normal;
-    probes.push_back(p);
-  }
-  // E + rho * (indirect irradiance) at every sample, then the exact direct part.
-  const auto res = evaluate_probes(scene, mesh, indirect_source, probes, so);
+  // E + the exact direct part + the gathered indirect part at every sample.
+  const std::vector<Rgb> gathered = brute_gather(scene, mesh, indirect_source, samples, so);
   const DirectIllumination direct(scene);
   std::vector<Rgb> value(samples.size());
   tbb::parallel_for(size_t(0), samples.size(), [&](size_t k) {
-    value[k] = res[k].radiosity + direct.reflected(samples[k].x, samples[k].patch);
+    value[k] = scene.material_of(samples[k].patch).emission + gathered[k] +
+               direct.reflected(samples[k].x, samples[k].patch);
   });
   const std::string path = path_out.empty() ? data + "/cornell_box/reference.csv" : path_out;
   write_file_atomically(path, [&](std::ostream& out) {
@@ -427,6 +590,8 @@ int main(int argc, char** argv) {
   app.add_flag("--direct", direct,
                "meshing study instead: direct light only, exact at the triangle corners, for discontinuity "
                "off, contacts and full; writes direct.csv and direct.png");
+  bool parts = false;
+  app.add_flag("--field-parts", parts, "with one --settings: the direct and gathered parts' errors per patch");
   app.add_option("--max-edge", ref_edge, "reference mesh size (mm)");
   app.add_option("--rays", ref_rays, "reference shadow rays per pair");
   std::string ref_out;
@@ -454,6 +619,7 @@ int main(int argc, char** argv) {
         sweep.clear();
         for (const std::string& c : custom) sweep.push_back(parse_settings(c));
       }
+      if (parts) return field_parts(sc, scene, samples, ref, sweep.at(0));
       for (const Settings& set : sweep) {
         const Row r = run_one(sc, scene, samples, ref, set);
         std::fprintf(stderr, "%-16s %-15s edge %-6g rays %-3d q%d: %6lld elements %8.3f s  L2 %.3e  max %.3e  patch %.3e (elements %.3e) (%s)\n",
@@ -487,12 +653,12 @@ int main(int argc, char** argv) {
     const std::string csv = (fs::path(out_dir) / "bench.csv").string();
     write_file_atomically(csv, [&](std::ostream& out) {
       out << "scene,method,discontinuity,max_edge,rays,quad_level,elements,form_factors,rays_cast,wall_s,l2,linf,patch_mean,"
-             "element_l2,element_patch_mean,options\n";
+             "element_l2,element_patch_mean,options,field\n";
       for (const Row& r : rows)
         out << r.scene << ',' << r.set.method << ',' << to_string(r.set.discontinuity) << ',' << r.set.max_edge << ','
             << r.set.rays << ',' << r.set.quad_level << ',' << r.elements << ',' << r.form_factors << ',' << r.rays << ','
             << r.seconds << ',' << r.err.l2 << ',' << r.err.linf << ',' << r.err.patch_mean << ',' << r.element.l2 << ','
-            << r.element.patch_mean << ',' << options_text(r.set.options) << '\n';
+            << r.element.patch_mean << ',' << options_text(r.set.options) << ',' << to_string(r.set.field) << '\n';
     });
     std::printf("%s\n", csv.c_str());
     std::string why;

@@ -44,7 +44,8 @@ struct Params {
   bool quiet = false;
   bool png = true;
   std::string discontinuity = "full";
-  std::string nodal = "fit";
+  std::string field = "gather";
+  std::string nodal;  // --nodal fit|mean: the older name of --field fit|mean
   std::string method = methods().front().name;
   // Method options: text per declared name; flags as bools. Only those
   // given on the command line reach the method (the others take defaults).
@@ -140,7 +141,12 @@ void check_params(Params& p, bool solving) {
     throw InputError(p.method_given.begin()->first + ": a method option; only run takes it");
   }
   p.meshing.discontinuity = parse_discontinuity_mode(p.discontinuity);
-  p.solve.nodal = p.nodal == "mean" ? NodalMethod::mean : NodalMethod::linear_fit;
+  if (!p.nodal.empty()) {
+    if (p.field != "gather" && p.field != p.nodal)
+      throw InputError("--nodal " + p.nodal + " and --field " + p.field + " disagree; give one of them");
+    p.field = p.nodal;
+  }
+  p.solve.field = parse_field_mode(p.field);
   if (p.meshing.max_edge < 0.0 || !std::isfinite(p.meshing.max_edge))
     throw InputError("--max-edge " + std::to_string(p.meshing.max_edge) + " must be > 0 (or 0 for auto)");
   if (solving) check_solve_options(p.solve);
@@ -198,7 +204,7 @@ int run(Params& p, bool solving) {
     SolveCallbacks cb;
     cb.progress = [&](const std::string& phase, double f) { rep.update(phase, f); };
     cb.on_round = [&](const MethodResult& r, int) { rounds.push_back(r); };
-    result = method->solve(scene, mesh, p.solve, p.method_options, cb);
+    result = run_method(*method, scene, mesh, p.solve, p.method_given, cb);
     rep.end();
     for (const auto& phase : result->seconds) info.seconds.push_back(phase);
     if (!result->report.empty()) rep.note(result->report);
@@ -428,9 +434,12 @@ int main(int argc, char** argv) {
                       "probe file: lines 'label x y z nx ny nz'; writes probes.csv")
       ->check(CLI::ExistingFile);
   run_cmd->add_flag("!--no-png", run_p.png, "do not render radiosity.png");
-  run_cmd->add_option("--nodal", run_p.nodal,
-                      "vertex values from element values: fit (least-squares plane through the elements "
-                      "around the vertex, default) or mean (their area-weighted mean)")
+  run_cmd->add_option("--field", run_p.field,
+                      "vertex values: gather (exact direct light and a final gather of the solved radiosity "
+                      "at every vertex, default), fit (least-squares plane through the element values "
+                      "around the vertex) or mean (their area-weighted mean)")
+      ->check(CLI::IsMember({"gather", "fit", "mean"}));
+  run_cmd->add_option("--nodal", run_p.nodal, "the older name of --field fit|mean")
       ->check(CLI::IsMember({"fit", "mean"}));
   add_method_options(run_cmd, run_p);
 

@@ -355,6 +355,22 @@ def box_on_floor():
     return s
 
 
+def floating_occluder():
+    s = Scene("floating_occluder")
+    s.material("floor", (0.5, 0.5, 0.5))
+    s.material("black", (0, 0, 0))
+    s.material("light", (0, 0, 0), (10, 10, 10))
+    up = (0.0, 1.0, 0.0)
+    s.face("floor", "floor", [(-2.0, 0.0, -2.0), (-2.0, 0.0, 2.0), (2.0, 0.0, 2.0), (2.0, 0.0, -2.0)], up,
+           label="floor")
+    o = 0.3
+    s.face("occluder", "black", [(-o, 1.0, -o), (-o, 1.0, o), (o, 1.0, o), (o, 1.0, -o)], up, label="occluder")
+    h = 0.25
+    s.face("light", "light", [(-h, 2.0, -h), (h, 2.0, -h), (h, 2.0, h), (-h, 2.0, h)], (0.0, -1.0, 0.0),
+           label="light")
+    return s
+
+
 # ---------------------------------------------------------------- main
 
 def main(argv):
@@ -387,6 +403,7 @@ def main(argv):
         (furnace_cube("grey09", 0.9), "furnace_cube", "furnace_cube_09"),
         (parallel_plates(), "parallel_plates", "parallel_plates"),
         (box_on_floor(), "box_on_floor", "box_on_floor"),
+        (floating_occluder(), "floating_occluder", "floating_occluder"),
     ]
     for scene, sub_dir, base in scenes:
         write_scene(scene, os.path.join(data, sub_dir), base)

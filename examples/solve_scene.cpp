@@ -21,7 +21,7 @@ int main(int argc, char** argv) {
     std::filesystem::create_directories(argv[2]);
     radmesh::write_vtu(std::string(argv[2]) + "/radiosity.vtu", scene, result.mesh,
                        radmesh::compute_quality(result.mesh), result.solution, result.cell_fields);
-    const auto means = radmesh::patch_mean_radiosity(scene, result.mesh, result.solution.element);
+    const auto means = radmesh::patch_mean_radiosity(scene, result.mesh, result.solution.nodal);
     for (size_t p = 0; p < scene.patches.size(); ++p)
       std::printf("%-20s %.6g %.6g %.6g\n", scene.patches[p].name.c_str(), means[p].x, means[p].y, means[p].z);
     return 0;

@@ -14,20 +14,6 @@ nlohmann::json rgb(const Rgb& c) { return nlohmann::json::array({c.x, c.y, c.z})
 
 }  // namespace
 
-std::vector<Rgb> patch_mean_radiosity(const Scene& scene, const Mesh& mesh, const std::vector<Rgb>& element) {
-  std::vector<Rgb> sum(scene.patches.size(), Rgb(0.0));
-  std::vector<double> area(scene.patches.size(), 0.0);
-  for (int t = 0; t < mesh.triangle_count(); ++t) {
-    const size_t p = static_cast<size_t>(mesh.patch[static_cast<size_t>(t)]);
-    const double a = mesh.area(t);
-    sum[p] += a * element[static_cast<size_t>(t)];
-    area[p] += a;
-  }
-  for (size_t p = 0; p < sum.size(); ++p)
-    if (area[p] > 0.0) sum[p] /= area[p];
-  return sum;
-}
-
 nlohmann::json make_summary(const RunInfo& info, const Scene& scene, const Mesh& mesh,
                             const TriangleQuality& quality, const MethodResult* result) {
   const Solution* solution = result ? &result->solution : nullptr;
@@ -43,7 +29,9 @@ nlohmann::json make_summary(const RunInfo& info, const Scene& scene, const Mesh&
                     {"rays", info.solve.rays},
                     {"threads", info.solve.threads},
                     {"crease_angle", info.solve.crease_angle},
-                    {"nodal", info.solve.nodal == NodalMethod::mean ? "mean" : "fit"}};
+                    {"field", to_string(info.solve.field)},
+                    {"nodal", to_string(nodal_method(info.solve.field) == NodalMethod::mean ? FieldMode::mean
+                                                                                          : FieldMode::fit)}};
   doc["counts"] = {{"faces_read", scene.report.faces_read},
                    {"patches", scene.patches.size()},
                    {"materials", scene.materials.size()},
@@ -93,15 +81,21 @@ nlohmann::json make_summary(const RunInfo& info, const Scene& scene, const Mesh&
   }
 
   json patches = json::array();
-  std::vector<Rgb> mean;
-  if (solution) mean = patch_mean_radiosity(scene, mesh, solution->element);
+  std::vector<Rgb> mean, element_mean;
+  if (solution) {
+    mean = patch_mean_radiosity(scene, mesh, solution->nodal);
+    element_mean = patch_mean_radiosity(scene, mesh, solution->element);
+  }
   for (size_t p = 0; p < scene.patches.size(); ++p) {
     const Patch& patch = scene.patches[p];
     json j = {{"id", p},
               {"name", patch.name},
               {"material", scene.material_of(patch).name},
               {"area", scene.patch_area(static_cast<int>(p))}};
-    if (solution) j["mean_radiosity"] = rgb(mean[p]);
+    if (solution) {
+      j["mean_radiosity"] = rgb(mean[p]);  // of the field users see
+      j["element_mean_radiosity"] = rgb(element_mean[p]);  // of the solver's elements
+    }
     patches.push_back(j);
   }
   doc["patches"] = patches;
@@ -149,6 +143,24 @@ nlohmann::json make_summary(const RunInfo& info, const Scene& scene, const Mesh&
                      {"escaped", rgb(st.power_escaped)},
                      {"relative_imbalance", rgb(rel)}};
     doc["skips"] = st.skips;
+    const FieldReport& f = result->field;
+    doc["field"] = {{"mode", to_string(f.mode)}};
+    if (f.mode == FieldMode::gather) {
+      doc["field"]["display_vertices"] = f.display_vertices;
+      doc["field"]["on_other_surface"] = f.on_other_surface;
+      doc["field"]["direct"] = {{"unoccluded", f.direct.unoccluded},
+                                {"clipped", f.direct.clipped},
+                                {"dark", f.direct.dark},
+                                {"hidden", f.direct.hidden},
+                                {"behind", f.direct.behind},
+                                {"seconds", f.seconds_direct}};
+      doc["field"]["gather"] = {{"sources", f.gather_sources},
+                                {"nodes", f.gather_nodes},
+                                {"triangles", f.gather_triangles},
+                                {"rays_cast", f.rays_cast},
+                                {"opening", FieldEvaluator::kOpening},
+                                {"seconds", f.seconds_gather}};
+    }
   }
   return doc;
 }

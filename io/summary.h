@@ -26,9 +26,6 @@ struct RunInfo {
   MethodOptions method_options;  // the method's options as solved with (empty for mesh only)
 };
 
-// Per patch: area-weighted mean of the element radiosity.
-std::vector<Rgb> patch_mean_radiosity(const Scene& scene, const Mesh& mesh, const std::vector<Rgb>& element);
-
 // The summary document; `result` may be null (mesh only). The "solver"
 // object holds the method's name, the common solve counts, every option of
 // the method (as given or its default) and every counter it published

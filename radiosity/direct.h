@@ -12,6 +12,23 @@
 
 namespace radmesh {
 
+// What the direct pass did, per (point, emitter) pair.
+struct DirectCounts {
+  long long behind = 0;      // the point is behind the emitter's plane: zero
+  long long unoccluded = 0;  // the shaft test cleared every occluder: Lambert's formula
+  long long clipped = 0;     // exact clip of the occluders the test could not clear
+  long long dark = 0;        // ... of which wholly hidden
+  long long hidden = 0;      // one convex occluder hides the whole emitter: zero, without a clip
+  DirectCounts& operator+=(const DirectCounts& o) {
+    behind += o.behind;
+    unoccluded += o.unoccluded;
+    clipped += o.clipped;
+    dark += o.dark;
+    hidden += o.hidden;
+    return *this;
+  }
+};
+
 // For a point x on a receiver, every emitter polygon is clipped against the
 // occluders as seen from x: each occluder triangle is clipped to the pyramid
 // from x over the emitter and to the slab between x and the emitter plane,
@@ -36,9 +53,15 @@ public:
   double unoccluded_form_factor(const Vec3& x, const Vec3& n, int emitter) const;
 
   // Direct radiosity reflected at x on `patch`: rho * sum over emitters of
-  // E_emitter * visible_form_factor (per channel). Emission of `patch`
-  // itself is not included.
-  Rgb reflected(const Vec3& x, int patch) const;
+  // E_emitter * the visible form factor (per channel). Emission of `patch`
+  // itself is not included. Takes the cheapest exact path per emitter: zero
+  // when x is behind it; Lambert's formula when a separating-axis test
+  // (double precision, with a margin far above rounding) clears every
+  // occluder triangle of the pyramid from x over the emitter; zero when the
+  // segments from x to every corner of the emitter cross one convex occluder
+  // inside its outline; otherwise the exact clip of only the triangles the
+  // test could not clear. Adds what it did to `counts` when given.
+  Rgb reflected(const Vec3& x, int patch, DirectCounts* counts = nullptr) const;
 
 private:
   struct Impl;

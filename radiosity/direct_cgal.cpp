@@ -40,6 +40,10 @@ struct Emitter {
   std::array<Point3, 4> corners;  // the 2-D bounding box lifted back to the plane
   Vec3 lo{0.0}, hi{0.0};
   Rgb emission{0.0};
+  std::vector<Vec3> base;               // the pyramid's base: the outline if convex, else `corners`
+  Vec3 base_centre{0.0};
+  std::vector<int> front;               // occluders with a corner strictly in front of the plane
+  std::vector<std::vector<Vec3>> loops;  // outline, then holes (scene coordinates)
 
   EK::Point_2 to2(const Point3& p) const {
     if (drop == 0) return EK::Point_2(p.y(), p.z());
@@ -58,6 +62,7 @@ struct Emitter {
 struct OccluderTriangle {
   int patch;
   std::array<Point3, 3> v;
+  std::array<Vec3, 3> d;  // the same corners in double
   Vec3 lo, hi;
 };
 
@@ -83,17 +88,28 @@ std::vector<Point3> clip(const std::vector<Point3>& poly, const EK::Plane_3& pla
 
 }  // namespace
 
+// A patch whose outline is convex and has no holes, in double (for the
+// test that one occluder hides a whole emitter); empty outline otherwise.
+struct ConvexOccluder {
+  std::vector<Vec3> outline;  // counter-clockwise around `normal`
+  Vec3 normal{0.0};
+};
+
 struct DirectIllumination::Impl {
   const Scene& scene;
   std::vector<Emitter> emitters;
-  std::vector<OccluderTriangle> occluders;
+  std::vector<OccluderTriangle> occluders;  // in patch order
+  std::vector<ConvexOccluder> convex;       // per patch
   explicit Impl(const Scene& s) : scene(s) {}
 
-  double visible(const Vec3& x, const Vec3& n, int receiver, const Emitter& e, bool occlude) const {
+  // The exact visible part; `candidates` (indices into `occluders`) are the
+  // triangles that may hide some of it, null for none.
+  double visible(const Vec3& x, const Vec3& n, int receiver, const Emitter& e,
+                 const std::vector<int>* candidates) const {
     const Point3 X = exact(x);
     if (e.plane.oriented_side(X) != CGAL::ON_POSITIVE_SIDE) return 0.0;
     PolygonSet2 lit(e.shape);
-    if (occlude) {
+    if (candidates) {
       // The pyramid from x over the emitter's box, and the slab between the
       // emitter plane and x's parallel plane.
       std::vector<EK::Plane_3> planes;
@@ -109,7 +125,8 @@ struct DirectIllumination::Impl {
       planes.push_back(level.opposite());
       const Vec3 lo = glm::min(x, e.lo), hi = glm::max(x, e.hi);
       std::vector<Polygon2> shadows;
-      for (const OccluderTriangle& t : occluders) {
+      for (const int index : *candidates) {
+        const OccluderTriangle& t = occluders[static_cast<size_t>(index)];
         if (t.patch == receiver || t.patch == e.patch) continue;
         if (glm::any(glm::lessThan(hi, t.lo)) || glm::any(glm::lessThan(t.hi, lo))) continue;
         // Nothing strictly in front of the emitter: cannot occlude it.
@@ -172,6 +189,137 @@ struct DirectIllumination::Impl {
     }
     return std::abs(sum) / (2.0 * std::numbers::pi);
   }
+
+  // The cheap test: which triangles of `e.front` may meet the pyramid from x
+  // over the emitter's (padded) box, within the slab between the emitter and
+  // x. A triangle is cleared when all its corners lie outside one of the
+  // pyramid's planes by a margin (1e-9 of the pyramid's size) far above the
+  // rounding of these double-precision tests, so a cleared triangle surely
+  // hides nothing; the others go to the exact clip. Returns true when one of
+  // the others passes within the margin of x (x lies on another surface,
+  // where the light depends on the side it is approached from).
+  void shaft(const Vec3& x, int receiver, const Emitter& e, std::vector<int>& out) const {
+    out.clear();
+    const double margin = 1e-9 * (glm::length(x - e.base_centre) + glm::length(e.hi - e.lo));
+    // The pyramid: apex x over the emitter's convex base.
+    const size_t nb = e.base.size();
+    std::vector<Vec3> hull;
+    hull.reserve(nb + 1);
+    hull.push_back(x);
+    hull.insert(hull.end(), e.base.begin(), e.base.end());
+    std::vector<Vec3> hull_edges;
+    hull_edges.reserve(2 * nb);
+    for (size_t i = 0; i < nb; ++i) {
+      hull_edges.push_back(e.base[i] - x);
+      hull_edges.push_back(e.base[(i + 1) % nb] - e.base[i]);
+    }
+    // Separating-axis test of a triangle and the pyramid, both convex:
+    // clear when their projections on some axis overlap by no more than the
+    // margin (a triangle that only touches the pyramid, as a wall meeting
+    // the emitter's edge does, hides nothing). Axes: the pyramid's faces,
+    // the triangle's plane, and the cross products of their edges.
+    auto apart = [&](const std::array<Vec3, 3>& t, const Vec3& axis) {
+      const double len = glm::length(axis);
+      if (!(len > 1e-300)) return false;
+      double hlo = INFINITY, hhi = -INFINITY, tlo = INFINITY, thi = -INFINITY;
+      for (const Vec3& p : hull) {
+        const double d = glm::dot(p, axis);
+        hlo = std::min(hlo, d);
+        hhi = std::max(hhi, d);
+      }
+      for (const Vec3& p : t) {
+        const double d = glm::dot(p, axis);
+        tlo = std::min(tlo, d);
+        thi = std::max(thi, d);
+      }
+      return hhi <= tlo + margin * len || thi <= hlo + margin * len;
+    };
+    auto separated = [&](const std::array<Vec3, 3>& t) {
+      for (size_t i = 0; i < nb; ++i)
+        if (apart(t, glm::cross(hull_edges[2 * i], hull_edges[2 * ((i + 1) % nb)]))) return true;
+      if (apart(t, e.normal)) return true;
+      const std::array<Vec3, 3> te = {t[1] - t[0], t[2] - t[1], t[0] - t[2]};
+      if (apart(t, glm::cross(te[0], te[1]))) return true;
+      for (const Vec3& he : hull_edges)
+        for (const Vec3& edge : te)
+          if (apart(t, glm::cross(he, edge))) return true;
+      return false;
+    };
+    const Vec3 lo = glm::min(x, e.lo) - Vec3(margin), hi = glm::max(x, e.hi) + Vec3(margin);
+    for (const int index : e.front) {
+      const OccluderTriangle& t = occluders[static_cast<size_t>(index)];
+      if (t.patch == receiver || t.patch == e.patch) continue;
+      if (glm::any(glm::lessThan(hi, t.lo)) || glm::any(glm::lessThan(t.hi, lo))) continue;
+      if (!separated(t.d)) out.push_back(index);
+    }
+  }
+
+  // True when one convex occluder patch among the candidates' patches hides
+  // the whole emitter from x: the segment from x to every corner of the
+  // emitter's outline crosses the occluder's plane inside its outline (by
+  // the margin). Then it hides the outline's convex hull, and so the emitter.
+  bool hidden_by_one(const Vec3& x, const Emitter& e, const std::vector<int>& candidates) const {
+    const double margin = 1e-9 * (glm::length(x - e.base_centre) + glm::length(e.hi - e.lo));
+    int last = -1;
+    for (const int index : candidates) {
+      const int patch = occluders[static_cast<size_t>(index)].patch;
+      if (patch == last) continue;
+      last = patch;
+      const ConvexOccluder& c = convex[static_cast<size_t>(patch)];
+      if (c.outline.empty()) continue;
+      const double sx = glm::dot(x - c.outline[0], c.normal);
+      bool all = true;
+      for (const Vec3& v : e.loops[0]) {
+        const double sv = glm::dot(v - c.outline[0], c.normal);
+        if (!((sx > margin && sv < -margin) || (sx < -margin && sv > margin))) {
+          all = false;
+          break;
+        }
+        const Vec3 q = x + (sx / (sx - sv)) * (v - x);
+        for (size_t i = 0; i < c.outline.size() && all; ++i) {
+          const Vec3& a = c.outline[i];
+          const Vec3& b = c.outline[(i + 1) % c.outline.size()];
+          all = glm::dot(glm::cross(b - a, q - a), c.normal) > margin * glm::length(b - a);
+        }
+        if (!all) break;
+      }
+      if (all) return true;
+    }
+    return false;
+  }
+
+  // Lambert's formula for the whole emitter (its loops as the exact path
+  // would hand them over when nothing is in the way).
+  static double unoccluded(const Vec3& x, const Vec3& n, const Emitter& e) {
+    double sum = 0.0;
+    for (const std::vector<Vec3>& loop : e.loops) sum += lambert_contour_sum(x, n, loop.data(), loop.size());
+    return std::abs(sum) / (2.0 * std::numbers::pi);
+  }
+
+  // The visible form factor by the cheapest exact path: 0 behind the
+  // emitter, Lambert's formula when the shaft is clear, 0 when one convex
+  // occluder hides it all, the exact clip of the triangles that may be in
+  // it otherwise.
+  double fast_visible(const Vec3& x, const Vec3& n, int receiver, const Emitter& e, DirectCounts& counts,
+                      std::vector<int>& scratch) const {
+    if (e.plane.oriented_side(exact(x)) != CGAL::ON_POSITIVE_SIDE) {
+      ++counts.behind;
+      return 0.0;
+    }
+    shaft(x, receiver, e, scratch);
+    if (scratch.empty()) {
+      ++counts.unoccluded;
+      return unoccluded(x, n, e);
+    }
+    if (hidden_by_one(x, e, scratch)) {
+      ++counts.hidden;
+      return 0.0;
+    }
+    ++counts.clipped;
+    const double f = visible(x, n, receiver, e, &scratch);
+    if (f == 0.0) ++counts.dark;
+    return f;
+  }
 };
 
 DirectIllumination::DirectIllumination(const Scene& scene) : impl_(std::make_unique<Impl>(scene)) {
@@ -184,10 +332,28 @@ DirectIllumination::DirectIllumination(const Scene& scene) : impl_(std::make_uni
     for (int k = 0; k < 3; ++k) {
       const Vec3& p = coarse.positions[static_cast<size_t>(tri[static_cast<size_t>(k)])];
       o.v[static_cast<size_t>(k)] = exact(p);
+      o.d[static_cast<size_t>(k)] = p;
       o.lo = glm::min(o.lo, p);
       o.hi = glm::max(o.hi, p);
     }
     impl_->occluders.push_back(o);
+  }
+  impl_->convex.resize(scene.patches.size());
+  for (size_t p = 0; p < scene.patches.size(); ++p) {
+    const Patch& patch = scene.patches[p];
+    if (!patch.holes.empty()) continue;
+    std::vector<Vec3> outline = scene.loop_points(patch.outer);
+    double turn = 0.0;
+    bool convex = outline.size() >= 3;
+    for (size_t i = 0; i < outline.size() && convex; ++i) {
+      const Vec3& a = outline[i];
+      const Vec3& b = outline[(i + 1) % outline.size()];
+      const Vec3& c = outline[(i + 2) % outline.size()];
+      const double z = glm::dot(glm::cross(b - a, c - b), patch.normal);
+      convex = z >= 0.0;
+      turn += z;
+    }
+    if (convex && turn > 0.0) impl_->convex[p] = {std::move(outline), patch.normal};
   }
   for (size_t p = 0; p < scene.patches.size(); ++p) {
     const Patch& patch = scene.patches[p];
@@ -232,6 +398,26 @@ DirectIllumination::DirectIllumination(const Scene& scene) : impl_(std::make_uni
       e.lo = glm::min(e.lo, d);
       e.hi = glm::max(e.hi, d);
     }
+    for (const Point3& q : e.corners)
+      e.base.emplace_back(CGAL::to_double(q.x()), CGAL::to_double(q.y()), CGAL::to_double(q.z()));
+    auto lifted = [&](const Polygon2& poly) {
+      std::vector<Vec3> out;
+      for (auto v = poly.vertices_begin(); v != poly.vertices_end(); ++v) {
+        const Point3 q = e.lift(*v);
+        out.emplace_back(CGAL::to_double(q.x()), CGAL::to_double(q.y()), CGAL::to_double(q.z()));
+      }
+      return out;
+    };
+    e.loops.push_back(lifted(e.shape.outer_boundary()));
+    for (auto h = e.shape.holes_begin(); h != e.shape.holes_end(); ++h) e.loops.push_back(lifted(*h));
+    if (patch.holes.empty() && e.shape.outer_boundary().is_convex()) e.base = e.loops[0];
+    for (const Vec3& b : e.base) e.base_centre += b / static_cast<double>(e.base.size());
+    for (size_t t = 0; t < impl_->occluders.size(); ++t) {
+      const OccluderTriangle& o = impl_->occluders[t];
+      if (std::any_of(o.v.begin(), o.v.end(),
+                      [&](const Point3& p) { return e.plane.oriented_side(p) == CGAL::ON_POSITIVE_SIDE; }))
+        e.front.push_back(static_cast<int>(t));
+    }
     impl_->emitters.push_back(std::move(e));
   }
 }
@@ -239,24 +425,29 @@ DirectIllumination::DirectIllumination(const Scene& scene) : impl_(std::make_uni
 DirectIllumination::~DirectIllumination() = default;
 
 double DirectIllumination::visible_form_factor(const Vec3& x, const Vec3& n, int receiver, int emitter) const {
+  std::vector<int> all(impl_->occluders.size());
+  for (size_t t = 0; t < all.size(); ++t) all[t] = static_cast<int>(t);
   for (const Emitter& e : impl_->emitters)
-    if (e.patch == emitter) return impl_->visible(x, n, receiver, e, true);
+    if (e.patch == emitter) return impl_->visible(x, n, receiver, e, &all);
   return 0.0;
 }
 
 double DirectIllumination::unoccluded_form_factor(const Vec3& x, const Vec3& n, int emitter) const {
   for (const Emitter& e : impl_->emitters)
-    if (e.patch == emitter) return impl_->visible(x, n, -1, e, false);
+    if (e.patch == emitter) return impl_->visible(x, n, -1, e, nullptr);
   return 0.0;
 }
 
-Rgb DirectIllumination::reflected(const Vec3& x, int patch) const {
+Rgb DirectIllumination::reflected(const Vec3& x, int patch, DirectCounts* counts) const {
   const Patch& p = impl_->scene.patches[static_cast<size_t>(patch)];
   const Rgb rho = impl_->scene.material_of(p).reflectance;
   if (std::max({rho.x, rho.y, rho.z}) <= 0.0) return Rgb(0.0);
+  DirectCounts local;
+  std::vector<int> scratch;
   Rgb sum(0.0);
   for (const Emitter& e : impl_->emitters)
-    if (e.patch != patch) sum += e.emission * impl_->visible(x, p.normal, patch, e, true);
+    if (e.patch != patch) sum += e.emission * impl_->fast_visible(x, p.normal, patch, e, local, scratch);
+  if (counts) *counts += local;
   return rho * sum;
 }
 

@@ -504,7 +504,7 @@ private:
     // sides of every unsplit edge (so a vertex is not split into several
     // display vertices there) and, having no area, add nothing to a fit or a
     // mean. A T-vertex thus gets the value the finer side gives it.
-    s.nodal = compute_nodal(scene_, o.mesh, s.element, opt_.crease_angle, opt_.nodal);
+    s.nodal = compute_nodal(scene_, o.mesh, s.element, opt_.crease_angle, nodal_method(opt_.field));
     // Leaf edges: directed edge (u, w) -> leaf triangle. The finer side of an
     // unsplit edge (a, b) of leaf t holds its pieces reversed.
     std::set<std::pair<int, int>> features;

@@ -259,7 +259,7 @@ Solution solve_with_matrix(const Scene& scene, const Mesh& mesh, const ElementSe
       throw NumericalError(scene.source + ": the solve produced a non-finite radiosity");
   st.seconds_solve = seconds_since(t1);
 
-  sol.nodal = compute_nodal(scene, mesh, sol.element, options.crease_angle, options.nodal);
+  sol.nodal = compute_nodal(scene, mesh, sol.element, options.crease_angle, nodal_method(options.field));
   return sol;
 }
 

@@ -13,6 +13,7 @@
 #include "meshing/mesh.h"
 #include "meshing/progress.h"
 #include "meshing/scene.h"
+#include "radiosity/field.h"
 #include "radiosity/solution.h"
 #include "radiosity/solve.h"
 
@@ -99,6 +100,7 @@ struct MethodResult {
   std::vector<Counter> counters;
   std::vector<std::pair<std::string, double>> seconds;  // phase -> wall seconds, in order
   std::string report;  // one line for people ("24128 leaves, 493567 links, ...")
+  FieldReport field;   // how solution.nodal was made (run_method)
 
   const Counter* counter(const std::string& name) const;  // nullptr when absent
 };
@@ -135,7 +137,9 @@ const Method& find_method(const std::string& name);
 std::vector<std::pair<OptionSpec, std::vector<std::string>>> all_method_options();
 
 // Checks `given` against the method (InputError for an option the method
-// does not take, naming the methods that do) and solves.
+// does not take, naming the methods that do), solves, and makes the field
+// of options.field (compute_field): with gather, solution.nodal is replaced,
+// `field` says how, and "direct" and "gather" join `seconds`.
 MethodResult run_method(const Method& method, const Scene& scene, const Mesh& mesh, const SolveOptions& options,
                         const OptionValues& given = {}, const SolveCallbacks& callbacks = {});
 

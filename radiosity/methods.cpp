@@ -165,7 +165,14 @@ MethodResult run_method(const Method& method, const Scene& scene, const Mesh& me
                         const OptionValues& given, const SolveCallbacks& callbacks) {
   check_solve_options(options);
   const MethodOptions opts(method.options, given, method.name);
-  return method.solve(scene, mesh, options, opts, callbacks);
+  MethodResult r = method.solve(scene, mesh, options, opts, callbacks);
+  r.field.mode = options.field;
+  if (options.field == FieldMode::gather) {
+    r.solution.nodal = compute_field(scene, r.mesh, r.solution.element, options, &r.field, callbacks.progress);
+    r.seconds.emplace_back("direct", r.field.seconds_direct);
+    r.seconds.emplace_back("gather", r.field.seconds_gather);
+  }
+  return r;
 }
 
 }  // namespace radmesh

@@ -1,6 +1,7 @@
 #include "radiosity/probe.h"
 
 #include "meshing/errors.h"
+#include "radiosity/field.h"
 #include "radiosity/transport.h"
 
 #include <tbb/parallel_for.h>
@@ -56,27 +57,12 @@ std::vector<ProbeResult> evaluate_probes(const Scene& scene, const Mesh& mesh,
     }
   }
 
-  const ElementSet el = make_elements(scene, mesh);
+  const FieldEvaluator field(scene, mesh, element_radiosity, options);
   run_in_arena(options.threads, [&] {
-    const VisibilityEstimator visibility(scene, options.rays);
     tbb::parallel_for(size_t(0), probes.size(), [&](size_t k) {
-      const Probe& pr = probes[k];
-      const int pp = out[k].patch;
-      const Triangle point = make_triangle(pr.point, pr.point, pr.point, pr.normal);
-      RayCount rays;
-      Rgb h(0.0);
-      for (size_t j = 0; j < el.size(); ++j) {
-        // Zero-area triangles never enter a form factor; a patch does not see itself.
-        if (el.patch[j] == pp || el.zero_area[j]) continue;
-        const Triangle& tj = el.triangle[j];
-        const double f = point_polygon_form_factor(pr.point, pr.normal, tj.v.data(), 3, tj.normal);
-        if (f <= 0.0) continue;
-        // Probe ids come after every element id: one stream per (probe, element).
-        const double visible = visibility.visible_fraction(point, pp, el.size() + k, tj, el.patch[j], j, rays);
-        h += f * visible * element_radiosity[j];
-      }
-      const Material& m = scene.material_of(pp);
-      out[k].radiosity = m.emission + m.reflectance * h;
+      FieldReport report;
+      // Seeds above any display vertex's: the probes' streams are their own.
+      out[k].radiosity = field.radiosity(probes[k].point, out[k].patch, (uint64_t{1} << 40) + k, report);
     });
   });
   return out;

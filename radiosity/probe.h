@@ -1,4 +1,4 @@
-// Radiosity at user-given surface points, by a final gather over a solution.
+// Radiosity at user-given surface points, evaluated as the gather field is.
 #pragma once
 
 #include "meshing/mesh.h"
@@ -24,9 +24,9 @@ struct ProbeResult {
 };
 
 // For each probe: finds the patch under it (InputError naming the probe's
-// file:line when it lies on no surface facing its normal), then gathers
-// H = sum_j F(x -> element j) * V(x, j) * B_j with Lambert's exact point
-// form factor and options.rays shadow rays per element.
+// file:line when it lies on no surface facing its normal), then evaluates B
+// there as the gather field does (FieldEvaluator: emission, exact direct
+// light, and the indirect light gathered from the element radiosity).
 std::vector<ProbeResult> evaluate_probes(const Scene& scene, const Mesh& mesh,
                                          const std::vector<Rgb>& element_radiosity,
                                          const std::vector<Probe>& probes, const SolveOptions& options);

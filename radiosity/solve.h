@@ -8,11 +8,23 @@
 #include "radiosity/solution.h"
 
 #include <memory>
+#include <string>
 #include <vector>
 
 namespace radmesh {
 
 enum class NodalMethod { mean, linear_fit };
+
+// How the field users see (per-vertex radiosity) is made from a solution:
+// gather (exact direct light and a final gather at every vertex, field.h),
+// fit or mean (from the element values, compute_nodal).
+enum class FieldMode { gather, fit, mean };
+// "gather", "fit", "mean"; InputError naming the value otherwise.
+FieldMode parse_field_mode(const std::string& text);
+std::string to_string(FieldMode mode);
+// The element-value interpolation a solver uses for its own field: mean for
+// `mean`, the linear fit otherwise.
+NodalMethod nodal_method(FieldMode mode);
 
 struct SolveOptions {
   // Gauss-Seidel stops when the largest change of a sweep is below
@@ -34,10 +46,11 @@ struct SolveOptions {
   // Vertex values are averaged only over triangles of one material whose
   // normals differ by less than this angle (degrees).
   double crease_angle = 20.0;
-  // How vertex values are made from element values (see compute_nodal).
-  // linear_fit by default: on the Cornell box benchmark (45 mm) it gives 0.79x
-  // the L2 error and 0.45x the worst patch-mean error of the mean.
-  NodalMethod nodal = NodalMethod::linear_fit;
+  // How vertex values are made (see FieldMode). run_method applies it to the
+  // method's result; a solver's own field (compute_nodal) uses
+  // nodal_method(field). gather by default: on the Cornell box benchmark it
+  // gives a fraction of the error of the fit (README, "The field").
+  FieldMode field = FieldMode::gather;
 };
 
 // Checks option ranges; throws InputError naming the option and the value.

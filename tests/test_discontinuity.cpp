@@ -106,7 +106,7 @@ TEST(Contacts, VertexValuesAreNotAveragedAcrossTheContactLine) {
   // The mean of the elements around a vertex shows what is averaged (the
   // linear fit may extrapolate a value in deep penumbra down to zero).
   SolveOptions so;
-  so.nodal = NodalMethod::mean;
+  so.field = FieldMode::mean;
   const Solution sol = solve_matrix(s, m, so);
   // Under the box the floor gets no light at all; just outside it does.
   const int floor = patch_named(s, "floor");

@@ -1,0 +1,392 @@
+// The display field: exact direct light and a final gather at every vertex.
+
+#include "radiosity/field.h"
+
+#include "meshing/errors.h"
+#include "radiosity/form_factor.h"
+#include "radiosity/occlusion.h"
+#include "radiosity/sampling.h"
+#include "radiosity/transport.h"
+#include "radiosity/visibility.h"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <numbers>
+
+namespace radmesh {
+
+namespace {
+
+double max3(const Rgb& c) { return std::max({c.x, c.y, c.z}); }
+
+// Lambert's formula for a whole patch (outline less holes), front side only.
+double patch_form_factor(const Vec3& x, const Vec3& n, const std::vector<std::vector<Vec3>>& loops,
+                         const Vec3& normal) {
+  if (glm::dot(x - loops[0][0], normal) <= 0.0) return 0.0;
+  double f = std::abs(lambert_contour_sum(x, n, loops[0].data(), loops[0].size()));
+  for (size_t h = 1; h < loops.size(); ++h) f -= std::abs(lambert_contour_sum(x, n, loops[h].data(), loops[h].size()));
+  return std::max(0.0, f) / (2.0 * std::numbers::pi);
+}
+
+// A source patch's tree over its triangles.
+struct SourceTree {
+  struct Node {
+    Vec3 centre{0.0};  // area centroid
+    double radius = 0.0;
+    double area = 0.0;
+    Rgb reflected{0.0};  // area-weighted mean of B - E
+    int begin = 0, end = 0;  // range in `order`
+    int left = -1, right = -1;
+  };
+  Vec3 normal{0.0};
+  std::vector<std::vector<Vec3>> loops;  // outline, then holes
+  std::vector<Triangle> triangle;        // the patch's triangles of positive area
+  std::vector<Rgb> reflected;            // per triangle: B - E
+  std::vector<int> order;                // triangle indices, in node order
+  std::vector<double> cumulative;        // area of order[0 .. i), size + 1
+  std::vector<Node> nodes;               // nodes[0] is the root
+
+  int build(int begin, int end) {
+    Node n;
+    n.begin = begin;
+    n.end = end;
+    Vec3 lo(INFINITY), hi(-INFINITY);
+    for (int i = begin; i < end; ++i) {
+      const Triangle& t = triangle[static_cast<size_t>(order[static_cast<size_t>(i)])];
+      n.area += t.area;
+      n.centre += t.area * t.centroid();
+      n.reflected += t.area * reflected[static_cast<size_t>(order[static_cast<size_t>(i)])];
+      lo = glm::min(lo, t.centroid());
+      hi = glm::max(hi, t.centroid());
+    }
+    n.centre /= n.area;
+    n.reflected /= n.area;
+    for (int i = begin; i < end; ++i)
+      for (const Vec3& v : triangle[static_cast<size_t>(order[static_cast<size_t>(i)])].v)
+        n.radius = std::max(n.radius, glm::length(v - n.centre));
+    const int id = static_cast<int>(nodes.size());
+    nodes.push_back(n);
+    if (end - begin > 2) {
+      const Vec3 ext = hi - lo;
+      const int axis = ext.x >= ext.y && ext.x >= ext.z ? 0 : (ext.y >= ext.z ? 1 : 2);
+      const int mid = (begin + end) / 2;
+      std::nth_element(order.begin() + begin, order.begin() + mid, order.begin() + end, [&](int a, int b) {
+        return triangle[static_cast<size_t>(a)].centroid()[axis] < triangle[static_cast<size_t>(b)].centroid()[axis];
+      });
+      const int l = build(begin, mid);
+      const int r = build(mid, end);
+      nodes[static_cast<size_t>(id)].left = l;
+      nodes[static_cast<size_t>(id)].right = r;
+    }
+    return id;
+  }
+
+  // A point of triangles order[begin .. end), area-uniform for u in [0, 1),
+  // and its triangle.
+  Vec3 sample(int begin, int end, double u, double a, double b, int& triangle_index) const {
+    const double target = cumulative[static_cast<size_t>(begin)] +
+                          u * (cumulative[static_cast<size_t>(end)] - cumulative[static_cast<size_t>(begin)]);
+    auto it = std::upper_bound(cumulative.begin() + begin + 1, cumulative.begin() + end, target);
+    const size_t i = static_cast<size_t>(it - cumulative.begin() - 1);
+    triangle_index = order[i];
+    const Triangle& t = triangle[static_cast<size_t>(order[i])];
+    return triangle_point(t.v[0], t.v[1], t.v[2], a, b);
+  }
+};
+
+}  // namespace
+
+FieldMode parse_field_mode(const std::string& text) {
+  if (text == "gather") return FieldMode::gather;
+  if (text == "fit") return FieldMode::fit;
+  if (text == "mean") return FieldMode::mean;
+  throw InputError("--field " + text + ": expected one of gather, fit, mean");
+}
+
+std::string to_string(FieldMode mode) {
+  switch (mode) {
+    case FieldMode::gather: return "gather";
+    case FieldMode::fit: return "fit";
+    case FieldMode::mean: return "mean";
+  }
+  return "?";
+}
+
+NodalMethod nodal_method(FieldMode mode) { return mode == FieldMode::mean ? NodalMethod::mean : NodalMethod::linear_fit; }
+
+struct FieldEvaluator::Impl {
+  const Scene& scene;
+  SolveOptions options;
+  DirectIllumination direct;
+  Occlusion occlusion;
+  std::unique_ptr<Visibility> visibility;
+  std::vector<SourceTree> sources;  // per patch (empty tree: reflects nothing)
+
+  Impl(const Scene& s, const SolveOptions& o) : scene(s), options(o), direct(s), occlusion(s) {}
+
+  // The mean of V(x, y) R(y) over area-uniform stratified points y of
+  // triangles order[begin .. end) of source q, by shadow rays from x (on
+  // patch p). Visibility and the reflected radiosity are sampled together:
+  // where the hidden part of a source is also its dark part (the floor at a
+  // block's foot seen from the ceiling), the mean visibility times the mean
+  // radiosity would come out low.
+  Rgb visible_reflected(const Vec3& x, const Vec3& n, int p, int q, const SourceTree& tree, int begin, int end,
+                        uint64_t seed, long long& rays) const {
+    SplitMix rng(seed);
+    const int k = std::max(1, options.rays / 4);
+    Rgb sum(0.0);
+    double weight = 0.0;
+    for (int s = 0; s < k; ++s) {
+      const double u = (s + rng.uniform()) / k;
+      const double a = rng.uniform(), b = rng.uniform();
+      int t = -1;
+      const Vec3 y = tree.sample(begin, end, u, a, b, t);
+      // The point form factor's kernel at y: the samples are weighted by it.
+      const Vec3 r = y - x;
+      const double w = std::max(0.0, glm::dot(n, r)) * std::max(0.0, -glm::dot(tree.normal, r)) / std::pow(glm::dot(r, r), 2);
+      weight += w;
+      if (w > 0.0 && visibility->visible(x, y, p, q)) sum += w * tree.reflected[static_cast<size_t>(t)];
+    }
+    rays += k;
+    return weight > 0.0 ? sum / weight : Rgb(0.0);
+  }
+};
+
+FieldEvaluator::FieldEvaluator(const Scene& scene, const Mesh& mesh, const std::vector<Rgb>& element,
+                               const SolveOptions& options)
+    : impl_(std::make_unique<Impl>(scene, options)) {
+  Impl& m = *impl_;
+  if (!m.occlusion.convex_enclosure()) m.visibility = std::make_unique<Visibility>(scene);
+  m.sources.resize(scene.patches.size());
+  for (int t = 0; t < mesh.triangle_count(); ++t) {
+    if (mesh.zero_area(t)) continue;
+    const int p = mesh.patch[static_cast<size_t>(t)];
+    const Patch& patch = scene.patches[static_cast<size_t>(p)];
+    const auto& tri = mesh.triangles[static_cast<size_t>(t)];
+    const Triangle triangle = make_triangle(mesh.positions[static_cast<size_t>(tri[0])],
+                                            mesh.positions[static_cast<size_t>(tri[1])],
+                                            mesh.positions[static_cast<size_t>(tri[2])], patch.normal);
+    if (!(triangle.area > 0.0)) continue;
+    SourceTree& s = m.sources[static_cast<size_t>(p)];
+    s.triangle.push_back(triangle);
+    s.reflected.push_back(glm::max(element[static_cast<size_t>(t)] - scene.material_of(patch).emission, Rgb(0.0)));
+  }
+  for (size_t p = 0; p < m.sources.size(); ++p) {
+    SourceTree& s = m.sources[p];
+    const bool reflects = std::any_of(s.reflected.begin(), s.reflected.end(), [](const Rgb& r) { return max3(r) > 0.0; });
+    if (!reflects) {
+      s = SourceTree{};
+      continue;
+    }
+    const Patch& patch = scene.patches[p];
+    s.normal = patch.normal;
+    s.loops.push_back(scene.loop_points(patch.outer));
+    for (const auto& h : patch.holes) s.loops.push_back(scene.loop_points(h));
+    s.order.resize(s.triangle.size());
+    for (size_t i = 0; i < s.order.size(); ++i) s.order[i] = static_cast<int>(i);
+    s.build(0, static_cast<int>(s.order.size()));
+    s.cumulative.assign(s.order.size() + 1, 0.0);
+    for (size_t i = 0; i < s.order.size(); ++i)
+      s.cumulative[i + 1] = s.cumulative[i] + s.triangle[static_cast<size_t>(s.order[i])].area;
+  }
+}
+
+FieldEvaluator::~FieldEvaluator() = default;
+
+Vec3 FieldEvaluator::evaluation_point(const Vec3& x, int patch, const Vec3& inward, FieldReport& report) const {
+  const Impl& m = *impl_;
+  if (inward == Vec3(0.0)) return x;
+  const double diagonal = m.scene.diagonal();
+  for (int q = 0; q < static_cast<int>(m.scene.patches.size()); ++q)
+    if (q != patch && m.occlusion.distance(q, x) <= 1e-9 * diagonal) {
+      ++report.on_other_surface;
+      // Far enough that the shadow rays (single precision) see the side,
+      // near enough that the value is the side's limit: 1e-5 of the scene's
+      // size, at most a tenth of the way to the centroid of the triangles.
+      const double length = glm::length(inward);
+      return x + std::min(1e-5 * diagonal / length, 0.1) * inward;
+    }
+  return x;
+}
+
+Rgb FieldEvaluator::direct(const Vec3& x, int patch, FieldReport& report) const {
+  return impl_->direct.reflected(x, patch, &report.direct);
+}
+
+Rgb FieldEvaluator::indirect(const Vec3& x, int patch, uint64_t id, FieldReport& report) const {
+  const Impl& m = *impl_;
+  const Patch& receiver = m.scene.patches[static_cast<size_t>(patch)];
+  const Rgb rho = m.scene.material_of(receiver).reflectance;
+  if (max3(rho) <= 0.0) return Rgb(0.0);
+  const Vec3& n = receiver.normal;
+  Rgb h(0.0);
+  std::vector<int> stack;
+  for (size_t q = 0; q < m.sources.size(); ++q) {
+    const SourceTree& s = m.sources[q];
+    if (s.nodes.empty() || static_cast<int>(q) == patch || !m.occlusion.facing(patch, static_cast<int>(q))) continue;
+    const double fq = patch_form_factor(x, n, s.loops, s.normal);
+    if (fq <= 0.0) continue;
+    ++report.gather_sources;
+    const bool occludable = m.visibility && !m.occlusion.candidates(patch, static_cast<int>(q)).empty();
+    // One random stream per (point, source node or triangle).
+    const uint64_t stream = pair_seed(id, q);
+    double weight = 0.0;
+    Rgb sum(0.0);
+    stack.assign(1, 0);
+    while (!stack.empty()) {
+      const int k = stack.back();
+      stack.pop_back();
+      const SourceTree::Node& node = s.nodes[static_cast<size_t>(k)];
+      const Vec3 r = node.centre - x;
+      const double d = glm::length(r);
+      if (node.left < 0) {
+        for (int i = node.begin; i < node.end; ++i) {
+          const int t = s.order[static_cast<size_t>(i)];
+          const Triangle& tri = s.triangle[static_cast<size_t>(t)];
+          const double f = point_polygon_form_factor(x, n, tri.v.data(), 3, s.normal);
+          ++report.gather_triangles;
+          if (f <= 0.0) continue;
+          weight += f;
+          sum += f * (occludable ? m.visible_reflected(x, n, patch, static_cast<int>(q), s, i, i + 1,
+                                                       pair_seed(stream, (uint64_t{1} << 32) + static_cast<uint64_t>(i)),
+                                                       report.rays_cast)
+                                 : s.reflected[static_cast<size_t>(t)]);
+        }
+      } else if (node.radius <= kOpening * d) {
+        const double cos_r = glm::dot(n, r) / d, cos_s = -glm::dot(s.normal, r) / d;
+        ++report.gather_nodes;
+        if (cos_r <= 0.0 || cos_s <= 0.0) continue;
+        const double f = node.area * cos_r * cos_s / (std::numbers::pi * d * d);
+        weight += f;
+        sum += f * (occludable ? m.visible_reflected(x, n, patch, static_cast<int>(q), s, node.begin, node.end,
+                                                     pair_seed(stream, static_cast<uint64_t>(k)), report.rays_cast)
+                               : node.reflected);
+      } else {
+        stack.push_back(node.left);
+        stack.push_back(node.right);
+      }
+    }
+    if (weight > 0.0) h += (fq / weight) * sum;
+  }
+  return rho * h;
+}
+
+Rgb FieldEvaluator::radiosity(const Vec3& x, int patch, uint64_t id, FieldReport& report) const {
+  return impl_->scene.material_of(patch).emission + direct(x, patch, report) + indirect(x, patch, id, report);
+}
+
+NodalField compute_field(const Scene& scene, const Mesh& mesh, const std::vector<Rgb>& element,
+                         const SolveOptions& options, FieldReport* report, const ProgressFn& progress) {
+  FieldReport rep;
+  rep.mode = options.field;
+  if (options.field != FieldMode::gather) {
+    if (report) *report = rep;
+    return compute_nodal(scene, mesh, element, options.crease_angle, nodal_method(options.field));
+  }
+  // The display vertices (and where each one's triangles lie), then every
+  // value anew.
+  NodalField field = compute_nodal(scene, mesh, element, options.crease_angle, NodalMethod::mean);
+  const size_t nd = field.points.size();
+  rep.display_vertices = static_cast<long long>(nd);
+  // Per display vertex: its patch (where a group spans coplanar patches of
+  // one material, the one with the most area around the vertex) and the
+  // direction into that patch's triangles around it.
+  std::vector<int> patch(nd, -1);
+  std::vector<Vec3> inward(nd, Vec3(0.0));
+  {
+    std::vector<std::vector<std::pair<int, double>>> area(nd);  // (patch, area) per display vertex
+    for (int t = 0; t < mesh.triangle_count(); ++t)
+      for (int d : field.corners[static_cast<size_t>(t)]) {
+        auto& list = area[static_cast<size_t>(d)];
+        const int p = mesh.patch[static_cast<size_t>(t)];
+        auto it = std::find_if(list.begin(), list.end(), [&](const auto& e) { return e.first == p; });
+        if (it == list.end()) it = list.insert(list.end(), {p, 0.0});
+        it->second += mesh.area(t);
+      }
+    for (size_t d = 0; d < nd; ++d)
+      patch[d] = std::max_element(area[d].begin(), area[d].end(),
+                                  [](const auto& a, const auto& b) { return a.second < b.second; })->first;
+    std::vector<Vec3> towards(nd, Vec3(0.0));
+    std::vector<double> weight(nd, 0.0);
+    for (int t = 0; t < mesh.triangle_count(); ++t)
+      for (int d : field.corners[static_cast<size_t>(t)])
+        if (mesh.patch[static_cast<size_t>(t)] == patch[static_cast<size_t>(d)]) {
+          towards[static_cast<size_t>(d)] += mesh.area(t) * mesh.centroid(t);
+          weight[static_cast<size_t>(d)] += mesh.area(t);
+        }
+    for (size_t d = 0; d < nd; ++d)
+      if (weight[d] > 0.0) inward[d] = towards[d] / weight[d] - field.points[d];
+  }
+
+  const FieldEvaluator evaluator(scene, mesh, element, options);
+  std::vector<FieldReport> per(nd);
+  std::vector<Rgb> direct(nd), indirect(nd);
+  // In blocks, so that progress is reported from one thread.
+  const size_t blocks = std::min<size_t>(nd, 50);
+  auto pass = [&](const char* phase, double& seconds, auto&& body) {
+    const auto t0 = std::chrono::steady_clock::now();
+    run_in_arena(options.threads, [&] {
+      for (size_t b = 0; b < blocks; ++b) {
+        tbb::parallel_for(b * nd / blocks, (b + 1) * nd / blocks, body);
+        if (progress) progress(phase, static_cast<double>(b + 1) / static_cast<double>(blocks));
+      }
+    });
+    seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  };
+  std::vector<Vec3> at(nd);
+  pass("direct", rep.seconds_direct, [&](size_t d) {
+    at[d] = evaluator.evaluation_point(field.points[d], patch[d], inward[d], per[d]);
+    direct[d] = evaluator.direct(at[d], patch[d], per[d]);
+  });
+  pass("gather", rep.seconds_gather, [&](size_t d) {
+    indirect[d] = evaluator.indirect(at[d], patch[d], static_cast<uint64_t>(d), per[d]);
+  });
+  for (size_t d = 0; d < nd; ++d) {
+    field.radiosity[d] = scene.material_of(patch[d]).emission + direct[d] + indirect[d];
+    rep.direct += per[d].direct;
+    rep.on_other_surface += per[d].on_other_surface;
+    rep.gather_sources += per[d].gather_sources;
+    rep.gather_nodes += per[d].gather_nodes;
+    rep.gather_triangles += per[d].gather_triangles;
+    rep.rays_cast += per[d].rays_cast;
+  }
+  if (report) *report = rep;
+  return field;
+}
+
+namespace {
+
+// Area-weighted means per patch of a per-triangle value.
+template <class Value>
+std::vector<Rgb> patch_means(const Scene& scene, const Mesh& mesh, Value&& value) {
+  std::vector<Rgb> sum(scene.patches.size(), Rgb(0.0));
+  std::vector<double> area(scene.patches.size(), 0.0);
+  for (int t = 0; t < mesh.triangle_count(); ++t) {
+    const size_t p = static_cast<size_t>(mesh.patch[static_cast<size_t>(t)]);
+    const double a = mesh.area(t);
+    sum[p] += a * value(t);
+    area[p] += a;
+  }
+  for (size_t p = 0; p < sum.size(); ++p)
+    if (area[p] > 0.0) sum[p] /= area[p];
+  return sum;
+}
+
+}  // namespace
+
+std::vector<Rgb> patch_mean_radiosity(const Scene& scene, const Mesh& mesh, const NodalField& field) {
+  return patch_means(scene, mesh, [&](int t) {
+    Rgb mean(0.0);
+    for (int d : field.corners[static_cast<size_t>(t)]) mean += field.radiosity[static_cast<size_t>(d)] / 3.0;
+    return mean;
+  });
+}
+
+std::vector<Rgb> patch_mean_radiosity(const Scene& scene, const Mesh& mesh, const std::vector<Rgb>& element) {
+  return patch_means(scene, mesh, [&](int t) { return element[static_cast<size_t>(t)]; });
+}
+
+}  // namespace radmesh

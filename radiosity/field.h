@@ -1,0 +1,99 @@
+// The field users see: radiosity at the vertices of the display mesh, made
+// from what a solver returns. `gather` evaluates every vertex anew: its
+// emission, the exact direct light (radiosity/direct.h) and the indirect
+// light gathered from the solved element radiosity; `fit` and `mean` are
+// made from the element values alone (compute_nodal).
+#pragma once
+
+#include "meshing/mesh.h"
+#include "meshing/progress.h"
+#include "meshing/scene.h"
+#include "radiosity/direct.h"
+#include "radiosity/solution.h"
+#include "radiosity/solve.h"
+
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace radmesh {
+
+// What the field pass did (gather only; fit and mean leave it zero).
+struct FieldReport {
+  FieldMode mode = FieldMode::gather;
+  long long display_vertices = 0;
+  DirectCounts direct;             // per (vertex, emitter) pair
+  long long on_other_surface = 0;  // vertices on another patch (a contact), taken a hair to their own side
+  long long gather_sources = 0;    // (vertex, source patch) pairs gathered
+  long long gather_nodes = 0;      // source nodes taken whole (their angular size within the bound)
+  long long gather_triangles = 0;  // source triangles taken one by one (Lambert's exact formula)
+  long long rays_cast = 0;
+  double seconds_direct = 0.0;
+  double seconds_gather = 0.0;
+};
+
+// Evaluates B = E + rho (direct + indirect irradiance) at points of the
+// scene's surfaces from a solution's element radiosity.
+//
+// Direct: DirectIllumination::reflected, exact.
+// Indirect: the reflected part of the solution, R_j = B_j - E_j, gathered
+// from every source patch q the point can see. Per source patch, a binary
+// tree over its triangles (split at the median centroid along the longest
+// axis) decides how finely the patch is taken: a node is taken whole when
+// its bounding sphere (radius r, centre at distance d) subtends
+// r / d <= kOpening (then its point form factor is A cos cos / (pi d^2) at
+// its area centroid, and the error of that approximation is O((r/d)^2)),
+// otherwise its children are; at most two triangles are taken one by one
+// with Lambert's exact formula. The node form factors are only weights
+// within the patch: their sum is scaled to the exact form factor to the
+// whole patch (Lambert's formula on its outline and holes), so a uniform
+// source is gathered exactly, and in a closed scene the form factors at a
+// point sum to 1 whatever the tree. Visibility: `rays` stratified shadow
+// rays per node or triangle taken, cast only where the shaft test finds a
+// patch that may be in the way. One random stream per (point, node), so
+// results do not depend on the thread count.
+class FieldEvaluator {
+public:
+  FieldEvaluator(const Scene& scene, const Mesh& mesh, const std::vector<Rgb>& element, const SolveOptions& options);
+  ~FieldEvaluator();
+  FieldEvaluator(const FieldEvaluator&) = delete;
+  FieldEvaluator& operator=(const FieldEvaluator&) = delete;
+
+  // Where the value of a vertex at x on `patch` is taken: x itself, or,
+  // where x lies on another patch (a contact line, where the light jumps:
+  // the floor at a block's foot is lit outside and dark under it), a hair
+  // towards `inward`, which points into the part of the
+  // surface the value belongs to. Counts the move in `report`. The hair is
+  // 1e-5 of the scene's diagonal (at most a tenth of `inward`): the shadow
+  // rays are single precision, and must start on the right side.
+  Vec3 evaluation_point(const Vec3& x, int patch, const Vec3& inward, FieldReport& report) const;
+  // B at x on `patch`: E + direct + indirect. `id` seeds the point's random
+  // streams. Thread-safe, like the two parts below.
+  Rgb radiosity(const Vec3& x, int patch, uint64_t id, FieldReport& report) const;
+  // The reflected direct light (exact) and the reflected gathered light.
+  Rgb direct(const Vec3& x, int patch, FieldReport& report) const;
+  Rgb indirect(const Vec3& x, int patch, uint64_t id, FieldReport& report) const;
+
+  static constexpr double kOpening = 0.25;
+
+private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+// The display field of `mode` over `mesh` (see compute_nodal for how
+// display vertices are made). gather: every display vertex evaluated by a
+// FieldEvaluator, in parallel, a vertex on a contact line on its own side.
+NodalField compute_field(const Scene& scene, const Mesh& mesh, const std::vector<Rgb>& element,
+                         const SolveOptions& options, FieldReport* report = nullptr,
+                         const ProgressFn& progress = {});
+
+// Per patch: the mean of the per-vertex linear field over the patch (its
+// integral over the patch's triangles divided by their area). The summary's
+// patch means.
+std::vector<Rgb> patch_mean_radiosity(const Scene& scene, const Mesh& mesh, const NodalField& field);
+// Per patch: the area-weighted mean of the element radiosity (what the
+// solver itself computed).
+std::vector<Rgb> patch_mean_radiosity(const Scene& scene, const Mesh& mesh, const std::vector<Rgb>& element);
+
+}  // namespace radmesh
