@@ -102,6 +102,16 @@ std::vector<Rgb> plates_reference(const Scene& s, const std::vector<SurfaceSampl
   return r;
 }
 
+// A scene whose light bounces once: E + the exact reflected direct light.
+std::vector<Rgb> direct_reference(const Scene& s, const std::vector<SurfaceSample>& samples) {
+  const DirectIllumination direct(s);
+  std::vector<Rgb> r(samples.size());
+  tbb::parallel_for(size_t(0), samples.size(), [&](size_t k) {
+    r[k] = s.material_of(samples[k].patch).emission + direct.reflected(samples[k].x, samples[k].patch);
+  });
+  return r;
+}
+
 // A stored converged solution (see data/README.md), at the same samples.
 std::vector<Rgb> stored_reference(const std::string& csv, const Scene& s, const std::vector<SurfaceSample>& samples) {
   std::ifstream in(csv);
@@ -131,11 +141,37 @@ std::vector<Rgb> stored_reference(const std::string& csv, const Scene& s, const 
 std::vector<Scenario> scenes(const std::string& data) {
   std::vector<Scenario> out;
   out.push_back({"furnace_cube", "furnace_cube/furnace_cube.obj", furnace_reference,
-                 {{0.5, 16, 1}, {0.3, 16, 1}, {0.2, 16, 1}, {0.12, 16, 1}},
+                 {{0.5, 16, 1},
+                  {0.3, 16, 1},
+                  {0.2, 16, 1},
+                  {0.12, 16, 1},
+                  {0.3, 16, 1, DiscontinuityMode::contacts, "matrix", {}, FieldMode::fit},
+                  {0.3, 16, 1, DiscontinuityMode::contacts, "matrix", {}, FieldMode::mean}},
                  {{0.5, 16, 1}, {0.3, 16, 1}}});
   out.push_back({"parallel_plates", "parallel_plates/parallel_plates.obj", plates_reference,
-                 {{0.5, 16, 1}, {0.25, 16, 1}, {0.12, 16, 1}, {0.06, 16, 1}, {0.04, 16, 1}},
+                 {{0.5, 16, 1},
+                  {0.25, 16, 1},
+                  {0.12, 16, 1},
+                  {0.06, 16, 1},
+                  {0.04, 16, 1},
+                  {0.25, 16, 1, DiscontinuityMode::contacts, "matrix", {}, FieldMode::fit},
+                  {0.12, 16, 1, DiscontinuityMode::contacts, "matrix", {}, FieldMode::fit},
+                  {0.25, 16, 1, DiscontinuityMode::contacts, "matrix", {}, FieldMode::mean}},
                  {{0.5, 16, 1}, {0.25, 16, 1}}});
+  // One bounce under a floating square: rho E times the exactly clipped
+  // visible form factor (radiosity/direct.h) on the floor, the emission on
+  // the light, nothing on the black occluder. Every field mode, full lines
+  // against none: the field's error is the mesh's.
+  std::vector<Settings> floating, floating_quick;
+  for (DiscontinuityMode lines : {DiscontinuityMode::full, DiscontinuityMode::off})
+    for (double edge : {0.8, 0.4, 0.2, 0.1, 0.07}) {
+      floating.push_back({edge, 16, 1, lines, "matrix", {}, FieldMode::gather});
+      if (edge <= 0.4 && edge >= 0.1) floating.push_back({edge, 16, 1, lines, "matrix", {}, FieldMode::fit});
+    }
+  floating_quick = {{0.4, 16, 1, DiscontinuityMode::full, "matrix", {}, FieldMode::gather},
+                    {0.4, 16, 1, DiscontinuityMode::off, "matrix", {}, FieldMode::gather}};
+  out.push_back({"floating_occluder", "floating_occluder/floating_occluder.obj", direct_reference, floating,
+                 floating_quick});
   const std::string ref = data + "/cornell_box/reference.csv";
   out.push_back({"cornell_box", "cornell_box/cornell_box.obj",
                  [ref](const Scene& s, const std::vector<SurfaceSample>& sm) { return stored_reference(ref, s, sm); },
@@ -167,10 +203,18 @@ std::vector<Scenario> scenes(const std::string& data) {
                   {200, 16, 1, DiscontinuityMode::contacts, "hierarchical", {{"epsilon", "0.001"}}},
                   {200, 16, 1, DiscontinuityMode::contacts, "hierarchical", {{"epsilon", "0.0005"}}},
                   {200, 16, 1, DiscontinuityMode::contacts, "hierarchical", {{"epsilon", "0.0002"}}},
-                  {200, 16, 1, DiscontinuityMode::contacts, "hierarchical", {{"epsilon", "0.0001"}}}},
+                  {200, 16, 1, DiscontinuityMode::contacts, "hierarchical", {{"epsilon", "0.0001"}}},
+                  // The same with the field made from the element values.
+                  {200, 16, 1, DiscontinuityMode::contacts, "hierarchical", {{"epsilon", "0.003"}}, FieldMode::fit},
+                  {200, 16, 1, DiscontinuityMode::contacts, "hierarchical", {{"epsilon", "0.001"}}, FieldMode::fit},
+                  {200, 16, 1, DiscontinuityMode::contacts, "hierarchical", {{"epsilon", "0.0002"}}, FieldMode::fit},
+                  {200, 16, 1, DiscontinuityMode::contacts, "hierarchical", {{"epsilon", "0.001"}}, FieldMode::mean},
+                  {45, 16, 1, DiscontinuityMode::full, "matrix", {}, FieldMode::fit},
+                  {45, 16, 1, DiscontinuityMode::full, "matrix", {}, FieldMode::mean}},
                  {{160, 16, 1},
                   {120, 16, 1},
-                  {200, 16, 1, DiscontinuityMode::contacts, "hierarchical", {{"epsilon", "0.003"}}}}});
+                  {200, 16, 1, DiscontinuityMode::contacts, "hierarchical", {{"epsilon", "0.003"}}},
+                  {200, 16, 1, DiscontinuityMode::contacts, "hierarchical", {{"epsilon", "0.003"}}, FieldMode::fit}}});
   return out;
 }
 
@@ -284,136 +328,71 @@ std::vector<Rgb> brute_gather(const Scene& scene, const Mesh& mesh, const std::v
   return out;
 }
 
-// Where the field's error comes from: the exact direct part and the
-// gathered indirect part evaluated at the samples themselves (no
-// interpolation), each against its share of the reference, per patch.
+// Where the gather field's error comes from: its direct and indirect parts
+// evaluated at the samples themselves (no interpolation), the brute-force
+// gather of the same element values beside the tree gather, and the field
+// interpolated between vertices; overall, then per patch (first channel),
+// then the samples the interpolation misses most.
 int field_parts(const Scenario& sc, const Scene& scene, const std::vector<SurfaceSample>& samples,
-                const std::vector<Rgb>& reference, Settings set) {
-  set.field = FieldMode::fit;
+                const std::vector<Rgb>& reference, const Settings& set) {
   const Method& method = find_method(set.method);
   MeshingOptions mo = method.meshing(scene);
   mo.max_edge = set.max_edge;
   mo.discontinuity = set.discontinuity;
-  const Mesh mesh = mesh_scene(scene, mo);
   SolveOptions so;
   so.rays = set.rays;
   so.quadrature.max_level = set.quad_level;
-  so.field = set.field;
-  const MethodResult r = run_method(method, scene, mesh, so, set.options);
+  so.field = FieldMode::gather;
+  const MethodResult r = run_method(method, scene, mesh_scene(scene, mo), so, set.options);
   const FieldEvaluator ev(scene, r.mesh, r.solution.element, so);
-  std::vector<Rgb> direct(samples.size()), indirect(samples.size()), ref_direct(samples.size()),
-      ref_indirect(samples.size());
+  const size_t n = samples.size();
+  std::vector<Rgb> direct(n), indirect(n), ref_indirect(n), total(n);
   FieldReport rep;
-  for (size_t k = 0; k < samples.size(); ++k) {
+  for (size_t k = 0; k < n; ++k) {
     direct[k] = ev.direct(samples[k].x, samples[k].patch, rep);
     indirect[k] = ev.indirect(samples[k].x, samples[k].patch, k, rep);
-    ref_direct[k] = direct[k];
     ref_indirect[k] = reference[k] - scene.material_of(samples[k].patch).emission - direct[k];
+    total[k] = direct[k] + indirect[k];
   }
-  // The brute-force gather of the same element values.
   std::vector<Rgb> source(r.solution.element.size());
   for (size_t t = 0; t < source.size(); ++t)
     source[t] = r.solution.element[t] - scene.material_of(r.mesh.patch[t]).emission;
-  const std::vector<Rgb> flat_indirect = brute_gather(scene, r.mesh, source, samples, so);
+  const std::vector<Rgb> brute = brute_gather(scene, r.mesh, source, samples, so);
   const auto ref = reflected_part(scene, samples, reference);
-  std::vector<Rgb> total(samples.size());
-  for (size_t k = 0; k < samples.size(); ++k) total[k] = direct[k] + indirect[k];
-  const FieldError et = field_error(samples, total, ref);
-  const FieldError ei = field_error(samples, indirect, ref_indirect);
-  std::printf("%s: point values: L2 %.3e patch %.3e; indirect alone L2 %.3e patch %.3e\n", sc.name.c_str(), et.l2,
-              et.patch_mean, ei.l2, ei.patch_mean);
-  so.field = FieldMode::gather;
-  const NodalField gathered = compute_field(scene, r.mesh, r.solution.element, so);
-  const auto interp = reflected_part(scene, samples, interpolate_nodal(scene, r.mesh, gathered, samples));
+  const auto interp = reflected_part(scene, samples, interpolate_nodal(scene, r.mesh, r.solution.nodal, samples));
+  const FieldError et = field_error(samples, total, ref), ei = field_error(samples, indirect, ref_indirect);
   const FieldError eg = field_error(samples, interp, ref);
-  std::printf("interpolated: L2 %.3e patch %.3e\n", eg.l2, eg.patch_mean);
-  {
-    std::vector<std::pair<double, size_t>> worst;
-    for (size_t k = 0; k < samples.size(); ++k) worst.emplace_back(std::abs(interp[k].x - total[k].x), k);
-    std::sort(worst.rbegin(), worst.rend());
-    for (size_t i = 0; i < 12; ++i) {
-      const size_t k = worst[i].second;
-      std::printf("  sample %zu %s (%.1f %.1f %.1f): interp %.4f point %.4f (direct %.4f indirect %.4f) ref %.4f\n", k,
-                  scene.patches[static_cast<size_t>(samples[k].patch)].name.c_str(), samples[k].x.x, samples[k].x.y,
-                  samples[k].x.z, interp[k].x, total[k].x, direct[k].x, indirect[k].x, ref[k].x);
-    }
-  }
-  {
-    const DirectIllumination exact_direct(scene);
-    const auto dv = interpolate_nodal(scene, r.mesh, direct_field(exact_direct, r.mesh), samples);
-    const FieldError ed = field_error(samples, dv, direct);
-    std::vector<Rgb> mixed(samples.size());
-    for (size_t k = 0; k < samples.size(); ++k) mixed[k] = dv[k] + indirect[k];
-    const FieldError em = field_error(samples, mixed, ref);
-    std::vector<std::pair<double, std::string>> diffs;
-    for (int t = 0; t < r.mesh.triangle_count(); ++t) {
-      if (r.mesh.zero_area(t)) continue;
-      for (int k = 0; k < 3; ++k) {
-        const int d = gathered.corners[static_cast<size_t>(t)][static_cast<size_t>(k)];
-        const Vec3 x = gathered.points[static_cast<size_t>(d)];
-        const Vec3 c = r.mesh.centroid(t);
-        const int pt = r.mesh.patch[static_cast<size_t>(t)];
-        const Rgb hair = exact_direct.reflected(x + 1e-7 * (c - x), pt);
-        const Rgb at = exact_direct.reflected(x, pt);
-        const double diff = std::abs(hair.x - at.x);
-        if (diff > 1e-3 * std::max(1.0, hair.x)) {
-          char buf[300];
-          std::snprintf(buf, sizeof buf, "patch %s x %.3f %.3f %.3f hair %.4f at %.4f", scene.patches[pt].name.c_str(), x.x, x.y, x.z, hair.x, at.x);
-          diffs.emplace_back(diff, buf);
-        }
-      }
-    }
-    std::sort(diffs.rbegin(), diffs.rend());
-    std::printf("%zu corners differ\n", diffs.size());
-    for (size_t i = 0; i < std::min<size_t>(diffs.size(), 15); ++i) std::printf("  %s\n", diffs[i].second.c_str());
-    {
-      NodalField ind = gathered, dir = gathered;
-      FieldReport rp;
-      std::vector<int> pp(gathered.points.size(), -1);
-      std::vector<Vec3> inw(gathered.points.size(), Vec3(0.0));
-      for (int t = 0; t < r.mesh.triangle_count(); ++t)
-        for (int d : gathered.corners[static_cast<size_t>(t)]) {
-          pp[static_cast<size_t>(d)] = r.mesh.patch[static_cast<size_t>(t)];
-          inw[static_cast<size_t>(d)] += r.mesh.area(t) * (r.mesh.centroid(t) - gathered.points[static_cast<size_t>(d)]);
-        }
-      for (size_t d = 0; d < ind.points.size(); ++d) {
-        ind.radiosity[d] = ev.indirect(ind.points[d], pp[d], d, rp);
-        const Vec3 at = ev.evaluation_point(ind.points[d], pp[d], inw[d], rp);
-        ind.radiosity[d] = ev.indirect(at, pp[d], d, rp);
-        dir.radiosity[d] = ev.direct(at, pp[d], rp);
-      }
-      const auto iv = interpolate_nodal(scene, r.mesh, ind, samples);
-      const auto dv2 = interpolate_nodal(scene, r.mesh, dir, samples);
-      const FieldError ei2 = field_error(samples, iv, indirect);
-      const FieldError ed2 = field_error(samples, dv2, direct);
-      std::printf("my vertices: indirect interpolated vs indirect at points: L2 %.3e patch %.3e; direct: L2 %.3e patch %.3e\n", ei2.l2, ei2.patch_mean, ed2.l2, ed2.patch_mean);
-    }
-    std::printf("direct alone interpolated (corners per triangle): L2 %.3e patch %.3e; with exact-point indirect: L2 %.3e\n", ed.l2, ed.patch_mean, em.l2);
-  }
+  std::printf("%s: at the samples L2 %.3e, worst patch mean %.3e (indirect part alone %.3e, %.3e); "
+              "interpolated between vertices L2 %.3e, worst patch mean %.3e\n",
+              sc.name.c_str(), et.l2, et.patch_mean, ei.l2, ei.patch_mean, eg.l2, eg.patch_mean);
+  std::printf("  %-18s %8s %8s %8s %8s  (patch means against the reference, first channel)\n", "patch", "field",
+              "samples", "indirect", "brute");
   for (size_t p = 0; p < scene.patches.size(); ++p) {
-    Rgb a(0.0), b(0.0), c(0.0);
-    double worst = 0.0;
-    for (size_t k = 0; k < samples.size(); ++k)
+    Rgb sums[6] = {Rgb(0.0), Rgb(0.0), Rgb(0.0), Rgb(0.0), Rgb(0.0), Rgb(0.0)};
+    for (size_t k = 0; k < n; ++k)
       if (samples[k].patch == static_cast<int>(p)) {
-        a += samples[k].weight * interp[k];
-        b += samples[k].weight * total[k];
-        c += samples[k].weight * ref[k];
-        worst = std::max(worst, std::abs(interp[k].x - total[k].x));
+        const double w = samples[k].weight;
+        sums[0] += w * interp[k];
+        sums[1] += w * total[k];
+        sums[2] += w * ref[k];
+        sums[3] += w * indirect[k];
+        sums[4] += w * brute[k];
+        sums[5] += w * ref_indirect[k];
       }
-    std::printf("  %-18s interpolated %.4e points %.4e ref %.4e (%.2f%% %.2f%%) worst %.3e\n", scene.patches[p].name.c_str(),
-                a.x, b.x, c.x, 100.0 * (a.x / c.x - 1.0), 100.0 * (b.x / c.x - 1.0), worst);
+    if (sums[2].x <= 0.0) continue;
+    auto rel = [](double a, double b) { return b > 0.0 ? 100.0 * (a / b - 1.0) : 0.0; };
+    std::printf("  %-18s %+7.2f%% %+7.2f%% %+7.2f%% %+7.2f%%\n", scene.patches[p].name.c_str(),
+                rel(sums[0].x, sums[2].x), rel(sums[1].x, sums[2].x), rel(sums[3].x, sums[5].x),
+                rel(sums[4].x, sums[5].x));
   }
-  for (size_t p = 0; p < scene.patches.size(); ++p) {
-    Rgb a(0.0), b(0.0), c(0.0), d(0.0);
-    for (size_t k = 0; k < samples.size(); ++k)
-      if (samples[k].patch == static_cast<int>(p)) {
-        a += samples[k].weight * indirect[k];
-        b += samples[k].weight * ref_indirect[k];
-        c += samples[k].weight * ref_direct[k];
-        d += samples[k].weight * flat_indirect[k];
-      }
-    std::printf("  %-18s indirect %.4e ref %.4e (%.2f%%)  brute %.4e (%.2f%%)  direct %.4e\n",
-                scene.patches[p].name.c_str(), a.x, b.x, 100.0 * (a.x / b.x - 1.0), d.x, 100.0 * (d.x / b.x - 1.0), c.x);
+  std::vector<std::pair<double, size_t>> worst;
+  for (size_t k = 0; k < n; ++k) worst.emplace_back(std::abs(interp[k].x - total[k].x), k);
+  std::sort(worst.rbegin(), worst.rend());
+  for (size_t i = 0; i < std::min<size_t>(10, n); ++i) {
+    const size_t k = worst[i].second;
+    std::printf("  sample %zu on %s (%g %g %g): field %.4g, at the sample %.4g (direct %.4g), reference %.4g\n", k,
+                scene.patches[static_cast<size_t>(samples[k].patch)].name.c_str(), samples[k].x.x, samples[k].x.y,
+                samples[k].x.z, interp[k].x, total[k].x, direct[k].x, ref[k].x);
   }
   return 0;
 }

@@ -208,6 +208,12 @@ int run(Params& p, bool solving) {
     rep.end();
     for (const auto& phase : result->seconds) info.seconds.push_back(phase);
     if (!result->report.empty()) rep.note(result->report);
+    const FieldReport& f = result->field;
+    if (f.mode == FieldMode::gather)
+      rep.note("field: gather at " + std::to_string(f.display_vertices) + " vertices; direct light " +
+               std::to_string(f.direct.unoccluded) + " unoccluded, " + std::to_string(f.direct.hidden) +
+               " hidden, " + std::to_string(f.direct.clipped) + " clipped exactly; " +
+               std::to_string(f.rays_cast) + " gather rays");
   }
   const Mesh& out_mesh = result ? result->mesh : mesh;
   const TriangleQuality out_quality = compute_quality(out_mesh);
