@@ -48,10 +48,13 @@ struct FieldReport {
 // within the patch: their sum is scaled to the exact form factor to the
 // whole patch (Lambert's formula on its outline and holes), so a uniform
 // source is gathered exactly, and in a closed scene the form factors at a
-// point sum to 1 whatever the tree. Visibility: `rays` stratified shadow
-// rays per node or triangle taken, cast only where the shaft test finds a
-// patch that may be in the way. One random stream per (point, node), so
-// results do not depend on the thread count.
+// point sum to 1 whatever the tree. Visibility: options.rays / 4
+// stratified shadow rays per node or triangle taken, cast only where the
+// shaft test finds a patch that may be in the way; each ray also samples
+// the source's radiosity where it lands, weighted by the point form
+// factor's kernel there (visibility and radiosity are correlated: the part
+// of a source hidden from x is often its dark part). One random stream per
+// (point, node), so results do not depend on the thread count.
 class FieldEvaluator {
 public:
   FieldEvaluator(const Scene& scene, const Mesh& mesh, const std::vector<Rgb>& element, const SolveOptions& options);
