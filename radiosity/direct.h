@@ -14,7 +14,7 @@ namespace radmesh {
 
 // What the direct pass did, per (point, emitter) pair.
 struct DirectCounts {
-  long long behind = 0;      // the point is behind the emitter's plane: zero
+  long long behind = 0;      // x behind the emitter, or the emitter behind x's tangent plane: zero
   long long unoccluded = 0;  // the shaft test cleared every occluder: Lambert's formula
   long long clipped = 0;     // exact clip of the occluders the test could not clear
   long long dark = 0;        // ... of which wholly hidden
@@ -55,12 +55,13 @@ public:
   // Direct radiosity reflected at x on `patch`: rho * sum over emitters of
   // E_emitter * the visible form factor (per channel). Emission of `patch`
   // itself is not included. Takes the cheapest exact path per emitter: zero
-  // when x is behind it; Lambert's formula when a separating-axis test
-  // (double precision, with a margin far above rounding) clears every
-  // occluder triangle of the pyramid from x over the emitter; zero when the
-  // segments from x to every corner of the emitter cross one convex occluder
-  // inside its outline; otherwise the exact clip of only the triangles the
-  // test could not clear. Adds what it did to `counts` when given.
+  // when x is behind it or it is behind x's tangent plane; Lambert's formula
+  // when a separating-axis test (double precision, with a margin far above
+  // rounding) clears every occluder triangle of the pyramid from x over the
+  // emitter; zero when the segments from x to every corner of the emitter
+  // cross one convex occluder inside its outline; otherwise the exact clip
+  // of only the triangles the test could not clear. Adds what it did to
+  // `counts` when given.
   Rgb reflected(const Vec3& x, int patch, DirectCounts* counts = nullptr) const;
 
 private:

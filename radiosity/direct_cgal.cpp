@@ -297,12 +297,16 @@ struct DirectIllumination::Impl {
   }
 
   // The visible form factor by the cheapest exact path: 0 behind the
-  // emitter, Lambert's formula when the shaft is clear, 0 when one convex
+  // emitter or facing away from it, Lambert's formula when the shaft is clear, 0 when one convex
   // occluder hides it all, the exact clip of the triangles that may be in
   // it otherwise.
   double fast_visible(const Vec3& x, const Vec3& n, int receiver, const Emitter& e, DirectCounts& counts,
                       std::vector<int>& scratch) const {
-    if (e.plane.oriented_side(exact(x)) != CGAL::ON_POSITIVE_SIDE) {
+    // Behind the emitter, or the emitter's outline wholly behind x's tangent
+    // plane (a surface facing away from the light): nothing to see.
+    const bool faces_away =
+        std::none_of(e.loops[0].begin(), e.loops[0].end(), [&](const Vec3& v) { return glm::dot(n, v - x) > 0.0; });
+    if (faces_away || e.plane.oriented_side(exact(x)) != CGAL::ON_POSITIVE_SIDE) {
       ++counts.behind;
       return 0.0;
     }
