@@ -30,6 +30,7 @@ using PolygonWithHoles2 = CGAL::Polygon_with_holes_2<EK>;
 using PolygonSet2 = CGAL::Polygon_set_2<EK>;
 
 Point3 exact(const Vec3& p) { return Point3(p.x, p.y, p.z); }
+Vec3 rounded(const Point3& p) { return Vec3(CGAL::to_double(p.x()), CGAL::to_double(p.y()), CGAL::to_double(p.z())); }
 
 struct Emitter {
   int patch = -1;
@@ -50,6 +51,8 @@ struct Emitter {
     if (drop == 1) return EK::Point_2(p.z(), p.x());
     return EK::Point_2(p.x(), p.y());
   }
+  // A loop of the 2-D map lifted back onto the plane, rounded to double.
+  std::vector<Vec3> lifted(const Polygon2& poly) const;
   // The point of the plane above a 2-D point (exact).
   Point3 lift(const EK::Point_2& q) const {
     const EK::FT a = plane.a(), b = plane.b(), c = plane.c(), d = plane.d();
@@ -58,6 +61,12 @@ struct Emitter {
     return Point3(q.x(), q.y(), -(a * q.x() + b * q.y() + d) / c);
   }
 };
+
+std::vector<Vec3> Emitter::lifted(const Polygon2& poly) const {
+  std::vector<Vec3> out;
+  for (auto v = poly.vertices_begin(); v != poly.vertices_end(); ++v) out.push_back(rounded(lift(*v)));
+  return out;
+}
 
 struct OccluderTriangle {
   int patch;
@@ -171,19 +180,11 @@ struct DirectIllumination::Impl {
     std::vector<PolygonWithHoles2> parts;
     lit.polygons_with_holes(std::back_inserter(parts));
     double sum = 0.0;
-    auto loop3 = [&](const Polygon2& p) {
-      std::vector<Vec3> out;
-      for (auto v = p.vertices_begin(); v != p.vertices_end(); ++v) {
-        const Point3 q = e.lift(*v);
-        out.emplace_back(CGAL::to_double(q.x()), CGAL::to_double(q.y()), CGAL::to_double(q.z()));
-      }
-      return out;
-    };
     for (const PolygonWithHoles2& part : parts) {
-      const std::vector<Vec3> outer = loop3(part.outer_boundary());
+      const std::vector<Vec3> outer = e.lifted(part.outer_boundary());
       sum += lambert_contour_sum(x, n, outer.data(), outer.size());
       for (auto h = part.holes_begin(); h != part.holes_end(); ++h) {
-        const std::vector<Vec3> hole = loop3(*h);
+        const std::vector<Vec3> hole = e.lifted(*h);
         sum += lambert_contour_sum(x, n, hole.data(), hole.size());
       }
     }
@@ -395,25 +396,14 @@ DirectIllumination::DirectIllumination(const Scene& scene) : impl_(std::make_uni
                                {box.xmax() + pad, box.ymax() + pad},
                                {box.xmin() - pad, box.ymax() + pad}};
     for (int i = 0; i < 4; ++i) e.corners[static_cast<size_t>(i)] = e.lift(c2[i]);
-    e.lo = e.hi = Vec3(CGAL::to_double(e.corners[0].x()), CGAL::to_double(e.corners[0].y()),
-                       CGAL::to_double(e.corners[0].z()));
-    for (const Point3& q : e.corners) {
-      const Vec3 d(CGAL::to_double(q.x()), CGAL::to_double(q.y()), CGAL::to_double(q.z()));
+    for (const Point3& q : e.corners) e.base.push_back(rounded(q));
+    e.lo = e.hi = e.base[0];
+    for (const Vec3& d : e.base) {
       e.lo = glm::min(e.lo, d);
       e.hi = glm::max(e.hi, d);
     }
-    for (const Point3& q : e.corners)
-      e.base.emplace_back(CGAL::to_double(q.x()), CGAL::to_double(q.y()), CGAL::to_double(q.z()));
-    auto lifted = [&](const Polygon2& poly) {
-      std::vector<Vec3> out;
-      for (auto v = poly.vertices_begin(); v != poly.vertices_end(); ++v) {
-        const Point3 q = e.lift(*v);
-        out.emplace_back(CGAL::to_double(q.x()), CGAL::to_double(q.y()), CGAL::to_double(q.z()));
-      }
-      return out;
-    };
-    e.loops.push_back(lifted(e.shape.outer_boundary()));
-    for (auto h = e.shape.holes_begin(); h != e.shape.holes_end(); ++h) e.loops.push_back(lifted(*h));
+    e.loops.push_back(e.lifted(e.shape.outer_boundary()));
+    for (auto h = e.shape.holes_begin(); h != e.shape.holes_end(); ++h) e.loops.push_back(e.lifted(*h));
     if (patch.holes.empty() && e.shape.outer_boundary().is_convex()) e.base = e.loops[0];
     for (const Vec3& b : e.base) e.base_centre += b / static_cast<double>(e.base.size());
     for (size_t t = 0; t < impl_->occluders.size(); ++t) {

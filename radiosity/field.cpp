@@ -119,13 +119,14 @@ NodalMethod nodal_method(FieldMode mode) { return mode == FieldMode::mean ? Noda
 
 struct FieldEvaluator::Impl {
   const Scene& scene;
-  SolveOptions options;
+  int rays_per_node = 1;  // options.rays / 4, at least 1
   DirectIllumination direct;
   Occlusion occlusion;
   std::unique_ptr<Visibility> visibility;
   std::vector<SourceTree> sources;  // per patch (empty tree: reflects nothing)
 
-  Impl(const Scene& s, const SolveOptions& o) : scene(s), options(o), direct(s), occlusion(s) {}
+  Impl(const Scene& s, const SolveOptions& o)
+      : scene(s), rays_per_node(std::max(1, o.rays / 4)), direct(s), occlusion(s) {}
 
   // The mean of V(x, y) R(y) over area-uniform stratified points y of
   // triangles order[begin .. end) of source q, by shadow rays from x (on
@@ -136,7 +137,7 @@ struct FieldEvaluator::Impl {
   Rgb visible_reflected(const Vec3& x, const Vec3& n, int p, int q, const SourceTree& tree, int begin, int end,
                         uint64_t seed, long long& rays) const {
     SplitMix rng(seed);
-    const int k = std::max(1, options.rays / 4);
+    const int k = rays_per_node;
     Rgb sum(0.0);
     double weight = 0.0;
     for (int s = 0; s < k; ++s) {
