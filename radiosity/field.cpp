@@ -231,7 +231,7 @@ Rgb FieldEvaluator::indirect(const Vec3& x, int patch, uint64_t id, FieldReport&
     const double fq = patch_form_factor(x, n, s.loops, s.normal);
     if (fq <= 0.0) continue;
     ++report.gather_sources;
-    const bool occludable = m.visibility && !m.occlusion.candidates(patch, static_cast<int>(q)).empty();
+    const bool occludable = m.visibility && m.occlusion.may_occlude(patch, static_cast<int>(q));
     // One random stream per (point, source node or triangle).
     const uint64_t stream = pair_seed(id, q);
     double weight = 0.0;

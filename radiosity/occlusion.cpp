@@ -1,24 +1,11 @@
 #include "radiosity/occlusion.h"
 
-#include <tbb/parallel_for.h>
-
 #include <algorithm>
 #include <limits>
 
 namespace radmesh {
 
 namespace {
-
-struct Box {
-  Vec3 lo{std::numeric_limits<double>::infinity()}, hi{-std::numeric_limits<double>::infinity()};
-  void add(const Vec3& p) {
-    lo = glm::min(lo, p);
-    hi = glm::max(hi, p);
-  }
-  bool overlaps(const Vec3& olo, const Vec3& ohi, double eps) const {
-    return !(glm::any(glm::lessThan(hi + eps, olo)) || glm::any(glm::lessThan(ohi + eps, lo)));
-  }
-};
 
 // True when every point of `k` lies strictly outside some supporting plane
 // of the convex hull of a and b: then k cannot meet any segment from a to b.
@@ -76,45 +63,72 @@ Occlusion::Occlusion(const Scene& scene) {
   const size_t np = scene.patches.size();
   eps_ = 1e-9 * scene.diagonal();
   polys_.resize(np);
+  std::vector<Box3> boxes(np);
   for (size_t p = 0; p < np; ++p) {
     Poly& poly = polys_[p];
     poly.v = scene.loop_points(scene.patches[p].outer);
     poly.normal = scene.patches[p].normal;
-    Box b;
-    for (const Vec3& v : poly.v) b.add(v);
-    poly.lo = b.lo;
-    poly.hi = b.hi;
+    for (const Vec3& v : poly.v) poly.box.add(v);
+    boxes[p] = poly.box;
   }
+  // Convex enclosure: no vertex behind any patch. The scene's bounding-box
+  // corners decide most patches at once (every vertex lies in the box, so a
+  // patch with all eight corners in front has every vertex in front).
+  Box3 all;
+  for (const Poly& poly : polys_) all.add(poly.box);
   convex_ = true;
-  for (size_t p = 0; p < np && convex_; ++p)
+  for (size_t p = 0; p < np && convex_; ++p) {
+    bool corners_in_front = true;
+    for (int c = 0; c < 8 && corners_in_front; ++c) {
+      const Vec3 corner((c & 1) ? all.hi.x : all.lo.x, (c & 2) ? all.hi.y : all.lo.y, (c & 4) ? all.hi.z : all.lo.z);
+      corners_in_front = glm::dot(corner - polys_[p].v[0], polys_[p].normal) >= -eps_;
+    }
+    if (corners_in_front) continue;
     for (const Vec3& v : scene.vertices)
       if (glm::dot(v - polys_[p].v[0], polys_[p].normal) < -eps_) {
         convex_ = false;
         break;
       }
-  cand_.resize(np * np);
+  }
   if (convex_) return;
-  tbb::parallel_for(size_t(0), np, [&](size_t p) {
-    for (size_t q = p + 1; q < np; ++q) {
-      Box pq;
-      for (const Vec3& v : polys_[p].v) pq.add(v);
-      for (const Vec3& v : polys_[q].v) pq.add(v);
-      std::vector<int>& out = cand_[p * np + q];
-      for (size_t k = 0; k < np; ++k) {
-        if (k == p || k == q) continue;
-        if (!pq.overlaps(polys_[k].lo, polys_[k].hi, eps_)) continue;
-        if (separated(polys_[p].v, polys_[q].v, polys_[k].v, polys_[p].normal, polys_[q].normal, eps_))
-          continue;
-        out.push_back(static_cast<int>(k));
-      }
-    }
-  });
+  tree_ = BoxTree(boxes);
+  if (np <= kCachedPatches) {
+    pair_ = std::make_unique<std::atomic<unsigned char>[]>(np * np);
+    for (size_t i = 0; i < np * np; ++i) pair_[i].store(0, std::memory_order_relaxed);
+  }
 }
 
-const std::vector<int>& Occlusion::candidates(int p, int q) const {
+template <class A, class B>
+bool Occlusion::shaft_blocked(int pa, int pb, const A& a, const B& b, const Vec3& na, const Vec3& nb) const {
+  Box3 shaft;
+  for (const Vec3& v : a) shaft.add(v);
+  for (const Vec3& v : b) shaft.add(v);
+  int tests = 0;
+  bool blocked = false;
+  tree_.overlapping(shaft, eps_, [&](int k) {
+    if (k == pa || k == pb) return true;
+    if (++tests > kMaxTests || !separated(a, b, polys_[static_cast<size_t>(k)].v, na, nb, eps_)) {
+      blocked = true;
+      return false;
+    }
+    return true;
+  });
+  return blocked;
+}
+
+bool Occlusion::may_occlude(int p, int q) const {
+  if (convex_ || p == q) return false;
   const size_t np = polys_.size();
   const size_t a = static_cast<size_t>(std::min(p, q)), b = static_cast<size_t>(std::max(p, q));
-  return cand_[a * np + b];
+  if (pair_) {
+    const unsigned char known = pair_[a * np + b].load(std::memory_order_relaxed);
+    if (known) return known == 2;
+  }
+  const Poly& pp = polys_[a];
+  const Poly& pq = polys_[b];
+  const bool blocked = shaft_blocked(static_cast<int>(a), static_cast<int>(b), pp.v, pq.v, pp.normal, pq.normal);
+  if (pair_) pair_[a * np + b].store(blocked ? 2 : 1, std::memory_order_relaxed);
+  return blocked;
 }
 
 bool Occlusion::facing(int p, int q) const {
@@ -136,18 +150,8 @@ double Occlusion::distance(int p, const Vec3& x) const {
 bool Occlusion::may_occlude(int pa, int pb, const Triangle& a, const Triangle& b) const {
   if (convex_) return false;
   if (pa == pb) return false;  // a planar patch: a segment between its points stays in its plane
-  const auto& cands = candidates(pa, pb);
-  if (cands.empty()) return false;
-  Box ab;
-  for (const Vec3& v : a.v) ab.add(v);
-  for (const Vec3& v : b.v) ab.add(v);
-  for (int k : cands) {
-    const Poly& poly = polys_[static_cast<size_t>(k)];
-    if (!ab.overlaps(poly.lo, poly.hi, eps_)) continue;
-    if (separated(a.v, b.v, poly.v, a.normal, b.normal, eps_)) continue;
-    return true;
-  }
-  return false;
+  if (pair_ && !may_occlude(pa, pb)) return false;  // the patches' shaft is clear, so is theirs
+  return shaft_blocked(pa, pb, a.v, b.v, a.normal, b.normal);
 }
 
 }  // namespace radmesh

@@ -1,10 +1,17 @@
 // Which patches can block the light between two others: a conservative shaft
 // test, so that shadow rays are cast only where something can be in the way.
+// The patches that may lie in a shaft are found by a box tree over the
+// patches (O(log P + hits) per query, nothing stored per pair of patches);
+// a shaft with more than kMaxTests boxes in it is taken as occludable
+// without further tests (shadow rays are cheaper than the tests then).
 #pragma once
 
+#include "meshing/box_tree.h"
 #include "meshing/scene.h"
 #include "radiosity/form_factor.h"
 
+#include <atomic>
+#include <memory>
 #include <vector>
 
 namespace radmesh {
@@ -17,8 +24,9 @@ public:
   // is one convex enclosure (or part of one) and nothing occludes anything.
   bool convex_enclosure() const { return convex_; }
 
-  // Patches that may lie between patches p and q (shaft test), p != q order-free.
-  const std::vector<int>& candidates(int p, int q) const;
+  // Some patch may lie between patches p and q (shaft test), order-free.
+  // Remembered per pair where the scene has at most kCachedPatches patches.
+  bool may_occlude(int p, int q) const;
 
   // Patch q has a point strictly in front of patch p's plane and p one in
   // front of q's: they can exchange light.
@@ -30,14 +38,23 @@ public:
   // Whether some patch may lie between elements a (of patch pa) and b (of pb).
   bool may_occlude(int pa, int pb, const Triangle& a, const Triangle& b) const;
 
+  static constexpr int kMaxTests = 64;
+  static constexpr size_t kCachedPatches = 4096;
+
 private:
   struct Poly {
     std::vector<Vec3> v;
     Vec3 normal;
-    Vec3 lo, hi;
+    Box3 box;
   };
+  // A patch other than pa and pb, with its box in `shaft`, that may lie
+  // between the convex polygons a and b (normals na, nb).
+  template <class A, class B>
+  bool shaft_blocked(int pa, int pb, const A& a, const B& b, const Vec3& na, const Vec3& nb) const;
   std::vector<Poly> polys_;
-  std::vector<std::vector<int>> cand_;  // np * np, filled for p < q
+  BoxTree tree_;
+  // Per pair p < q when the scene is small: 0 unknown, 1 clear, 2 may occlude.
+  std::unique_ptr<std::atomic<unsigned char>[]> pair_;
   double eps_ = 0.0;
   bool convex_ = false;
 };
