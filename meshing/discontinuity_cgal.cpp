@@ -1,6 +1,7 @@
 // Discontinuity lines with exact constructions: contacts (D0) and the
 // shadow boundaries of emitter polygons (D1/D2).
 
+#include "meshing/box_tree.h"
 #include "meshing/discontinuity.h"
 #include "meshing/errors.h"
 
@@ -171,12 +172,25 @@ std::vector<DiscontinuitySegment> contact_segments(const Scene& scene) {
   const double eps = 1e-9 * scene.diagonal();
   const std::vector<Poly> polys = make_polys(scene);
   std::vector<DiscontinuitySegment> out;
-  for (size_t p = 0; p < polys.size(); ++p)
-    for (size_t q = 0; q < polys.size(); ++q) {
+  std::vector<Box3> boxes(polys.size());
+  for (size_t p = 0; p < polys.size(); ++p) {
+    boxes[p].lo = polys[p].lo;
+    boxes[p].hi = polys[p].hi;
+  }
+  const BoxTree tree(boxes);
+  std::vector<int> near;
+  for (size_t p = 0; p < polys.size(); ++p) {
+    near.clear();
+    tree.overlapping(boxes[p], eps, [&](int q) {
+      near.push_back(q);
+      return true;
+    });
+    std::sort(near.begin(), near.end());  // in patch order, as a scan would find them
+    for (int qi : near) {
+      const size_t q = static_cast<size_t>(qi);
       if (p == q) continue;
       const Poly& t = polys[p];
       const Poly& o = polys[q];
-      if (glm::any(glm::lessThan(t.hi + eps, o.lo)) || glm::any(glm::lessThan(o.hi + eps, t.lo))) continue;
       if (glm::length(glm::cross(t.normal, o.normal)) <= 1e-12) continue;  // parallel or coplanar
       for (const auto& [a, b] : slice(o, t, eps))
         for (const auto& [c, d] : clip(t, a, b, eps)) {
@@ -188,6 +202,7 @@ std::vector<DiscontinuitySegment> contact_segments(const Scene& scene) {
           out.push_back(seg);
         }
     }
+  }
   return out;
 }
 

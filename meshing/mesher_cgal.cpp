@@ -12,6 +12,7 @@
 // patch's interior points from its last refinement are kept), so the result
 // is always conforming.
 
+#include "meshing/box_tree.h"
 #include "meshing/errors.h"
 #include "meshing/mesh.h"
 
@@ -280,9 +281,22 @@ private:
       lo[s] = glm::min(A, B) - Vec3(eps_);
       hi[s] = glm::max(A, B) + Vec3(eps_);
     }
-    for (size_t s = 0; s < n; ++s)
-      for (size_t r = s + 1; r < n; ++r) {
-        if (glm::any(glm::lessThan(hi[s], lo[r])) || glm::any(glm::lessThan(hi[r], lo[s]))) continue;
+    std::vector<Box3> boxes(n);
+    for (size_t s = 0; s < n; ++s) {
+      boxes[s].lo = lo[s];
+      boxes[s].hi = hi[s];
+    }
+    const BoxTree tree(boxes);
+    std::vector<int> near;
+    for (size_t s = 0; s < n; ++s) {
+      near.clear();
+      tree.overlapping(boxes[s], 0.0, [&](int r) {
+        if (static_cast<size_t>(r) > s) near.push_back(r);
+        return true;
+      });
+      std::sort(near.begin(), near.end());
+      for (int ri : near) {
+        const size_t r = static_cast<size_t>(ri);
         double ta, tb;
         if (!on_line(s, positions_[static_cast<size_t>(segments_[r].a)], &ta) ||
             !on_line(s, positions_[static_cast<size_t>(segments_[r].b)], &tb))
@@ -294,6 +308,7 @@ private:
         overlaps_[s].push_back(static_cast<int>(r));
         overlaps_[r].push_back(static_cast<int>(s));
       }
+    }
   }
 
   // A point of segment s (endpoints included) within eps of p, or -1.
@@ -410,15 +425,23 @@ private:
       }
     }
     // Vertices of non-collinear patches touching a segment's interior.
+    std::vector<Box3> points(scene_.vertices.size());
+    for (size_t v = 0; v < points.size(); ++v) points[v].add(scene_.vertices[v]);
+    const BoxTree vertex_tree(points);
+    std::vector<int> near;
     for (size_t s = 0; s < segments_.size(); ++s) {
       const Vec3 A = positions_[static_cast<size_t>(segments_[s].a)];
       const Vec3 B = positions_[static_cast<size_t>(segments_[s].b)];
-      const Vec3 lo = glm::min(A, B) - Vec3(eps_), hi = glm::max(A, B) + Vec3(eps_);
-      for (int v = 0; v < static_cast<int>(scene_.vertices.size()); ++v) {
-        const Vec3& p = scene_.vertices[static_cast<size_t>(v)];
-        if (glm::any(glm::lessThan(p, lo)) || glm::any(glm::greaterThan(p, hi))) continue;
-        add_point(s, v, nullptr);
-      }
+      Box3 box;
+      box.add(A);
+      box.add(B);
+      near.clear();
+      vertex_tree.overlapping(box, eps_, [&](int v) {
+        near.push_back(v);
+        return true;
+      });
+      std::sort(near.begin(), near.end());  // in vertex order, as a scan would find them
+      for (int v : near) add_point(s, v, nullptr);
     }
     // Even pre-split of every segment to the maximum edge length; points are
     // created once per distinct segment (shared by the segments overlapping it

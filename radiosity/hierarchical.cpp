@@ -4,6 +4,7 @@
 
 #include "meshing/errors.h"
 #include "radiosity/form_factor.h"
+#include "radiosity/sampling.h"
 #include "radiosity/transport.h"
 
 #include <tbb/blocked_range.h>
@@ -15,6 +16,7 @@
 #include <cmath>
 #include <string>
 #include <limits>
+#include <numbers>
 #include <set>
 #include <unordered_map>
 
@@ -58,6 +60,15 @@ public:
     const ElementTree& tree = out_.tree;
     report("link", 0.0);
     auto t0 = std::chrono::steady_clock::now();
+    if (hopt_.clusters == ClusterMode::volume && tree.root_count() >= 2) {
+      build_clusters();
+      link_pairs(link_cluster_pairs({{cluster_code(0), cluster_code(0)}}));
+      report("link", 1.0);
+      close_t_vertices();
+      st.seconds_link += seconds_since(t0);
+      solve_round();
+      return;
+    }
     // Every root pair whose patches face each other becomes at least one
     // link: refuse at once when those alone would not fit the memory limit.
     std::vector<long long> per_patch(scene_.patches.size(), 0);
@@ -120,7 +131,8 @@ public:
     out_.stats.links = count_links();
     out_.links.assign(links_.size(), {});
     for (size_t p = 0; p < links_.size(); ++p)
-      for (const Link& l : links_[p]) out_.links[p].push_back({l.source, l.f * l.visible, l.visible});
+      for (const Link& l : links_[p])
+        if (l.source >= 0) out_.links[p].push_back({l.source, l.f * l.visible, l.visible});
   }
 
 private:
@@ -320,22 +332,44 @@ private:
     long long refined = 0;
     std::vector<std::pair<int, int>> next;
     const size_t n = links_.size();
+    std::vector<std::pair<int, int>> cluster_next;
     for (size_t p = 0; p < n; ++p) {
       std::vector<Link> keep, redo;
-      for (const Link& l : links_[p])
-        (wants_refinement(static_cast<int>(p), l) &&
-                 (splittable(static_cast<int>(p)) || splittable(l.source))
-             ? redo
-             : keep)
-            .push_back(l);
+      for (const Link& l : links_[p]) {
+        const bool again = l.source >= 0 ? wants_refinement(static_cast<int>(p), l) &&
+                                               (splittable(static_cast<int>(p)) || splittable(l.source))
+                                         : wants_cluster_refinement(static_cast<int>(p), l);
+        (again ? redo : keep).push_back(l);
+      }
       if (redo.empty()) continue;
       links_[p] = keep;
       dirty_[p] = 1;
       for (const Link& l : redo) {
         ++refined;
-        if (!split_pair(static_cast<int>(p), l.source, spread_dominates(l), next)) links_[p].push_back(l);
+        if (l.source < 0)
+          cluster_next.emplace_back(static_cast<int>(p), l.source);
+        else if (!split_pair(static_cast<int>(p), l.source, spread_dominates(l), next))
+          links_[p].push_back(l);
       }
     }
+    for (size_t c = 0; c < clinks_.size(); ++c) {
+      std::vector<Link> keep;
+      for (const Link& l : clinks_[c]) {
+        if (wants_cluster_refinement(cluster_code(static_cast<int>(c)), l)) {
+          ++refined;
+          cluster_next.emplace_back(cluster_code(static_cast<int>(c)), l.source);
+        } else {
+          keep.push_back(l);
+        }
+      }
+      if (keep.size() != clinks_[c].size()) clinks_[c] = std::move(keep);
+    }
+    // Split cluster links become pairs of their children first: a pair of
+    // two elements then goes to the element linking with the rest.
+    for (auto& [p, q] : cluster_next) split_cluster_pair(p, q, cluster_next_children_);
+    std::vector<std::pair<int, int>> elements = link_cluster_pairs(std::move(cluster_next_children_));
+    cluster_next_children_.clear();
+    next.insert(next.end(), elements.begin(), elements.end());
     link_pairs(std::move(next));
     return refined;
   }
@@ -343,6 +377,7 @@ private:
   long long count_links() const {
     long long c = 0;
     for (const auto& l : links_) c += static_cast<long long>(l.size());
+    for (const auto& l : clinks_) c += static_cast<long long>(l.size());
     return c;
   }
 
@@ -376,8 +411,10 @@ private:
       for (size_t i = r.begin(); i != r.end(); ++i) gather_terms(static_cast<size_t>(todo[i]));
     });
     std::fill(dirty_.begin(), dirty_.end(), 0);
+    cluster_terms();
     out_.stats.leaf_terms = 0;
     for (size_t x = 0; x < n; ++x) out_.stats.leaf_terms += static_cast<long long>(terms_[x].size());
+    for (const auto& t : gterms_) out_.stats.leaf_terms += static_cast<long long>(t.size());
   }
 
   void gather_terms(size_t x) {
@@ -394,11 +431,16 @@ private:
     double near = std::numeric_limits<double>::infinity();
     const Vec3 c = t.centroid();
     for (const Link* l : path)
-      near = std::min(near, distance_to_triangle(c, tri_[static_cast<size_t>(l->source)]) - t.radius);
+      if (l->source >= 0)
+        near = std::min(near, distance_to_triangle(c, tri_[static_cast<size_t>(l->source)]) - t.radius);
     near = std::max(near, 0.0);
     const ReceiverPoints pts = receiver_points(t, [near](const Vec3&) { return near; }, opt_.quadrature);
     for (const Link* l : path) {
       if (l->visible <= 0.0) continue;  // hidden: kept as a link, never gathered
+      if (l->source < 0) {  // a cluster: its normal groups, seen from the leaf's centroid
+        group_terms(cluster_of(l->source), c, t.normal, l->visible, terms_[x], F_sum_[x]);
+        continue;
+      }
       const double f = form_factor(pts, tri_[static_cast<size_t>(l->source)]) * l->visible;
       if (f <= 0.0) continue;
       terms_[x].push_back({l->source, f});
@@ -417,7 +459,7 @@ private:
     // The norm of rho F over the leaves, for the stopping rule.
     double contraction = 0.0;
     for (size_t x = 0; x < n; ++x)
-      if (tree.is_leaf(static_cast<int>(x))) contraction = std::max(contraction, max3(rho_[x]) * F_sum_[x]);
+      if (tree.is_leaf(static_cast<int>(x))) contraction = std::max(contraction, max3(rho_[x]) * row_sum(x));
     SweepMonitor monitor(opt_.tolerance, contraction);
     std::vector<Rgb> before;
     for (int sweep = 0;; ++sweep) {
@@ -427,7 +469,9 @@ private:
                              " sweeps");
       before = B_;
       double change = 0.0, top = 0.0;
+      gather_clusters();
       for (int r = 0; r < tree.root_count(); ++r) pull(r, change, top);
+      update_groups();
       ++out_.stats.sweeps;
       if (!std::isfinite(change))
         throw NumericalError(scene_.source + ": hierarchical solve produced a non-finite radiosity");
@@ -438,12 +482,17 @@ private:
         // and the extrapolation is linear, so they stay consistent.
         const double k = monitor.extrapolation_factor();
         for (size_t x = 0; x < n; ++x) B_[x] += k * (B_[x] - before[x]);
+        update_groups();
       }
     }
     extrapolations_ += monitor.extrapolations();
+    gather_clusters();
     H_.assign(n, Rgb(0.0));
-    for (size_t x = 0; x < n; ++x)
-      for (const auto& [q, c] : terms_[x]) H_[x] += c * B_[static_cast<size_t>(q)];
+    for (size_t x = 0; x < n; ++x) {
+      if (!tree.is_leaf(static_cast<int>(x))) continue;
+      for (const auto& [q, c] : terms_[x]) H_[x] += c * value(q);
+      H_[x] += pushed(static_cast<int>(x));
+    }
   }
 
   Rgb pull(int p, double& change, double& top) {
@@ -451,7 +500,8 @@ private:
     Rgb b(0.0);
     if (node.child < 0) {
       Rgb g(0.0);
-      for (const auto& [q, c] : terms_[static_cast<size_t>(p)]) g += c * B_[static_cast<size_t>(q)];
+      for (const auto& [q, c] : terms_[static_cast<size_t>(p)]) g += c * value(q);
+      g += pushed(p);
       b = emit_[static_cast<size_t>(p)] + rho_[static_cast<size_t>(p)] * g;
     } else {
       double area = 0.0;
@@ -587,9 +637,9 @@ private:
     BalanceAccumulator balance;
     for (size_t p = 0; p < B_.size(); ++p) {
       if (!o.tree.is_leaf(static_cast<int>(p))) continue;
-      o.stats.row_sum_min = std::min(o.stats.row_sum_min, F_sum_[p]);
-      o.stats.row_sum_max = std::max(o.stats.row_sum_max, F_sum_[p]);
-      balance.add(tri_[p].area, rho_[p], emit_[p], B_[p], H_[p], F_sum_[p]);
+      o.stats.row_sum_min = std::min(o.stats.row_sum_min, row_sum(p));
+      o.stats.row_sum_max = std::max(o.stats.row_sum_max, row_sum(p));
+      balance.add(tri_[p].area, rho_[p], emit_[p], B_[p], H_[p], row_sum(p));
     }
     balance.finish(st);
     st.extrapolations = extrapolations_;
@@ -597,10 +647,464 @@ private:
     st.rays_skipped = o.stats.rays_skipped;
     st.pairs_unoccludable = o.stats.pairs_unoccludable;
     st.convex_enclosure = visibility_.convex_enclosure();
+    o.stats.clusters = static_cast<int>(clusters_.size());
+    o.stats.cluster_groups = static_cast<int>(groups_.size());
+    o.stats.cluster_links = 0;
+    for (const auto& l : clinks_) o.stats.cluster_links += static_cast<long long>(l.size());
+    for (const auto& l : links_)
+      for (const Link& k : l) o.stats.cluster_links += k.source < 0 ? 1 : 0;
     st.form_factors = count_links();
     st.seconds_form_factors = o.stats.seconds_link;
     st.seconds_solve = o.stats.seconds_solve;
     report_visibility_skips(st, "node");
+  }
+
+  // ---------------------------------------------------------------- clusters
+  // ClusterMode::volume: a binary box hierarchy over the roots (median splits
+  // of their centroids on the longest axis). A link has a node code at each
+  // end: an element node (>= 0) or a cluster (cluster_code(c) <= -2). Each
+  // cluster keeps up to kGroups normal groups: members merged by normal
+  // (greedily, the two closest normals first), each with s = sum of area x
+  // unit normal, its centroid and its mean radiosity. Light leaving a group
+  // toward direction w is taken as B x max(0, s . w) / pi per steradian,
+  // exact while the group's normals are within 90 degrees of each other and
+  // all face w or all face away. A link from a cluster is gathered per
+  // group of the source; a cluster receives per group of its own (at the
+  // group's centroid and mean normal), and what a group gathers is pushed
+  // down to every leaf below it (through the group its root belongs to).
+  static constexpr int kGroups = 8;
+  // Cluster links need a gap between the two bounding spheres of at least
+  // this fraction of the larger radius; nearer pairs are split.
+  static constexpr double kClusterGap = 0.5;
+
+  struct Cluster {
+    std::array<int, 2> child{};  // node codes
+    int begin = 0, end = 0;      // its roots: corder_[begin, end)
+    Vec3 centre{0.0};            // area-weighted centroid
+    double radius = 0.0, area = 0.0, rho_max = 0.0;
+    int group_begin = 0, group_end = 0;
+    int contrib_begin = 0, contrib_end = 0;
+  };
+  struct Group {
+    Vec3 s{0.0};  // sum over members of area x unit normal
+    Vec3 centroid{0.0};
+    double area = 0.0;
+    int up = -1;  // the group of the parent cluster it belongs to
+  };
+  // A member of a group: an element root (>= 0) or a child group (-2 - g).
+  struct Contribution {
+    int from;
+    double area;
+    int group;
+  };
+
+  static constexpr int cluster_code(int c) { return -2 - c; }
+  static constexpr int cluster_of(int code) { return -2 - code; }
+
+  // Radiosity of a term's source: an element node, or a group (-2 - g).
+  Rgb value(int code) const { return code >= 0 ? B_[static_cast<size_t>(code)] : GB_[static_cast<size_t>(-2 - code)]; }
+  // What cluster links give a leaf: the pushed gathering of the group its
+  // root belongs to, and that group's form factors.
+  Rgb pushed(int leaf) const {
+    if (root_up_.empty()) return Rgb(0.0);
+    const int g = root_up_[static_cast<size_t>(out_.tree.node(leaf).root)];
+    return g >= 0 ? HGacc_[static_cast<size_t>(g)] : Rgb(0.0);
+  }
+  double row_sum(size_t leaf) const {
+    double f = F_sum_[leaf];
+    if (!root_up_.empty()) {
+      const int g = root_up_[static_cast<size_t>(out_.tree.node(static_cast<int>(leaf)).root)];
+      if (g >= 0) f += FGacc_[static_cast<size_t>(g)];
+    }
+    return f;
+  }
+
+  Vec3 code_centre(int code) const {
+    return code >= 0 ? tri_[static_cast<size_t>(code)].centroid() : clusters_[static_cast<size_t>(cluster_of(code))].centre;
+  }
+  double code_radius(int code) const {
+    return code >= 0 ? tri_[static_cast<size_t>(code)].radius : clusters_[static_cast<size_t>(cluster_of(code))].radius;
+  }
+  double code_area(int code) const {
+    return code >= 0 ? tri_[static_cast<size_t>(code)].area : clusters_[static_cast<size_t>(cluster_of(code))].area;
+  }
+  double code_rho(int code) const {
+    return code >= 0 ? max3(rho_[static_cast<size_t>(code)]) : clusters_[static_cast<size_t>(cluster_of(code))].rho_max;
+  }
+  // The mean radiosity (largest channel) of a node: its power per area.
+  double code_radiosity(int code) const {
+    if (code >= 0) return max3(B_[static_cast<size_t>(code)]);
+    const Cluster& c = clusters_[static_cast<size_t>(cluster_of(code))];
+    Rgb sum(0.0);
+    for (int g = c.group_begin; g < c.group_end; ++g) sum += groups_[static_cast<size_t>(g)].area * GB_[static_cast<size_t>(g)];
+    return max3(sum) / c.area;
+  }
+  uint64_t code_key(int code) const {
+    return code >= 0 ? static_cast<uint64_t>(code) : (uint64_t{1} << 40) + static_cast<uint64_t>(cluster_of(code));
+  }
+
+  int build_cluster_node(int begin, int end, std::vector<Vec3>& centroids) {
+    if (end - begin == 1) return corder_[static_cast<size_t>(begin)];
+    const int c = static_cast<int>(clusters_.size());
+    clusters_.emplace_back();
+    clusters_.back().begin = begin;
+    clusters_.back().end = end;
+    Vec3 lo(std::numeric_limits<double>::infinity()), hi(-std::numeric_limits<double>::infinity());
+    for (int i = begin; i < end; ++i) {
+      lo = glm::min(lo, centroids[static_cast<size_t>(corder_[static_cast<size_t>(i)])]);
+      hi = glm::max(hi, centroids[static_cast<size_t>(corder_[static_cast<size_t>(i)])]);
+    }
+    const Vec3 e = hi - lo;
+    const int axis = e.x >= e.y && e.x >= e.z ? 0 : (e.y >= e.z ? 1 : 2);
+    const int mid = begin + (end - begin) / 2;
+    std::nth_element(corder_.begin() + begin, corder_.begin() + mid, corder_.begin() + end, [&](int a, int b) {
+      const double ca = centroids[static_cast<size_t>(a)][axis], cb = centroids[static_cast<size_t>(b)][axis];
+      return ca < cb || (ca == cb && a < b);
+    });
+    const int left = build_cluster_node(begin, mid, centroids);
+    const int right = build_cluster_node(mid, end, centroids);
+    clusters_[static_cast<size_t>(c)].child = {left, right};
+    return cluster_code(c);
+  }
+
+  void build_clusters() {
+    const ElementTree& tree = out_.tree;
+    const int roots = tree.root_count();
+    corder_.resize(static_cast<size_t>(roots));
+    std::vector<Vec3> centroids(static_cast<size_t>(roots));
+    for (int r = 0; r < roots; ++r) {
+      corder_[static_cast<size_t>(r)] = r;
+      centroids[static_cast<size_t>(r)] = tri_[static_cast<size_t>(r)].centroid();
+    }
+    clusters_.clear();
+    clusters_.reserve(static_cast<size_t>(roots));
+    build_cluster_node(0, roots, centroids);
+    root_up_.assign(static_cast<size_t>(roots), -1);
+    groups_.clear();
+    contrib_.clear();
+    // Children before parents: clusters were numbered parents first.
+    struct Item {
+      Vec3 s{0.0}, moment{0.0};
+      double area = 0.0;
+      std::vector<std::pair<int, double>> from;  // (element root or -2 - group, area)
+    };
+    for (int c = static_cast<int>(clusters_.size()) - 1; c >= 0; --c) {
+      Cluster& cl = clusters_[static_cast<size_t>(c)];
+      std::vector<Item> items;
+      double rho = 0.0;
+      for (int code : cl.child) {
+        if (code >= 0) {
+          const Triangle& t = tri_[static_cast<size_t>(code)];
+          items.push_back({t.area * t.normal, t.area * t.centroid(), t.area, {{code, t.area}}});
+          rho = std::max(rho, max3(rho_[static_cast<size_t>(code)]));
+        } else {
+          const Cluster& ch = clusters_[static_cast<size_t>(cluster_of(code))];
+          for (int g = ch.group_begin; g < ch.group_end; ++g) {
+            const Group& gr = groups_[static_cast<size_t>(g)];
+            items.push_back({gr.s, gr.area * gr.centroid, gr.area, {{-2 - g, gr.area}}});
+          }
+          rho = std::max(rho, ch.rho_max);
+        }
+      }
+      auto direction = [](const Item& it) {
+        const double l = glm::length(it.s);
+        return l > 0.0 ? it.s / l : Vec3(0.0);
+      };
+      while (items.size() > static_cast<size_t>(kGroups)) {
+        size_t bi = 0, bj = 1;
+        double best = -2.0;
+        for (size_t i = 0; i < items.size(); ++i)
+          for (size_t j = i + 1; j < items.size(); ++j) {
+            const double d = glm::dot(direction(items[i]), direction(items[j]));
+            if (d > best) {
+              best = d;
+              bi = i;
+              bj = j;
+            }
+          }
+        Item& a = items[bi];
+        a.s += items[bj].s;
+        a.moment += items[bj].moment;
+        a.area += items[bj].area;
+        a.from.insert(a.from.end(), items[bj].from.begin(), items[bj].from.end());
+        items.erase(items.begin() + static_cast<std::ptrdiff_t>(bj));
+      }
+      cl.group_begin = static_cast<int>(groups_.size());
+      cl.contrib_begin = static_cast<int>(contrib_.size());
+      Vec3 moment(0.0);
+      for (const Item& it : items) {
+        const int g = static_cast<int>(groups_.size());
+        groups_.push_back({it.s, it.moment / it.area, it.area, -1});
+        for (const auto& [from, a] : it.from) {
+          contrib_.push_back({from, a, g});
+          if (from >= 0)
+            root_up_[static_cast<size_t>(from)] = g;
+          else
+            groups_[static_cast<size_t>(-2 - from)].up = g;
+        }
+        cl.area += it.area;
+        moment += it.moment;
+      }
+      cl.group_end = static_cast<int>(groups_.size());
+      cl.contrib_end = static_cast<int>(contrib_.size());
+      cl.centre = moment / cl.area;
+      cl.rho_max = rho;
+      for (int code : cl.child) {
+        if (code >= 0) {
+          for (const Vec3& v : tri_[static_cast<size_t>(code)].v) cl.radius = std::max(cl.radius, glm::length(v - cl.centre));
+        } else {
+          const Cluster& ch = clusters_[static_cast<size_t>(cluster_of(code))];
+          cl.radius = std::max(cl.radius, glm::length(ch.centre - cl.centre) + ch.radius);
+        }
+      }
+    }
+    cumulative_.assign(static_cast<size_t>(roots) + 1, 0.0);
+    for (int i = 0; i < roots; ++i)
+      cumulative_[static_cast<size_t>(i) + 1] =
+          cumulative_[static_cast<size_t>(i)] + tri_[static_cast<size_t>(corder_[static_cast<size_t>(i)])].area;
+    clinks_.assign(clusters_.size(), {});
+    GB_.assign(groups_.size(), Rgb(0.0));
+    HG_.assign(groups_.size(), Rgb(0.0));
+    HGacc_.assign(groups_.size(), Rgb(0.0));
+    FG_.assign(groups_.size(), 0.0);
+    FGacc_.assign(groups_.size(), 0.0);
+    gterms_.assign(groups_.size(), {});
+    update_groups();
+  }
+
+  // Group radiosity from the roots' (area means of their leaves), children first.
+  void update_groups() {
+    for (int c = static_cast<int>(clusters_.size()) - 1; c >= 0; --c) {
+      const Cluster& cl = clusters_[static_cast<size_t>(c)];
+      for (int g = cl.group_begin; g < cl.group_end; ++g) GB_[static_cast<size_t>(g)] = Rgb(0.0);
+      for (int k = cl.contrib_begin; k < cl.contrib_end; ++k) {
+        const Contribution& m = contrib_[static_cast<size_t>(k)];
+        GB_[static_cast<size_t>(m.group)] += m.area * value(m.from);
+      }
+      for (int g = cl.group_begin; g < cl.group_end; ++g) GB_[static_cast<size_t>(g)] /= groups_[static_cast<size_t>(g)].area;
+    }
+  }
+
+  // Form factors from a point x with normal n to the normal groups of
+  // cluster c, times `visible`, appended as (-2 - group, F) and summed into f_sum.
+  void group_terms(int c, const Vec3& x, const Vec3& n, double visible, std::vector<std::pair<int, double>>& out,
+                   double& f_sum) const {
+    const Cluster& cl = clusters_[static_cast<size_t>(c)];
+    for (int g = cl.group_begin; g < cl.group_end; ++g) {
+      const Group& gr = groups_[static_cast<size_t>(g)];
+      const Vec3 r = x - gr.centroid;
+      const double d2 = glm::dot(r, r);
+      const double out_cos = glm::dot(gr.s, r), in_cos = -glm::dot(n, r);
+      if (out_cos <= 0.0 || in_cos <= 0.0) continue;
+      const double f = visible * out_cos * in_cos / (std::numbers::pi * d2 * d2);
+      out.push_back({-2 - g, f});
+      f_sum += f;
+    }
+  }
+
+  // Per group of every receiving cluster: (source, F) at the group's
+  // centroid with its mean normal, over the cluster's links.
+  void cluster_terms() {
+    if (clusters_.empty()) return;
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, clusters_.size(), 16), [&](const tbb::blocked_range<size_t>& r) {
+      for (size_t c = r.begin(); c != r.end(); ++c) {
+        const Cluster& cl = clusters_[c];
+        for (int g = cl.group_begin; g < cl.group_end; ++g) {
+          auto& terms = gterms_[static_cast<size_t>(g)];
+          double& fsum = FG_[static_cast<size_t>(g)];
+          terms.clear();
+          fsum = 0.0;
+          const Group& gr = groups_[static_cast<size_t>(g)];
+          const double len = glm::length(gr.s);
+          if (!(len > 0.0)) continue;
+          const Vec3 n = gr.s / len;
+          for (const Link& l : clinks_[c]) {
+            if (l.visible <= 0.0) continue;
+            if (l.source < 0) {
+              group_terms(cluster_of(l.source), gr.centroid, n, l.visible, terms, fsum);
+            } else {
+              const Triangle& t = tri_[static_cast<size_t>(l.source)];
+              const double f = point_polygon_form_factor(gr.centroid, n, t.v.data(), 3, t.normal) * l.visible;
+              if (!(f > 0.0)) continue;
+              terms.push_back({l.source, f});
+              fsum += f;
+            }
+          }
+        }
+      }
+    });
+    // Pushed form factors: a group's and its ancestors' (parents have the
+    // larger group numbers).
+    for (int g = static_cast<int>(groups_.size()) - 1; g >= 0; --g) {
+      const int up = groups_[static_cast<size_t>(g)].up;
+      FGacc_[static_cast<size_t>(g)] = FG_[static_cast<size_t>(g)] + (up >= 0 ? FGacc_[static_cast<size_t>(up)] : 0.0);
+    }
+  }
+
+  // What every cluster group gathers now, pushed down (accumulated over its
+  // ancestors' groups) for the leaves.
+  void gather_clusters() {
+    if (clusters_.empty()) return;
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, groups_.size(), 256), [&](const tbb::blocked_range<size_t>& r) {
+      for (size_t g = r.begin(); g != r.end(); ++g) {
+        Rgb h(0.0);
+        for (const auto& [q, f] : gterms_[g]) h += f * value(q);
+        HG_[g] = h;
+      }
+    });
+    for (int g = static_cast<int>(groups_.size()) - 1; g >= 0; --g) {
+      const int up = groups_[static_cast<size_t>(g)].up;
+      HGacc_[static_cast<size_t>(g)] = HG_[static_cast<size_t>(g)] + (up >= 0 ? HGacc_[static_cast<size_t>(up)] : Rgb(0.0));
+    }
+  }
+
+  // A point of node `code` (area-uniform over its roots), its normal and patch.
+  void sample_node(int code, SplitMix& rng, Vec3& x, Vec3& n, int& patch) const {
+    int root = code;
+    if (code < 0) {
+      const Cluster& cl = clusters_[static_cast<size_t>(cluster_of(code))];
+      const double lo = cumulative_[static_cast<size_t>(cl.begin)], hi = cumulative_[static_cast<size_t>(cl.end)];
+      const double u = lo + rng.uniform() * (hi - lo);
+      auto it = std::upper_bound(cumulative_.begin() + cl.begin + 1, cumulative_.begin() + cl.end, u);
+      root = corder_[static_cast<size_t>(it - cumulative_.begin() - 1)];
+    }
+    const Triangle& t = tri_[static_cast<size_t>(root)];
+    const double a = rng.uniform(), b = rng.uniform();
+    x = triangle_point(t.v[0], t.v[1], t.v[2], a, b);
+    n = t.normal;
+    patch = node_patch(root);
+  }
+
+  // Visible fraction between two nodes, at least one a cluster: shadow rays
+  // between area-uniform points of both, weighted by the point kernel
+  // (cosines at both ends over r^4), so that members facing away count for
+  // nothing. One stream per pair, order-free.
+  double cluster_visible(int p, int q, RayCount& count) const {
+    const int rays = opt_.rays;
+    if (visibility_.convex_enclosure()) {
+      count.skipped += rays;
+      ++count.unoccludable;
+      return 1.0;
+    }
+    const bool swap = code_key(q) < code_key(p);
+    const int a = swap ? q : p, b = swap ? p : q;
+    SplitMix rng(pair_seed(code_key(a), code_key(b)));
+    double weight = 0.0, open = 0.0;
+    int used = 0;
+    for (int k = 0; k < 4 * rays && used < rays; ++k) {
+      Vec3 x, nx, y, ny;
+      int px = -1, py = -1;
+      sample_node(a, rng, x, nx, px);
+      sample_node(b, rng, y, ny, py);
+      const Vec3 r = y - x;
+      const double d2 = glm::dot(r, r);
+      const double w = std::max(0.0, glm::dot(nx, r)) * std::max(0.0, -glm::dot(ny, r)) / (d2 * d2);
+      if (!(w > 0.0)) continue;
+      ++used;
+      weight += w;
+      if (visibility_.visible(x, y, px, py)) open += w;
+    }
+    count.cast += used;
+    return weight > 0.0 ? open / weight : 1.0;
+  }
+
+  // The pair's kernel error factor (F bound x size over gap), or a negative
+  // value when the pair must be split (bounding spheres too close), or 0
+  // when the two cannot see each other (one wholly behind an element's plane).
+  double cluster_shape_error(int p, int q) const {
+    const Vec3 cp = code_centre(p), cq = code_centre(q);
+    const double rp = code_radius(p), rq = code_radius(q);
+    if (p >= 0 && glm::dot(cq - cp, tri_[static_cast<size_t>(p)].normal) <= -rq) return 0.0;
+    if (q >= 0 && glm::dot(cp - cq, tri_[static_cast<size_t>(q)].normal) <= -rp) return 0.0;
+    const double gap = glm::length(cq - cp) - rp - rq;
+    const double size = std::max(rp, rq);
+    if (!(gap > kClusterGap * size)) return -1.0;
+    return code_area(q) / (std::numbers::pi * gap * gap) * size / gap;
+  }
+
+  // The oracle for a link with a cluster at one end: rho_p B_q times its
+  // kernel error factor, plus the whole transport when partly visible.
+  bool wants_cluster_refinement(int p, const Link& l) const {
+    const double rb = code_rho(p) * code_radiosity(l.source);
+    const double unseen = l.partial() ? l.f * l.visible : 0.0;
+    return rb * (l.spread + unseen) > hopt_.epsilon * scale_;
+  }
+
+  // Queues the children pairs of (p, q): the larger cluster (by radius) is
+  // split; a cluster paired with itself gives every pair of its children.
+  void split_cluster_pair(int p, int q, std::vector<std::pair<int, int>>& next) const {
+    if (p == q) {
+      if (p >= 0) return;  // a planar element does not see itself
+      const Cluster& c = clusters_[static_cast<size_t>(cluster_of(p))];
+      for (int a : c.child)
+        for (int b : c.child) next.emplace_back(a, b);
+      return;
+    }
+    const bool split_p = p < 0 && (q >= 0 || code_radius(p) >= code_radius(q));
+    const int n = split_p ? p : q;
+    for (int c : clusters_[static_cast<size_t>(cluster_of(n))].child) next.emplace_back(split_p ? c : p, split_p ? q : c);
+  }
+
+  // Links pairs with a cluster at one end or both, top down: a pair is
+  // linked when its oracle allows, else split. Returns the pairs of two
+  // elements reached, for link_pairs.
+  std::vector<std::pair<int, int>> link_cluster_pairs(std::vector<std::pair<int, int>> todo) {
+    std::vector<std::pair<int, int>> elements;
+    while (!todo.empty()) {
+      std::vector<std::pair<int, int>> pairs, next;
+      for (const auto& [p, q] : todo) {
+        if (p >= 0 && q >= 0)
+          elements.emplace_back(p, q);
+        else if (p == q)
+          split_cluster_pair(p, q, next);
+        else
+          pairs.emplace_back(p, q);
+      }
+      std::vector<Link> ev(pairs.size());
+      std::vector<RayCount> rays(pairs.size());
+      std::vector<char> split(pairs.size(), 0);
+      tbb::parallel_for(tbb::blocked_range<size_t>(0, pairs.size(), 16), [&](const tbb::blocked_range<size_t>& r) {
+        for (size_t i = r.begin(); i != r.end(); ++i) {
+          const auto [p, q] = pairs[i];
+          Link& l = ev[i];
+          l.source = q;
+          const double shape = cluster_shape_error(p, q);
+          if (shape == 0.0) continue;
+          const double rb = code_rho(p) * code_radiosity(q);
+          if (shape < 0.0 || rb * shape > hopt_.epsilon * scale_) {
+            split[i] = 1;
+            continue;
+          }
+          l.spread = shape;
+          const double d = glm::length(code_centre(q) - code_centre(p));
+          l.f = code_area(q) / (std::numbers::pi * d * d);
+          l.visible = cluster_visible(p, q, rays[i]);
+          if (wants_cluster_refinement(p, l)) split[i] = 1;
+        }
+      });
+      for (size_t i = 0; i < pairs.size(); ++i) {
+        const auto [p, q] = pairs[i];
+        ++out_.stats.links_examined;
+        out_.stats.rays_cast += rays[i].cast;
+        out_.stats.rays_skipped += rays[i].skipped;
+        out_.stats.pairs_unoccludable += rays[i].unoccludable;
+        if (split[i]) {
+          split_cluster_pair(p, q, next);
+          continue;
+        }
+        const Link& l = ev[i];
+        if (!(l.f > 0.0)) continue;
+        if (p >= 0) {
+          links_[static_cast<size_t>(p)].push_back(l);
+          dirty_[static_cast<size_t>(p)] = 1;
+        } else {
+          clinks_[static_cast<size_t>(cluster_of(p))].push_back(l);
+        }
+      }
+      todo.swap(next);
+      check_memory();
+    }
+    return elements;
   }
 
   // Progress from the calling thread: the phase (link, solve, refine) and,
@@ -637,6 +1141,18 @@ private:
   std::vector<std::vector<std::pair<int, double>>> terms_;  // per leaf: (source node, F x visibility at the leaf)
   std::vector<std::vector<Link>> links_;  // per receiver node
   std::vector<char> dirty_;               // per node: links changed since the last leaf_terms (new nodes too)
+  // Clusters (ClusterMode::volume; all empty otherwise).
+  std::vector<Cluster> clusters_;
+  std::vector<int> corder_;               // roots in cluster order
+  std::vector<double> cumulative_;        // area of corder_'s first i roots
+  std::vector<Group> groups_;
+  std::vector<Contribution> contrib_;
+  std::vector<int> root_up_;              // per root: its group in its parent cluster
+  std::vector<std::vector<Link>> clinks_;  // per receiving cluster
+  std::vector<std::vector<std::pair<int, double>>> gterms_;  // per group: (source, F) at its centroid
+  std::vector<Rgb> GB_, HG_, HGacc_;      // per group: radiosity, gathered, gathered with its ancestors'
+  std::vector<double> FG_, FGacc_;        // per group: form factor sum, with its ancestors'
+  std::vector<std::pair<int, int>> cluster_next_children_;
 };
 
 }  // namespace
@@ -646,6 +1162,20 @@ TVertexMode parse_tvertex_mode(const std::string& name) {
   if (name == "free") return TVertexMode::free;
   if (name == "split") return TVertexMode::split;
   throw InputError("T-vertex mode '" + name + "': expected anchor, free or split");
+}
+
+ClusterMode parse_cluster_mode(const std::string& name) {
+  if (name == "off") return ClusterMode::off;
+  if (name == "volume") return ClusterMode::volume;
+  throw InputError("cluster mode '" + name + "': expected volume or off");
+}
+
+const char* to_string(ClusterMode mode) {
+  switch (mode) {
+    case ClusterMode::off: return "off";
+    case ClusterMode::volume: return "volume";
+  }
+  return "?";
 }
 
 const char* to_string(TVertexMode mode) {

@@ -28,6 +28,17 @@ enum class TVertexMode {
 TVertexMode parse_tvertex_mode(const std::string& name);
 const char* to_string(TVertexMode mode);
 
+// What sits above the initial mesh's triangles (the roots).
+enum class ClusterMode {
+  off,     // nothing: every pair of roots is linked (O(k^2) links in k roots)
+  volume,  // a box hierarchy of clusters (Smits-Arvo-Greenberg, Sillion), each
+           // with a few oriented normal groups: linking starts from the root
+           // cluster's self-link, so links grow about linearly
+};
+// "off", "volume"; InputError naming the value otherwise.
+ClusterMode parse_cluster_mode(const std::string& name);
+const char* to_string(ClusterMode mode);
+
 struct HierarchicalOptions {
   // Oracle: the link receiver p <- source q is refined while its error
   // estimate exceeds epsilon x the largest emission and one of the two may
@@ -54,6 +65,7 @@ struct HierarchicalOptions {
   // and by more than baum_absolute (down to min_area). 0 = off.
   double baum_relative = 0.0;
   double baum_absolute = 0.0;
+  ClusterMode clusters = ClusterMode::off;
 };
 
 struct HierarchicalStats {
@@ -69,6 +81,9 @@ struct HierarchicalStats {
   int sweeps = 0;                 // gather + push-pull sweeps, all rounds
   double seconds_link = 0.0, seconds_solve = 0.0;
   std::vector<long long> links_per_round;
+  int clusters = 0;                // cluster nodes above the roots (ClusterMode::volume)
+  int cluster_groups = 0;          // their normal groups
+  long long cluster_links = 0;     // links with a cluster at one end or both (in `links`)
   std::vector<int> leaves_per_round;
   double last_change = 0.0;       // largest relative change of a leaf between the last two rounds
   // Per leaf, the sum of F x visibility over the links of its path to the

@@ -76,6 +76,10 @@ Method make_hierarchical_method() {
        "also split a leaf whose vertex values differ by more than this fraction of the largest reflected "
        "radiosity (Baum's criterion; 0 = off)",
        d.baum_relative, 0.0, 1.0, {}},
+      {"clusters", Kind::choice, "",
+       "what sits above the initial mesh's triangles: volume (a box hierarchy of clusters with oriented normal "
+       "groups, links grow about linearly) or off (every pair of initial triangles is linked)",
+       0.0, 0.0, 0.0, {to_string(d.clusters), to_string(d.clusters == ClusterMode::off ? ClusterMode::volume : ClusterMode::off)}},
       {"export_links", Kind::flag, "",
        "also write links.vtu, every link as a line from receiver to source (fields receiver_level, source_level, "
        "receiver_patch, source_patch, form_factor, visible, transport)",
@@ -98,6 +102,7 @@ Method make_hierarchical_method() {
     ho.tvertex = parse_tvertex_mode(o.text("tvertex"));
     ho.min_area = o.number("min_area");
     ho.baum_relative = o.number("baum");
+    ho.clusters = parse_cluster_mode(o.text("clusters"));
     std::function<void(const HierarchicalSolution&, int)> on_round;
     if (cb.on_round)
       on_round = [&](const HierarchicalSolution& h, int round) {
@@ -127,7 +132,10 @@ Method make_hierarchical_method() {
                   count("conforming_splits", hs.conforming_splits),
                   measure("max_tvertex_jump", hs.max_tvertex_jump),
                   measure("min_area", hs.min_area, "scene units^2"),
-                  count("baum_splits", hs.baum_splits)};
+                  count("baum_splits", hs.baum_splits),
+                  count("clusters", hs.clusters),
+                  count("cluster_groups", hs.cluster_groups),
+                  count("cluster_links", static_cast<double>(hs.cluster_links))};
     r.seconds = {{"link", hs.seconds_link}, {"solve", hs.seconds_solve}};
     r.report = std::to_string(hs.leaves) + " leaves, " + std::to_string(hs.links) + " links, " +
                std::to_string(hs.zero_area_triangles) + " zero-area triangles, " + std::to_string(hs.rounds) +

@@ -48,6 +48,10 @@ VisibilityEstimator::VisibilityEstimator(const Scene& scene, int rays)
 
 VisibilityEstimator::~VisibilityEstimator() = default;
 
+bool VisibilityEstimator::visible(const Vec3& x, const Vec3& y, int pa, int pb) const {
+  return !impl_->embree || impl_->embree->visible(x, y, pa, pb);
+}
+
 bool VisibilityEstimator::convex_enclosure() const { return impl_->occlusion.convex_enclosure(); }
 bool VisibilityEstimator::facing(int p, int q) const { return impl_->occlusion.facing(p, q); }
 double VisibilityEstimator::distance_to_patch(int p, const Vec3& x) const { return impl_->occlusion.distance(p, x); }

@@ -66,6 +66,10 @@ public:
   double visible_fraction(const Triangle& a, int pa, uint64_t id_a, const Triangle& b, int pb, uint64_t id_b,
                           RayCount& count) const;
 
+  // The open segment (x, y) is clear of every patch but pa and pb (always
+  // in a convex enclosure). Thread-safe.
+  bool visible(const Vec3& x, const Vec3& y, int pa, int pb) const;
+
   bool convex_enclosure() const;
   // Patches p and q can exchange light (Occlusion::facing).
   bool facing(int p, int q) const;
