@@ -172,6 +172,7 @@ public:
     const int np = static_cast<int>(scene_.patches.size());
     std::vector<char> dirty(static_cast<size_t>(np), 1);
     std::vector<std::vector<std::array<int, 3>>> tris(static_cast<size_t>(np));
+    double all_triangles = 0.0;  // in `tris`
     int rounds = 0;
     for (bool any = true; any; ++rounds) {
       any = false;
@@ -188,11 +189,11 @@ public:
         // The work bound: the mesher may add as many points to this patch
         // as the other patches leave of max_elements (each point makes
         // about two triangles).
-        double others = 0.0;
-        for (int q = 0; q < np; ++q)
-          if (q != p) others += static_cast<double>(tris[static_cast<size_t>(q)].size());
+        auto& mine = tris[static_cast<size_t>(p)];
+        const double others = all_triangles - static_cast<double>(mine.size());
         point_budget_ = opt_.max_elements - others;
-        tris[static_cast<size_t>(p)] = mesh_patch(p, refine);
+        mine = mesh_patch(p, refine);
+        all_triangles = others + static_cast<double>(mine.size());
       }
       for (const Pending& pd : pending_) {
         const int same = find_point(pd.segment, positions_[static_cast<size_t>(pd.vertex)]);
@@ -241,6 +242,7 @@ public:
 
 private:
   void collect_segments() {
+    patch_segments_.assign(1, 0);
     for (int p = 0; p < static_cast<int>(scene_.patches.size()); ++p) {
       const Patch& patch = scene_.patches[static_cast<size_t>(p)];
       auto add_loop = [&](const std::vector<int>& loop) {
@@ -248,6 +250,7 @@ private:
       };
       add_loop(patch.outer);
       for (const auto& h : patch.holes) add_loop(h);
+      patch_segments_.push_back(static_cast<int>(segments_.size()));
     }
     seg_points_.resize(segments_.size());
     overlaps_.resize(segments_.size());
@@ -482,8 +485,8 @@ private:
     const Frame frame = make_frame(scene_, patch);
     CDT cdt;
     std::vector<size_t> my_segments;
-    for (size_t s = 0; s < segments_.size(); ++s)
-      if (segments_[s].patch == p) my_segments.push_back(s);
+    for (int s = patch_segments_[static_cast<size_t>(p)]; s < patch_segments_[static_cast<size_t>(p) + 1]; ++s)
+      my_segments.push_back(static_cast<size_t>(s));
 
     auto insert_vertex = [&](int g) {
       auto vh = cdt.insert(frame.to2(positions_[static_cast<size_t>(g)]));
@@ -724,6 +727,7 @@ private:
   double eps_ = 0.0;
   std::vector<Vec3> positions_;
   std::vector<Segment> segments_;
+  std::vector<int> patch_segments_;  // patch p's segments: [patch_segments_[p], patch_segments_[p + 1])
   std::vector<std::vector<int>> seg_points_;
   std::vector<std::vector<int>> overlaps_;
   struct Pending {

@@ -100,14 +100,16 @@ struct SourceTree {
 }  // namespace
 
 FieldMode parse_field_mode(const std::string& text) {
+  if (text == "auto") return FieldMode::automatic;
   if (text == "gather") return FieldMode::gather;
   if (text == "fit") return FieldMode::fit;
   if (text == "mean") return FieldMode::mean;
-  throw InputError("--field " + text + ": expected one of gather, fit, mean");
+  throw InputError("--field " + text + ": expected one of auto, gather, fit, mean");
 }
 
 std::string to_string(FieldMode mode) {
   switch (mode) {
+    case FieldMode::automatic: return "auto";
     case FieldMode::gather: return "gather";
     case FieldMode::fit: return "fit";
     case FieldMode::mean: return "mean";
@@ -116,6 +118,18 @@ std::string to_string(FieldMode mode) {
 }
 
 NodalMethod nodal_method(FieldMode mode) { return mode == FieldMode::mean ? NodalMethod::mean : NodalMethod::linear_fit; }
+
+FieldMode resolve_field_mode(FieldMode requested, const Scene& scene, const Mesh& mesh, std::string* why) {
+  if (requested != FieldMode::automatic) return requested;
+  const double pairs = static_cast<double>(mesh.positions.size()) * static_cast<double>(scene.patches.size());
+  if (pairs <= kGatherBudget) return FieldMode::gather;
+  if (why)
+    *why = "field: the fit, not the gather: " + format_number(static_cast<double>(mesh.positions.size())) +
+           " vertices x " + std::to_string(scene.patches.size()) + " patches = " + format_number(pairs) +
+           " (vertex, patch) pairs, over the automatic gather's budget of " + format_number(kGatherBudget) +
+           " (--field gather forces it)";
+  return FieldMode::fit;
+}
 
 struct FieldEvaluator::Impl {
   const Scene& scene;
@@ -282,10 +296,10 @@ Rgb FieldEvaluator::radiosity(const Vec3& x, int patch, uint64_t id, FieldReport
 NodalField compute_field(const Scene& scene, const Mesh& mesh, const std::vector<Rgb>& element,
                          const SolveOptions& options, FieldReport* report, const ProgressFn& progress) {
   FieldReport rep;
-  rep.mode = options.field;
-  if (options.field != FieldMode::gather) {
+  rep.mode = resolve_field_mode(options.field, scene, mesh, &rep.why);
+  if (rep.mode != FieldMode::gather) {
     if (report) *report = rep;
-    return compute_nodal(scene, mesh, element, options.crease_angle, nodal_method(options.field));
+    return compute_nodal(scene, mesh, element, options.crease_angle, nodal_method(rep.mode));
   }
   // The display vertices (and where each one's triangles lie), then every
   // value anew.

@@ -20,7 +20,8 @@ namespace radmesh {
 
 // What the field pass did (gather only; fit and mean leave it zero).
 struct FieldReport {
-  FieldMode mode = FieldMode::gather;
+  FieldMode mode = FieldMode::gather;  // the mode used (automatic resolved)
+  std::string why;                     // why automatic did not gather ("" otherwise)
   long long display_vertices = 0;
   DirectCounts direct;             // per (vertex, emitter) pair
   long long on_other_surface = 0;  // vertices on another patch (a contact), taken a hair to their own side
@@ -83,6 +84,17 @@ private:
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };
+
+// The automatic field's budget: (display vertices) x (patches) at most this
+// many pairs for the gather. Both of its passes visit every patch per
+// vertex (the direct pass every occluder in the light's shaft); the Cornell
+// box has 3e5 pairs, a 1,280-triangle sphere in a room 2e7 (33 s of field
+// for 10 s of solve on this machine).
+inline constexpr double kGatherBudget = 2e7;
+
+// `requested`, or for FieldMode::automatic gather or fit by the budget
+// (with the reason in *why when it is fit).
+FieldMode resolve_field_mode(FieldMode requested, const Scene& scene, const Mesh& mesh, std::string* why = nullptr);
 
 // The display field of `mode` over `mesh` (see compute_nodal for how
 // display vertices are made). gather: every display vertex evaluated by a

@@ -6,6 +6,7 @@
 #include "radiosity/form_factor.h"
 #include "radiosity/sampling.h"
 #include "radiosity/transport.h"
+#include "radiosity/visibility.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -130,9 +131,28 @@ public:
   void finish() {
     out_.stats.links = count_links();
     out_.links.assign(links_.size(), {});
+    out_.cluster_links.clear();
+    auto cluster_link = [&](int p, const Link& l) {
+      HierarchicalClusterLink c;
+      c.receiver = code_centre(p);
+      c.source = code_centre(l.source);
+      (p >= 0 ? c.receiver_node : c.receiver_cluster) = p >= 0 ? p : cluster_of(p);
+      (l.source >= 0 ? c.source_node : c.source_cluster) = l.source >= 0 ? l.source : cluster_of(l.source);
+      c.form_factor = l.f * l.visible;
+      c.visible = l.visible;
+      const double rho = p >= 0 ? max3(rho_[static_cast<size_t>(p)]) : clusters_[static_cast<size_t>(cluster_of(p))].rho_max;
+      c.transport = rho * c.form_factor * code_radiosity(l.source);
+      out_.cluster_links.push_back(c);
+    };
     for (size_t p = 0; p < links_.size(); ++p)
-      for (const Link& l : links_[p])
-        if (l.source >= 0) out_.links[p].push_back({l.source, l.f * l.visible, l.visible});
+      for (const Link& l : links_[p]) {
+        if (l.source >= 0)
+          out_.links[p].push_back({l.source, l.f * l.visible, l.visible});
+        else
+          cluster_link(static_cast<int>(p), l);
+      }
+    for (size_t c = 0; c < clinks_.size(); ++c)
+      for (const Link& l : clinks_[c]) cluster_link(cluster_code(static_cast<int>(c)), l);
   }
 
 private:
@@ -276,7 +296,8 @@ private:
   void check_memory() {
     const long long links = count_links();
     const double bytes = static_cast<double>(links) * kLinkBytes +
-                         static_cast<double>(out_.stats.leaf_terms) * sizeof(std::pair<int, double>);
+                         static_cast<double>(out_.stats.leaf_terms) * sizeof(std::pair<int, double>) +
+                         (clusters_.empty() ? 0.0 : cluster_bytes(static_cast<double>(out_.tree.root_count())));
     if (bytes > limit_)
       throw NumericalError(scene_.source + ": hierarchical refinement reached " + std::to_string(links) +
                            " links (" + format_number(bytes / kGiB) + " GiB), more than the " + format_number(limit_ / kGiB) +
@@ -395,11 +416,13 @@ private:
     const size_t n = tree.nodes().size();
     terms_.resize(n);
     F_sum_.resize(n, 0.0);
+    F_approx_.resize(n, 0.0);
     std::vector<int> todo;
     for (size_t x = 0; x < n; ++x) {
       if (!tree.is_leaf(static_cast<int>(x))) {
         terms_[x] = {};
         F_sum_[x] = 0.0;
+        F_approx_[x] = 0.0;
         continue;
       }
       bool changed = false;
@@ -412,6 +435,7 @@ private:
     });
     std::fill(dirty_.begin(), dirty_.end(), 0);
     cluster_terms();
+    scale_rows();
     out_.stats.leaf_terms = 0;
     for (size_t x = 0; x < n; ++x) out_.stats.leaf_terms += static_cast<long long>(terms_[x].size());
     for (const auto& t : gterms_) out_.stats.leaf_terms += static_cast<long long>(t.size());
@@ -421,6 +445,7 @@ private:
     const ElementTree& tree = out_.tree;
     terms_[x].clear();
     F_sum_[x] = 0.0;
+    F_approx_[x] = 0.0;
     std::vector<const Link*> path;
     for (int a = static_cast<int>(x); a >= 0; a = tree.node(a).parent)
       for (const Link& l : links_[static_cast<size_t>(a)]) path.push_back(&l);
@@ -438,7 +463,7 @@ private:
     for (const Link* l : path) {
       if (l->visible <= 0.0) continue;  // hidden: kept as a link, never gathered
       if (l->source < 0) {  // a cluster: its normal groups, seen from the leaf's centroid
-        group_terms(cluster_of(l->source), c, t.normal, l->visible, terms_[x], F_sum_[x]);
+        group_terms(cluster_of(l->source), c, t.normal, l->visible, terms_[x], F_approx_[x]);
         continue;
       }
       const double f = form_factor(pts, tri_[static_cast<size_t>(l->source)]) * l->visible;
@@ -490,8 +515,7 @@ private:
     H_.assign(n, Rgb(0.0));
     for (size_t x = 0; x < n; ++x) {
       if (!tree.is_leaf(static_cast<int>(x))) continue;
-      for (const auto& [q, c] : terms_[x]) H_[x] += c * value(q);
-      H_[x] += pushed(static_cast<int>(x));
+      H_[x] = gathered(x);
     }
   }
 
@@ -499,9 +523,7 @@ private:
     const auto& node = out_.tree.node(p);
     Rgb b(0.0);
     if (node.child < 0) {
-      Rgb g(0.0);
-      for (const auto& [q, c] : terms_[static_cast<size_t>(p)]) g += c * value(q);
-      g += pushed(p);
+      const Rgb g = gathered(static_cast<size_t>(p));
       b = emit_[static_cast<size_t>(p)] + rho_[static_cast<size_t>(p)] * g;
     } else {
       double area = 0.0;
@@ -675,7 +697,7 @@ private:
   static constexpr int kGroups = 8;
   // Cluster links need a gap between the two bounding spheres of at least
   // this fraction of the larger radius; nearer pairs are split.
-  static constexpr double kClusterGap = 0.5;
+  static constexpr double kClusterGap = 1.0;
 
   struct Cluster {
     std::array<int, 2> child{};  // node codes
@@ -698,6 +720,17 @@ private:
     int group;
   };
 
+  // A cluster of at most this many roots is small and never ends a link:
+  // a link the oracle would make there is split down to its elements,
+  // whose links have exact form factors and their own visibility. Only big
+  // clusters, which the gap rule keeps far away, are approximated.
+  static constexpr int kSmallCluster = 16;
+  bool small_code(int code) const {
+    if (code >= 0) return false;
+    const Cluster& cl = clusters_[static_cast<size_t>(cluster_of(code))];
+    return cl.end - cl.begin <= kSmallCluster;
+  }
+
   static constexpr int cluster_code(int c) { return -2 - c; }
   static constexpr int cluster_of(int code) { return -2 - code; }
 
@@ -710,13 +743,73 @@ private:
     const int g = root_up_[static_cast<size_t>(out_.tree.node(leaf).root)];
     return g >= 0 ? HGacc_[static_cast<size_t>(g)] : Rgb(0.0);
   }
-  double row_sum(size_t leaf) const {
-    double f = F_sum_[leaf];
+  // What a leaf gathers: its exact terms (element sources, >= 0), then its
+  // approximate ones (big clusters' groups at its centroid, < 0, and what its
+  // root's groups push down) scaled by row_scale_.
+  Rgb gathered(size_t leaf) const {
+    Rgb exact(0.0), approx(0.0);
+    for (const auto& [q, c] : terms_[leaf]) (q >= 0 ? exact : approx) += c * value(q);
+    return exact + row_scale_[leaf] * (approx + pushed(static_cast<int>(leaf)));
+  }
+  // The approximate part of a leaf's form factors, before row_scale_.
+  double approx_row_sum(size_t leaf) const {
+    double f = F_approx_[leaf];
     if (!root_up_.empty()) {
       const int g = root_up_[static_cast<size_t>(out_.tree.node(static_cast<int>(leaf)).root)];
       if (g >= 0) f += FGacc_[static_cast<size_t>(g)];
     }
     return f;
+  }
+  double row_sum(size_t leaf) const { return F_sum_[leaf] + row_scale_[leaf] * approx_row_sum(leaf); }
+
+  // The cluster approximations keep a row near 1, not at 1; its exact
+  // terms are left as they are, and its approximate part is scaled. Per
+  // leaf with an approximate part, kEnclosureRays cosine-distributed rays
+  // from its centroid: when every one meets the front of a patch, the leaf
+  // is enclosed (nothing it sees is open sky or the back of a one-sided
+  // patch) and the approximate part is scaled so that the row sums to 1;
+  // otherwise it is scaled only where the row exceeds 1 (no leaf sees more
+  // than its hemisphere), down to 1. The furnace stays exact with clusters,
+  // and rho x row sum stays below 1 for reflectance near 1. The scale is
+  // kept within [0, kMaxRowScale].
+  static constexpr int kEnclosureRays = 64;
+  static constexpr double kMaxRowScale = 4.0;
+  bool enclosed(size_t leaf) const {
+    const Triangle& t = tri_[leaf];
+    const Vec3 c = t.centroid();
+    const Vec3 n = t.normal;
+    const Vec3 a = std::abs(n.x) < 0.9 ? Vec3(1, 0, 0) : Vec3(0, 1, 0);
+    const Vec3 u = glm::normalize(glm::cross(n, a)), v = glm::cross(n, u);
+    const Visibility& rays = visibility_.rays();
+    const double reach = 4.0 * scene_.diagonal();
+    const int patch = node_patch(static_cast<int>(leaf));
+    SplitMix rng(pair_seed(static_cast<uint64_t>(leaf), 0xE17C105EULL));
+    constexpr int side = 8;  // kEnclosureRays = side^2 strata
+    for (int k = 0; k < side * side; ++k) {
+      const double r1 = ((k / side) + rng.uniform()) / side, r2 = ((k % side) + rng.uniform()) / side;
+      const double r = std::sqrt(r1), phi = 2.0 * std::numbers::pi * r2;
+      const Vec3 d = r * std::cos(phi) * u + r * std::sin(phi) * v + std::sqrt(std::max(0.0, 1.0 - r1)) * n;
+      const int hit = rays.first_hit(c, d, reach, patch);
+      if (hit < 0 || glm::dot(scene_.patches[static_cast<size_t>(hit)].normal, d) >= 0.0) return false;
+    }
+    return true;
+  }
+  void scale_rows() {
+    const size_t n = B_.size();
+    row_scale_.resize(n, 1.0);
+    enclosed_.resize(n, -1);
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 64), [&](const tbb::blocked_range<size_t>& r) {
+      for (size_t x = r.begin(); x != r.end(); ++x) {
+        row_scale_[x] = 1.0;
+        if (!out_.tree.is_leaf(static_cast<int>(x))) continue;
+        const double approx = approx_row_sum(x);
+        if (!(approx > 0.0)) continue;
+        if (enclosed_[x] < 0) enclosed_[x] = enclosed(x) ? 1 : 0;
+        const double row = F_sum_[x] + approx;
+        if (enclosed_[x] == 1 || row > 1.0)
+          row_scale_[x] = std::clamp((1.0 - F_sum_[x]) / approx, 0.0, kMaxRowScale);
+      }
+    });
   }
 
   Vec3 code_centre(int code) const {
@@ -728,8 +821,15 @@ private:
   double code_area(int code) const {
     return code >= 0 ? tri_[static_cast<size_t>(code)].area : clusters_[static_cast<size_t>(cluster_of(code))].area;
   }
+  // The reflectance the cluster oracle weighs a receiver's error by: its
+  // largest channel, but 1 for an emitter (an emitter reflects little, yet
+  // its row says where its power goes in the energy balance); a cluster's
+  // largest over its members.
+  double element_oracle_rho(size_t e) const {
+    return max3(emit_[e]) > 0.0 ? 1.0 : max3(rho_[e]);
+  }
   double code_rho(int code) const {
-    return code >= 0 ? max3(rho_[static_cast<size_t>(code)]) : clusters_[static_cast<size_t>(cluster_of(code))].rho_max;
+    return code >= 0 ? element_oracle_rho(static_cast<size_t>(code)) : clusters_[static_cast<size_t>(cluster_of(code))].rho_max;
   }
   // The mean radiosity (largest channel) of a node: its power per area.
   double code_radiosity(int code) const {
@@ -776,6 +876,14 @@ private:
       corder_[static_cast<size_t>(r)] = r;
       centroids[static_cast<size_t>(r)] = tri_[static_cast<size_t>(r)].centroid();
     }
+    // Refused before any work when the clusters alone would not fit.
+    const double need = cluster_bytes(static_cast<double>(roots));
+    if (need > limit_)
+      throw NumericalError(scene_.source + ": the " + std::to_string(roots - 1) + " clusters above " +
+                           std::to_string(roots) + " initial elements need " + format_number(need / kGiB) +
+                           " GiB at least, more than the " + format_number(limit_ / kGiB) +
+                           " GiB allowed; use a larger --max-edge (hierarchical radiosity refines by itself) or "
+                           "raise --max-memory");
     clusters_.clear();
     clusters_.reserve(static_cast<size_t>(roots));
     build_cluster_node(0, roots, centroids);
@@ -796,7 +904,7 @@ private:
         if (code >= 0) {
           const Triangle& t = tri_[static_cast<size_t>(code)];
           items.push_back({t.area * t.normal, t.area * t.centroid(), t.area, {{code, t.area}}});
-          rho = std::max(rho, max3(rho_[static_cast<size_t>(code)]));
+          rho = std::max(rho, element_oracle_rho(static_cast<size_t>(code)));
         } else {
           const Cluster& ch = clusters_[static_cast<size_t>(cluster_of(code))];
           for (int g = ch.group_begin; g < ch.group_end; ++g) {
@@ -872,6 +980,15 @@ private:
     update_groups();
   }
 
+  // Bytes of the cluster structures over `roots` roots (roots - 1 clusters,
+  // about two groups each, every group's radiosity, gathering and sums).
+  static double cluster_bytes(double roots) {
+    const double groups = 2.0 * roots;
+    return roots * (sizeof(Cluster) + sizeof(int) + 2 * sizeof(double)) +
+           groups * (sizeof(Group) + sizeof(Contribution) + 3 * sizeof(Rgb) + 2 * sizeof(double) +
+                     sizeof(std::vector<std::pair<int, double>>));
+  }
+
   // Group radiosity from the roots' (area means of their leaves), children first.
   void update_groups() {
     for (int c = static_cast<int>(clusters_.size()) - 1; c >= 0; --c) {
@@ -885,8 +1002,10 @@ private:
     }
   }
 
-  // Form factors from a point x with normal n to the normal groups of
-  // cluster c, times `visible`, appended as (-2 - group, F) and summed into f_sum.
+  // Form factors from a point x with normal n (or, for a receiving group,
+  // its s / area: the same kernel both ways, so that area x F is
+  // reciprocal between two groups) to the normal groups of cluster c, times
+  // `visible`, appended as (-2 - group, F) and summed into f_sum.
   void group_terms(int c, const Vec3& x, const Vec3& n, double visible, std::vector<std::pair<int, double>>& out,
                    double& f_sum) const {
     const Cluster& cl = clusters_[static_cast<size_t>(c)];
@@ -915,16 +1034,19 @@ private:
           terms.clear();
           fsum = 0.0;
           const Group& gr = groups_[static_cast<size_t>(g)];
-          const double len = glm::length(gr.s);
-          if (!(len > 0.0)) continue;
-          const Vec3 n = gr.s / len;
+          const Vec3 n = gr.s / gr.area;  // not unit: the group's mean projected area per area
           for (const Link& l : clinks_[c]) {
             if (l.visible <= 0.0) continue;
             if (l.source < 0) {
               group_terms(cluster_of(l.source), gr.centroid, n, l.visible, terms, fsum);
             } else {
+              // An element source as a point (its area at its centroid), the
+              // kernel its own leaves use toward this group.
               const Triangle& t = tri_[static_cast<size_t>(l.source)];
-              const double f = point_polygon_form_factor(gr.centroid, n, t.v.data(), 3, t.normal) * l.visible;
+              const Vec3 r = gr.centroid - t.centroid();
+              const double d2 = glm::dot(r, r);
+              const double f = l.visible * t.area * std::max(0.0, glm::dot(t.normal, r)) *
+                               std::max(0.0, -glm::dot(n, r)) / (std::numbers::pi * d2 * d2);
               if (!(f > 0.0)) continue;
               terms.push_back({l.source, f});
               fsum += f;
@@ -1040,7 +1162,9 @@ private:
         for (int b : c.child) next.emplace_back(a, b);
       return;
     }
-    const bool split_p = p < 0 && (q >= 0 || code_radius(p) >= code_radius(q));
+    // A small cluster first (it may not end a link), else the larger.
+    const bool split_p = p < 0 && (q >= 0 || small_code(p) > small_code(q) ||
+                                   (small_code(p) == small_code(q) && code_radius(p) >= code_radius(q)));
     const int n = split_p ? p : q;
     for (int c : clusters_[static_cast<size_t>(cluster_of(n))].child) next.emplace_back(split_p ? c : p, split_p ? q : c);
   }
@@ -1071,7 +1195,7 @@ private:
           const double shape = cluster_shape_error(p, q);
           if (shape == 0.0) continue;
           const double rb = code_rho(p) * code_radiosity(q);
-          if (shape < 0.0 || rb * shape > hopt_.epsilon * scale_) {
+          if (shape < 0.0 || rb * shape > hopt_.epsilon * scale_ || small_code(p) || small_code(q)) {
             split[i] = 1;
             continue;
           }
@@ -1137,7 +1261,8 @@ private:
   std::vector<Rgb> previous_;  // node radiosity of the round before (for last_change)
   bool done_ = false;          // the stopping rule was met: step() changes nothing more
   int extrapolations_ = 0;     // Aitken steps of the sweeps, all rounds
-  std::vector<double> F_sum_;
+  std::vector<double> F_sum_;     // per leaf: its exact form factors (element sources)
+  std::vector<double> F_approx_;  // per leaf: its form factors to big clusters' groups
   std::vector<std::vector<std::pair<int, double>>> terms_;  // per leaf: (source node, F x visibility at the leaf)
   std::vector<std::vector<Link>> links_;  // per receiver node
   std::vector<char> dirty_;               // per node: links changed since the last leaf_terms (new nodes too)
@@ -1153,6 +1278,8 @@ private:
   std::vector<Rgb> GB_, HG_, HGacc_;      // per group: radiosity, gathered, gathered with its ancestors'
   std::vector<double> FG_, FGacc_;        // per group: form factor sum, with its ancestors'
   std::vector<std::pair<int, int>> cluster_next_children_;
+  std::vector<double> row_scale_;      // per node (leaves): what its approximate part is scaled by (scale_rows)
+  std::vector<signed char> enclosed_;  // per node: 1 enclosed, 0 not, -1 not yet known
 };
 
 }  // namespace
@@ -1208,7 +1335,7 @@ void check_hierarchical_options(const Scene& scene, const SolveOptions& options,
 struct HierarchicalSolver::Impl {
   Impl(const Scene& scene, const Mesh& initial, const SolveOptions& o, const HierarchicalOptions& h,
        const ProgressFn& progress)
-      : options(o), out{ElementTree(initial), {}, {}, {}, {}, {}, {}, {}} {
+      : options(o), out{ElementTree(initial), {}, {}, {}, {}, {}, {}, {}, {}} {
     run_in_arena(options.threads, [&] {
       solver = std::make_unique<Solver>(scene, options, h, out, progress);
       solver->start();

@@ -65,7 +65,10 @@ struct HierarchicalOptions {
   // and by more than baum_absolute (down to min_area). 0 = off.
   double baum_relative = 0.0;
   double baum_absolute = 0.0;
-  ClusterMode clusters = ClusterMode::off;
+  // volume by default: on the Cornell box at equal time it is as accurate
+  // as off, and on scenes of thousands of input triangles it is many times
+  // faster (README, "Clusters").
+  ClusterMode clusters = ClusterMode::volume;
 };
 
 struct HierarchicalStats {
@@ -107,11 +110,26 @@ struct HierarchicalLink {
   double visible = 1.0;
 };
 
+// A link with a cluster at one end or both (ClusterMode::volume): centres
+// of its two ends, the element node at an end that is one (-1 for a
+// cluster), the cluster at an end that is one (-1 for an element), F x
+// visibility from the two centres (the cluster's area over pi d^2), the
+// visible fraction, and rho_receiver x F x V x B_source (largest channel,
+// the largest reflectance of a receiving cluster, its mean radiosity for a
+// source cluster).
+struct HierarchicalClusterLink {
+  Vec3 receiver{0.0}, source{0.0};
+  int receiver_node = -1, source_node = -1;
+  int receiver_cluster = -1, source_cluster = -1;
+  double form_factor = 0.0, visible = 1.0, transport = 0.0;
+};
+
 struct HierarchicalSolution {
   ElementTree tree;
   std::vector<Rgb> node_radiosity;  // per tree node (inner nodes: area-weighted mean of children)
   std::vector<int> node_links;      // per tree node: links it gathers over
   std::vector<std::vector<HierarchicalLink>> links;  // per receiver node, filled at the end (not in on_round)
+  std::vector<HierarchicalClusterLink> cluster_links;  // filled at the end; links = these + `links`
   Mesh mesh;                        // conforming mesh: leaves, then zero-area fans
   std::vector<int> leaf_of;         // per mesh triangle: its leaf, or -1 (zero-area)
   Solution solution;                // per mesh triangle (zero-area: the leaf owning the edge) and per vertex

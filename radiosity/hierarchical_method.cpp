@@ -14,7 +14,8 @@ namespace {
 // The links of a hierarchical solution as lines from the receiver's centroid
 // to the source's, with the nodes' levels and patches, F x visibility, the
 // visible fraction, and the radiosity the link adds to its receiver
-// (rho_receiver x F x V x B_source, largest channel).
+// (rho_receiver x F x V x B_source, largest channel). Links with a cluster
+// end (HierarchicalClusterLink) have level and patch -1 at that end.
 LineSet link_line_set(const Scene& scene, const HierarchicalSolution& h) {
   LineSet out;
   std::vector<int> rl, sl, rp, sp;
@@ -34,6 +35,17 @@ LineSet link_line_set(const Scene& scene, const HierarchicalSolution& h) {
       const Rgb t = rho * h.node_radiosity[static_cast<size_t>(l.source)] * l.form_factor;
       transport.push_back(std::max({t.x, t.y, t.z}));
     }
+  }
+  // Links with a cluster end: level and patch -1 at that end.
+  for (const HierarchicalClusterLink& c : h.cluster_links) {
+    out.segments.push_back({c.receiver, c.source});
+    rl.push_back(c.receiver_node >= 0 ? h.tree.node(c.receiver_node).level : -1);
+    sl.push_back(c.source_node >= 0 ? h.tree.node(c.source_node).level : -1);
+    rp.push_back(c.receiver_node >= 0 ? h.tree.node(c.receiver_node).patch : -1);
+    sp.push_back(c.source_node >= 0 ? h.tree.node(c.source_node).patch : -1);
+    ff.push_back(c.form_factor);
+    vis.push_back(c.visible);
+    transport.push_back(c.transport);
   }
   out.int_fields = {{"receiver_level", rl}, {"source_level", sl}, {"receiver_patch", rp}, {"source_patch", sp}};
   out.real_fields = {{"form_factor", ff}, {"visible", vis}, {"transport", transport}};
@@ -82,7 +94,7 @@ Method make_hierarchical_method() {
        0.0, 0.0, 0.0, {to_string(d.clusters), to_string(d.clusters == ClusterMode::off ? ClusterMode::volume : ClusterMode::off)}},
       {"export_links", Kind::flag, "",
        "also write links.vtu, every link as a line from receiver to source (fields receiver_level, source_level, "
-       "receiver_patch, source_patch, form_factor, visible, transport)",
+       "receiver_patch, source_patch, form_factor, visible, transport; level and patch -1 at a cluster end)",
        0.0, 0.0, 1.0, {}},
   };
   m.quick = {{"epsilon", "0.02"}};

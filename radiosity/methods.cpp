@@ -166,11 +166,14 @@ MethodResult run_method(const Method& method, const Scene& scene, const Mesh& me
   check_solve_options(options);
   const MethodOptions opts(method.options, given, method.name);
   MethodResult r = method.solve(scene, mesh, options, opts, callbacks);
-  r.field.mode = options.field;
-  if (options.field == FieldMode::gather) {
+  r.field.mode = resolve_field_mode(options.field, scene, r.mesh, &r.field.why);
+  if (!r.field.why.empty()) r.solution.stats.skips.push_back(r.field.why);
+  if (r.field.mode == FieldMode::gather) {
     r.solution.nodal = compute_field(scene, r.mesh, r.solution.element, options, &r.field, callbacks.progress);
     r.seconds.emplace_back("direct", r.field.seconds_direct);
     r.seconds.emplace_back("gather", r.field.seconds_gather);
+  } else if (nodal_method(r.field.mode) != nodal_method(options.field)) {
+    r.solution.nodal = compute_nodal(scene, r.mesh, r.solution.element, options.crease_angle, nodal_method(r.field.mode));
   }
   return r;
 }

@@ -17,9 +17,11 @@ enum class NodalMethod { mean, linear_fit };
 
 // How the field users see (per-vertex radiosity) is made from a solution:
 // gather (exact direct light and a final gather at every vertex, field.h),
-// fit or mean (from the element values, compute_nodal).
-enum class FieldMode { gather, fit, mean };
-// "gather", "fit", "mean"; InputError naming the value otherwise.
+// fit or mean (from the element values, compute_nodal); automatic: gather
+// where its cost, (display vertices) x (patches), is within
+// kGatherBudget, else fit, saying so (resolve_field_mode).
+enum class FieldMode { automatic, gather, fit, mean };
+// "auto", "gather", "fit", "mean"; InputError naming the value otherwise.
 FieldMode parse_field_mode(const std::string& text);
 std::string to_string(FieldMode mode);
 // The element-value interpolation a solver uses for its own field: mean for
@@ -48,9 +50,10 @@ struct SolveOptions {
   double crease_angle = 20.0;
   // How vertex values are made (see FieldMode). run_method applies it to the
   // method's result; a solver's own field (compute_nodal) uses
-  // nodal_method(field). gather by default: on the Cornell box benchmark it
+  // nodal_method(field). automatic by default, which is gather on every
+  // scene of up to a few thousand patches: on the Cornell box benchmark it
   // gives a fraction of the error of the fit (README, "The field").
-  FieldMode field = FieldMode::gather;
+  FieldMode field = FieldMode::automatic;
 };
 
 // Checks option ranges; throws InputError naming the option and the value.

@@ -8,6 +8,7 @@
 
 #include <array>
 #include <numeric>
+#include <mutex>
 #include <optional>
 #include <string>
 
@@ -40,11 +41,22 @@ struct VisibilityEstimator::Impl {
     if (!occlusion.convex_enclosure()) embree.emplace(scene);
   }
   Occlusion occlusion;
-  std::optional<Visibility> embree;  // none in a convex enclosure
+  std::optional<Visibility> embree;  // none in a convex enclosure (until rays() asks)
+  std::once_flag built;
+  const Scene* scene = nullptr;
 };
 
 VisibilityEstimator::VisibilityEstimator(const Scene& scene, int rays)
-    : impl_(std::make_unique<Impl>(scene)), side_(strata_side(rays)) {}
+    : impl_(std::make_unique<Impl>(scene)), side_(strata_side(rays)) {
+  impl_->scene = &scene;
+}
+
+const Visibility& VisibilityEstimator::rays() const {
+  std::call_once(impl_->built, [&] {
+    if (!impl_->embree) impl_->embree.emplace(*impl_->scene);
+  });
+  return *impl_->embree;
+}
 
 VisibilityEstimator::~VisibilityEstimator() = default;
 

@@ -16,6 +16,8 @@
 
 namespace radmesh {
 
+class Visibility;
+
 // Elements as the solvers see them: per element its triangle (vertices, the
 // patch normal, area), patch, material values and zero-area flag. A
 // zero-area element never enters a form factor, never receives or shoots.
@@ -69,6 +71,10 @@ public:
   // The open segment (x, y) is clear of every patch but pa and pb (always
   // in a convex enclosure). Thread-safe.
   bool visible(const Vec3& x, const Vec3& y, int pa, int pb) const;
+
+  // Embree's scene, built on the first call even in a convex enclosure
+  // (where visible_fraction needs none). Thread-safe.
+  const Visibility& rays() const;
 
   bool convex_enclosure() const;
   // Patches p and q can exchange light (Occlusion::facing).

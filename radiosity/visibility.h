@@ -24,6 +24,12 @@ public:
   // `ignore_a` and `ignore_b` (-1: none). Thread-safe.
   bool visible(const Vec3& from, const Vec3& to, int ignore_a, int ignore_b) const;
 
+  // The patch first hit by the ray from `from` along `direction` (any
+  // length) between 1e-7 and 1 times `reach` times the direction's length
+  // (a patch lying on `from` is not hit), ignoring patch `ignore`; -1 when
+  // it hits nothing. Thread-safe.
+  int first_hit(const Vec3& from, const Vec3& direction, double reach, int ignore) const;
+
 private:
   struct Impl;
   std::unique_ptr<Impl> impl_;

@@ -124,4 +124,33 @@ bool Visibility::visible(const Vec3& from, const Vec3& to, int ignore_a, int ign
   return ray.tfar >= 0.0f;  // Embree sets tfar to -inf when occluded
 }
 
+int Visibility::first_hit(const Vec3& from, const Vec3& direction, double reach, int ignore) const {
+  const Impl& m = *impl_;
+  QueryContext ctx;
+  rtcInitIntersectContext(&ctx.base);
+  ctx.base.filter = ignore_filter;
+  ctx.prim_patch = m.prim_patch.data();
+  ctx.ignore_a = ignore;
+  ctx.ignore_b = -1;
+  const Vec3 o = from - m.origin;
+  RTCRayHit rh;
+  rh.ray.org_x = static_cast<float>(o.x);
+  rh.ray.org_y = static_cast<float>(o.y);
+  rh.ray.org_z = static_cast<float>(o.z);
+  rh.ray.dir_x = static_cast<float>(direction.x);
+  rh.ray.dir_y = static_cast<float>(direction.y);
+  rh.ray.dir_z = static_cast<float>(direction.z);
+  rh.ray.tnear = static_cast<float>(1e-7 * reach);  // not the surface the ray leaves (nor one lying on it)
+  rh.ray.tfar = static_cast<float>(reach);
+  rh.ray.time = 0.0f;
+  rh.ray.mask = 0xFFFFFFFFu;
+  rh.ray.id = 0;
+  rh.ray.flags = 0;
+  rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+  rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
+  rtcIntersect1(m.scene, &ctx.base, &rh);
+  if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return -1;
+  return m.prim_patch[rh.hit.primID];
+}
+
 }  // namespace radmesh

@@ -285,19 +285,24 @@ TEST(HierarchicalStress, MemoryLimitIsAClearErrorBeforeAnyCrash) {
   SolveOptions tiny, small;
   tiny.max_memory_gb = 1e-6;
   small.max_memory_gb = 8.0 / 1024.0;  // 8 MiB
-  auto message = [&](const SolveOptions& o) {
-    try {
-      solve_hierarchical(s, coarse, o, {});
-    } catch (const NumericalError& e) {
-      return std::string(e.what());
-    }
-    return std::string("no error");
-  };
-  const std::string first = message(tiny), later = message(small);
-  EXPECT_NE(first.find("pairs to link"), std::string::npos) << first;
-  EXPECT_NE(first.find("cornell_box.obj"), std::string::npos) << first;
-  EXPECT_NE(later.find("refinement reached"), std::string::npos) << later;
-  EXPECT_NE(later.find("--epsilon"), std::string::npos) << later;
+  for (ClusterMode mode : {ClusterMode::off, ClusterMode::volume}) {
+    HierarchicalOptions ho;
+    ho.clusters = mode;
+    auto message = [&](const SolveOptions& o) {
+      try {
+        solve_hierarchical(s, coarse, o, ho);
+      } catch (const NumericalError& e) {
+        return std::string(e.what());
+      }
+      return std::string("no error");
+    };
+    const std::string first = message(tiny), later = message(small);
+    // Without clusters the root pairs are refused; with them, the clusters.
+    EXPECT_NE(first.find(mode == ClusterMode::off ? "pairs to link" : "clusters above"), std::string::npos) << first;
+    EXPECT_NE(first.find("cornell_box.obj"), std::string::npos) << first;
+    EXPECT_NE(later.find("refinement reached"), std::string::npos) << later;
+    EXPECT_NE(later.find("--epsilon"), std::string::npos) << later;
+  }
 }
 
 TEST(Hierarchical, SolverObjectStepsToTheOneOffResult) {
@@ -326,9 +331,10 @@ TEST(Hierarchical, SolverObjectStepsToTheOneOffResult) {
   ASSERT_EQ(stepped.solution.element.size(), once.solution.element.size());
   for (size_t t = 0; t < once.solution.element.size(); ++t)
     EXPECT_EQ(stepped.solution.element[t], once.solution.element[t]);
-  long long published = 0;
+  long long published = static_cast<long long>(stepped.cluster_links.size());
   for (const auto& l : stepped.links) published += static_cast<long long>(l.size());
   EXPECT_EQ(published, stepped.stats.links);
+  EXPECT_EQ(static_cast<long long>(stepped.cluster_links.size()), stepped.stats.cluster_links);
 }
 
 TEST(Hierarchical, ReportsProgressFromTheCallingThread) {
