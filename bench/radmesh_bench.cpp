@@ -7,9 +7,12 @@
 //   radmesh_bench --direct [--out DIR] [--quick]   (meshing study: direct light only)
 //   radmesh_bench --make-reference [--max-edge L] [--rays N] [--reference-out F]   (Cornell box reference)
 //   radmesh_bench --load-times [--out DIR]   (scene loading per format, 10^6 triangles)
+//   radmesh_bench --scaling [--out DIR] [--max-triangles N] [--clusters volume,off] [--time-limit S]
+//                 (bench/scaling.h: time, links and memory against input size, one process per run)
 
 #include "bench/mesh_writers.h"
 #include "bench/plot.h"
+#include "bench/scaling.h"
 #include "io/atomic_file.h"
 #include "io/obj_reader.h"
 #include "io/scene_reader.h"
@@ -575,8 +578,28 @@ int main(int argc, char** argv) {
   app.add_option("--rays", ref_rays, "reference shadow rays per pair");
   std::string ref_out;
   app.add_option("--reference-out", ref_out, "with --make-reference: write here instead of the data directory");
+  bool scaling = false;
+  bench::ScalingOptions so;
+  so.radmesh = RADMESH_CLI;
+  std::string modes = "volume,off";
+  app.add_flag("--scaling", scaling,
+               "scaling benchmark instead: rooms of 10^3 .. --max-triangles input triangles and the bunny, each "
+               "run by the radmesh program in its own process; writes scaling.csv, scaling_time.png, "
+               "scaling_links.png");
+  app.add_option("--max-triangles", so.max_triangles, "--scaling: the largest generated scene (input triangles)");
+  app.add_option("--clusters", modes, "--scaling: comma-separated --clusters modes of the hierarchical runs");
+  app.add_option("--time-limit", so.time_limit, "--scaling: seconds per run before it is stopped and noted");
+  app.add_option("--radmesh", so.radmesh, "--scaling: the radmesh program to run");
   CLI11_PARSE(app, argc, argv);
   try {
+    if (scaling) {
+      so.out_dir = out_dir;
+      so.data = data;
+      so.modes.clear();
+      std::stringstream ms(modes);
+      for (std::string m; std::getline(ms, m, ',');) so.modes.push_back(m);
+      return bench::scaling_benchmark(so);
+    }
     if (reference) return make_reference(data, ref_edge, ref_rays, ref_out);
     if (direct) return direct_study(data, out_dir, quick);
     if (loads) return load_times(out_dir);

@@ -1152,9 +1152,12 @@ private:
     return rb * (l.spread + unseen) > hopt_.epsilon * scale_;
   }
 
-  // Queues the children pairs of (p, q): the larger cluster (by radius) is
-  // split; a cluster paired with itself gives every pair of its children.
-  void split_cluster_pair(int p, int q, std::vector<std::pair<int, int>>& next) const {
+  // Queues the children pairs of (p, q), one end at least a cluster: a
+  // small cluster first (it may not end a link), else the larger end by
+  // radius, an element too (split in four, as the element linking would)
+  // while it may be split. A cluster paired with itself gives every pair of
+  // its children.
+  void split_cluster_pair(int p, int q, std::vector<std::pair<int, int>>& next) {
     if (p == q) {
       if (p >= 0) return;  // a planar element does not see itself
       const Cluster& c = clusters_[static_cast<size_t>(cluster_of(p))];
@@ -1162,11 +1165,25 @@ private:
         for (int b : c.child) next.emplace_back(a, b);
       return;
     }
-    // A small cluster first (it may not end a link), else the larger.
-    const bool split_p = p < 0 && (q >= 0 || small_code(p) > small_code(q) ||
-                                   (small_code(p) == small_code(q) && code_radius(p) >= code_radius(q)));
+    auto may_split = [&](int code) { return code < 0 || splittable(code); };
+    bool split_p;
+    if (small_code(p) != small_code(q))
+      split_p = small_code(p);
+    else if (may_split(p) != may_split(q))
+      split_p = may_split(p);
+    else
+      split_p = code_radius(p) >= code_radius(q);
     const int n = split_p ? p : q;
-    for (int c : clusters_[static_cast<size_t>(cluster_of(n))].child) next.emplace_back(split_p ? c : p, split_p ? q : c);
+    if (n < 0) {
+      for (int c : clusters_[static_cast<size_t>(cluster_of(n))].child) next.emplace_back(split_p ? c : p, split_p ? q : c);
+      return;
+    }
+    int first = out_.tree.node(n).child;
+    if (first < 0) {
+      first = out_.tree.split(n);
+      grow();
+    }
+    for (int c = first; c < first + 4; ++c) next.emplace_back(split_p ? c : p, split_p ? q : c);
   }
 
   // Links pairs with a cluster at one end or both, top down: a pair is

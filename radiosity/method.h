@@ -139,7 +139,8 @@ std::vector<std::pair<OptionSpec, std::vector<std::string>>> all_method_options(
 // Checks `given` against the method (InputError for an option the method
 // does not take, naming the methods that do), solves, and makes the field
 // of options.field (compute_field): with gather, solution.nodal is replaced,
-// `field` says how, and "direct" and "gather" join `seconds`.
+// `field` says how, and "direct" and "gather" join `seconds`; "setup" (first)
+// is the wall time of the solve its own phases leave out.
 MethodResult run_method(const Method& method, const Scene& scene, const Mesh& mesh, const SolveOptions& options,
                         const OptionValues& given = {}, const SolveCallbacks& callbacks = {});
 

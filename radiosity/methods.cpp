@@ -5,6 +5,7 @@
 #include "meshing/errors.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdlib>
 
@@ -165,7 +166,15 @@ MethodResult run_method(const Method& method, const Scene& scene, const Mesh& me
                         const OptionValues& given, const SolveCallbacks& callbacks) {
   check_solve_options(options);
   const MethodOptions opts(method.options, given, method.name);
+  const auto start = std::chrono::steady_clock::now();
   MethodResult r = method.solve(scene, mesh, options, opts, callbacks);
+  // What the method's own phases leave out of its wall time (building its
+  // structures: visibility, clusters) is its "setup", so that the phases
+  // add up to the whole run.
+  double phases = 0.0;
+  for (const auto& [name, s] : r.seconds) phases += s;
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  r.seconds.insert(r.seconds.begin(), {"setup", std::max(0.0, wall - phases)});
   r.field.mode = resolve_field_mode(options.field, scene, r.mesh, &r.field.why);
   if (!r.field.why.empty()) r.solution.stats.skips.push_back(r.field.why);
   if (r.field.mode == FieldMode::gather) {
