@@ -3,6 +3,7 @@
 #include "radiosity/hierarchical.h"
 
 #include "meshing/errors.h"
+#include "radiosity/clusters.h"
 #include "radiosity/form_factor.h"
 #include "radiosity/sampling.h"
 #include "radiosity/transport.h"
@@ -140,7 +141,7 @@ public:
       (l.source >= 0 ? c.source_node : c.source_cluster) = l.source >= 0 ? l.source : cluster_of(l.source);
       c.form_factor = l.f * l.visible;
       c.visible = l.visible;
-      const double rho = p >= 0 ? max3(rho_[static_cast<size_t>(p)]) : clusters_[static_cast<size_t>(cluster_of(p))].rho_max;
+      const double rho = p >= 0 ? max3(rho_[static_cast<size_t>(p)]) : ct_.cluster(cluster_of(p)).weight;
       c.transport = rho * c.form_factor * code_radiosity(l.source);
       out_.cluster_links.push_back(c);
     };
@@ -297,7 +298,7 @@ private:
     const long long links = count_links();
     const double bytes = static_cast<double>(links) * kLinkBytes +
                          static_cast<double>(out_.stats.leaf_terms) * sizeof(std::pair<int, double>) +
-                         (clusters_.empty() ? 0.0 : cluster_bytes(static_cast<double>(out_.tree.root_count())));
+                         ClusterTree::bytes(static_cast<double>(ct_.size()), static_cast<double>(ct_.group_count()));
     if (bytes > limit_)
       throw NumericalError(scene_.source + ": hierarchical refinement reached " + std::to_string(links) +
                            " links (" + format_number(bytes / kGiB) + " GiB), more than the " + format_number(limit_ / kGiB) +
@@ -387,9 +388,9 @@ private:
     }
     // Split cluster links become pairs of their children first: a pair of
     // two elements then goes to the element linking with the rest.
-    for (auto& [p, q] : cluster_next) split_cluster_pair(p, q, cluster_next_children_);
-    std::vector<std::pair<int, int>> elements = link_cluster_pairs(std::move(cluster_next_children_));
-    cluster_next_children_.clear();
+    std::vector<std::pair<int, int>> children;
+    for (auto& [p, q] : cluster_next) split_cluster_pair(p, q, children);
+    std::vector<std::pair<int, int>> elements = link_cluster_pairs(std::move(children));
     next.insert(next.end(), elements.begin(), elements.end());
     link_pairs(std::move(next));
     return refined;
@@ -463,7 +464,7 @@ private:
     for (const Link* l : path) {
       if (l->visible <= 0.0) continue;  // hidden: kept as a link, never gathered
       if (l->source < 0) {  // a cluster: its normal groups, seen from the leaf's centroid
-        group_terms(cluster_of(l->source), c, t.normal, l->visible, terms_[x], F_approx_[x]);
+        ct_.form_factors(cluster_of(l->source), c, t.normal, l->visible, terms_[x], F_approx_[x]);
         continue;
       }
       const double f = form_factor(pts, tri_[static_cast<size_t>(l->source)]) * l->visible;
@@ -669,8 +670,8 @@ private:
     st.rays_skipped = o.stats.rays_skipped;
     st.pairs_unoccludable = o.stats.pairs_unoccludable;
     st.convex_enclosure = visibility_.convex_enclosure();
-    o.stats.clusters = static_cast<int>(clusters_.size());
-    o.stats.cluster_groups = static_cast<int>(groups_.size());
+    o.stats.clusters = static_cast<int>(ct_.size());
+    o.stats.cluster_groups = static_cast<int>(ct_.group_count());
     o.stats.cluster_links = 0;
     for (const auto& l : clinks_) o.stats.cluster_links += static_cast<long long>(l.size());
     for (const auto& l : links_)
@@ -682,65 +683,34 @@ private:
   }
 
   // ---------------------------------------------------------------- clusters
-  // ClusterMode::volume: a binary box hierarchy over the roots (median splits
-  // of their centroids on the longest axis). A link has a node code at each
-  // end: an element node (>= 0) or a cluster (cluster_code(c) <= -2). Each
-  // cluster keeps up to kGroups normal groups: members merged by normal
-  // (greedily, the two closest normals first), each with s = sum of area x
-  // unit normal, its centroid and its mean radiosity. Light leaving a group
-  // toward direction w is taken as B x max(0, s . w) / pi per steradian,
-  // exact while the group's normals are within 90 degrees of each other and
-  // all face w or all face away. A link from a cluster is gathered per
-  // group of the source; a cluster receives per group of its own (at the
-  // group's centroid and mean normal), and what a group gathers is pushed
-  // down to every leaf below it (through the group its root belongs to).
-  static constexpr int kGroups = 8;
+  // ClusterMode::volume: the cluster tree above the roots (clusters.h). A
+  // link has a node code at each end: an element node (>= 0) or a cluster
+  // (cluster_code(c) <= -2). A link from a cluster is gathered per group of
+  // the source; a cluster receives per group of its own (at the group's
+  // centroid, with s / area as its normal), and what a group gathers is
+  // pushed down to every leaf below it (through the group its root belongs to).
+  //
   // Cluster links need a gap between the two bounding spheres of at least
   // this fraction of the larger radius; nearer pairs are split.
   static constexpr double kClusterGap = 1.0;
-
-  struct Cluster {
-    std::array<int, 2> child{};  // node codes
-    int begin = 0, end = 0;      // its roots: corder_[begin, end)
-    Vec3 centre{0.0};            // area-weighted centroid
-    double radius = 0.0, area = 0.0, rho_max = 0.0;
-    int group_begin = 0, group_end = 0;
-    int contrib_begin = 0, contrib_end = 0;
-  };
-  struct Group {
-    Vec3 s{0.0};  // sum over members of area x unit normal
-    Vec3 centroid{0.0};
-    double area = 0.0;
-    int up = -1;  // the group of the parent cluster it belongs to
-  };
-  // A member of a group: an element root (>= 0) or a child group (-2 - g).
-  struct Contribution {
-    int from;
-    double area;
-    int group;
-  };
 
   // A cluster of at most this many roots is small and never ends a link:
   // a link the oracle would make there is split down to its elements,
   // whose links have exact form factors and their own visibility. Only big
   // clusters, which the gap rule keeps far away, are approximated.
   static constexpr int kSmallCluster = 16;
-  bool small_code(int code) const {
-    if (code >= 0) return false;
-    const Cluster& cl = clusters_[static_cast<size_t>(cluster_of(code))];
-    return cl.end - cl.begin <= kSmallCluster;
-  }
+  bool small_code(int code) const { return code < 0 && ct_.members(cluster_of(code)) <= kSmallCluster; }
 
-  static constexpr int cluster_code(int c) { return -2 - c; }
-  static constexpr int cluster_of(int code) { return -2 - code; }
+  static constexpr int cluster_code(int c) { return ClusterTree::code(c); }
+  static constexpr int cluster_of(int code) { return ClusterTree::index(code); }
 
   // Radiosity of a term's source: an element node, or a group (-2 - g).
   Rgb value(int code) const { return code >= 0 ? B_[static_cast<size_t>(code)] : GB_[static_cast<size_t>(-2 - code)]; }
   // What cluster links give a leaf: the pushed gathering of the group its
   // root belongs to, and that group's form factors.
   Rgb pushed(int leaf) const {
-    if (root_up_.empty()) return Rgb(0.0);
-    const int g = root_up_[static_cast<size_t>(out_.tree.node(leaf).root)];
+    if (ct_.empty()) return Rgb(0.0);
+    const int g = ct_.root_group(out_.tree.node(leaf).root);
     return g >= 0 ? HGacc_[static_cast<size_t>(g)] : Rgb(0.0);
   }
   // What a leaf gathers: its exact terms (element sources, >= 0), then its
@@ -754,8 +724,8 @@ private:
   // The approximate part of a leaf's form factors, before row_scale_.
   double approx_row_sum(size_t leaf) const {
     double f = F_approx_[leaf];
-    if (!root_up_.empty()) {
-      const int g = root_up_[static_cast<size_t>(out_.tree.node(static_cast<int>(leaf)).root)];
+    if (!ct_.empty()) {
+      const int g = ct_.root_group(out_.tree.node(static_cast<int>(leaf)).root);
       if (g >= 0) f += FGacc_[static_cast<size_t>(g)];
     }
     return f;
@@ -813,13 +783,13 @@ private:
   }
 
   Vec3 code_centre(int code) const {
-    return code >= 0 ? tri_[static_cast<size_t>(code)].centroid() : clusters_[static_cast<size_t>(cluster_of(code))].centre;
+    return code >= 0 ? tri_[static_cast<size_t>(code)].centroid() : ct_.cluster(cluster_of(code)).centre;
   }
   double code_radius(int code) const {
-    return code >= 0 ? tri_[static_cast<size_t>(code)].radius : clusters_[static_cast<size_t>(cluster_of(code))].radius;
+    return code >= 0 ? tri_[static_cast<size_t>(code)].radius : ct_.cluster(cluster_of(code)).radius;
   }
   double code_area(int code) const {
-    return code >= 0 ? tri_[static_cast<size_t>(code)].area : clusters_[static_cast<size_t>(cluster_of(code))].area;
+    return code >= 0 ? tri_[static_cast<size_t>(code)].area : ct_.cluster(cluster_of(code)).area;
   }
   // The reflectance the cluster oracle weighs a receiver's error by: its
   // largest channel, but 1 for an emitter (an emitter reflects little, yet
@@ -829,216 +799,63 @@ private:
     return max3(emit_[e]) > 0.0 ? 1.0 : max3(rho_[e]);
   }
   double code_rho(int code) const {
-    return code >= 0 ? element_oracle_rho(static_cast<size_t>(code)) : clusters_[static_cast<size_t>(cluster_of(code))].rho_max;
+    return code >= 0 ? element_oracle_rho(static_cast<size_t>(code)) : ct_.cluster(cluster_of(code)).weight;
   }
   // The mean radiosity (largest channel) of a node: its power per area.
   double code_radiosity(int code) const {
-    if (code >= 0) return max3(B_[static_cast<size_t>(code)]);
-    const Cluster& c = clusters_[static_cast<size_t>(cluster_of(code))];
-    Rgb sum(0.0);
-    for (int g = c.group_begin; g < c.group_end; ++g) sum += groups_[static_cast<size_t>(g)].area * GB_[static_cast<size_t>(g)];
-    return max3(sum) / c.area;
+    return max3(code >= 0 ? B_[static_cast<size_t>(code)] : ct_.mean(cluster_of(code), GB_));
   }
   uint64_t code_key(int code) const {
     return code >= 0 ? static_cast<uint64_t>(code) : (uint64_t{1} << 40) + static_cast<uint64_t>(cluster_of(code));
   }
 
-  int build_cluster_node(int begin, int end, std::vector<Vec3>& centroids) {
-    if (end - begin == 1) return corder_[static_cast<size_t>(begin)];
-    const int c = static_cast<int>(clusters_.size());
-    clusters_.emplace_back();
-    clusters_.back().begin = begin;
-    clusters_.back().end = end;
-    Vec3 lo(std::numeric_limits<double>::infinity()), hi(-std::numeric_limits<double>::infinity());
-    for (int i = begin; i < end; ++i) {
-      lo = glm::min(lo, centroids[static_cast<size_t>(corder_[static_cast<size_t>(i)])]);
-      hi = glm::max(hi, centroids[static_cast<size_t>(corder_[static_cast<size_t>(i)])]);
-    }
-    const Vec3 e = hi - lo;
-    const int axis = e.x >= e.y && e.x >= e.z ? 0 : (e.y >= e.z ? 1 : 2);
-    const int mid = begin + (end - begin) / 2;
-    std::nth_element(corder_.begin() + begin, corder_.begin() + mid, corder_.begin() + end, [&](int a, int b) {
-      const double ca = centroids[static_cast<size_t>(a)][axis], cb = centroids[static_cast<size_t>(b)][axis];
-      return ca < cb || (ca == cb && a < b);
-    });
-    const int left = build_cluster_node(begin, mid, centroids);
-    const int right = build_cluster_node(mid, end, centroids);
-    clusters_[static_cast<size_t>(c)].child = {left, right};
-    return cluster_code(c);
-  }
-
   void build_clusters() {
-    const ElementTree& tree = out_.tree;
-    const int roots = tree.root_count();
-    corder_.resize(static_cast<size_t>(roots));
-    std::vector<Vec3> centroids(static_cast<size_t>(roots));
-    for (int r = 0; r < roots; ++r) {
-      corder_[static_cast<size_t>(r)] = r;
-      centroids[static_cast<size_t>(r)] = tri_[static_cast<size_t>(r)].centroid();
-    }
-    // Refused before any work when the clusters alone would not fit.
-    const double need = cluster_bytes(static_cast<double>(roots));
+    const int roots = out_.tree.root_count();
+    // Refused before any work when the clusters alone would not fit (at
+    // least one group per cluster).
+    const double need = ClusterTree::bytes(roots - 1.0, roots - 1.0);
     if (need > limit_)
       throw NumericalError(scene_.source + ": the " + std::to_string(roots - 1) + " clusters above " +
                            std::to_string(roots) + " initial elements need " + format_number(need / kGiB) +
                            " GiB at least, more than the " + format_number(limit_ / kGiB) +
                            " GiB allowed; use a larger --max-edge (hierarchical radiosity refines by itself) or "
                            "raise --max-memory");
-    clusters_.clear();
-    clusters_.reserve(static_cast<size_t>(roots));
-    build_cluster_node(0, roots, centroids);
-    root_up_.assign(static_cast<size_t>(roots), -1);
-    groups_.clear();
-    contrib_.clear();
-    // Children before parents: clusters were numbered parents first.
-    struct Item {
-      Vec3 s{0.0}, moment{0.0};
-      double area = 0.0;
-      std::vector<std::pair<int, double>> from;  // (element root or -2 - group, area)
-    };
-    for (int c = static_cast<int>(clusters_.size()) - 1; c >= 0; --c) {
-      Cluster& cl = clusters_[static_cast<size_t>(c)];
-      std::vector<Item> items;
-      double rho = 0.0;
-      for (int code : cl.child) {
-        if (code >= 0) {
-          const Triangle& t = tri_[static_cast<size_t>(code)];
-          items.push_back({t.area * t.normal, t.area * t.centroid(), t.area, {{code, t.area}}});
-          rho = std::max(rho, element_oracle_rho(static_cast<size_t>(code)));
-        } else {
-          const Cluster& ch = clusters_[static_cast<size_t>(cluster_of(code))];
-          for (int g = ch.group_begin; g < ch.group_end; ++g) {
-            const Group& gr = groups_[static_cast<size_t>(g)];
-            items.push_back({gr.s, gr.area * gr.centroid, gr.area, {{-2 - g, gr.area}}});
-          }
-          rho = std::max(rho, ch.rho_max);
-        }
-      }
-      auto direction = [](const Item& it) {
-        const double l = glm::length(it.s);
-        return l > 0.0 ? it.s / l : Vec3(0.0);
-      };
-      while (items.size() > static_cast<size_t>(kGroups)) {
-        size_t bi = 0, bj = 1;
-        double best = -2.0;
-        for (size_t i = 0; i < items.size(); ++i)
-          for (size_t j = i + 1; j < items.size(); ++j) {
-            const double d = glm::dot(direction(items[i]), direction(items[j]));
-            if (d > best) {
-              best = d;
-              bi = i;
-              bj = j;
-            }
-          }
-        Item& a = items[bi];
-        a.s += items[bj].s;
-        a.moment += items[bj].moment;
-        a.area += items[bj].area;
-        a.from.insert(a.from.end(), items[bj].from.begin(), items[bj].from.end());
-        items.erase(items.begin() + static_cast<std::ptrdiff_t>(bj));
-      }
-      cl.group_begin = static_cast<int>(groups_.size());
-      cl.contrib_begin = static_cast<int>(contrib_.size());
-      Vec3 moment(0.0);
-      for (const Item& it : items) {
-        const int g = static_cast<int>(groups_.size());
-        groups_.push_back({it.s, it.moment / it.area, it.area, -1});
-        for (const auto& [from, a] : it.from) {
-          contrib_.push_back({from, a, g});
-          if (from >= 0)
-            root_up_[static_cast<size_t>(from)] = g;
-          else
-            groups_[static_cast<size_t>(-2 - from)].up = g;
-        }
-        cl.area += it.area;
-        moment += it.moment;
-      }
-      cl.group_end = static_cast<int>(groups_.size());
-      cl.contrib_end = static_cast<int>(contrib_.size());
-      cl.centre = moment / cl.area;
-      cl.rho_max = rho;
-      for (int code : cl.child) {
-        if (code >= 0) {
-          for (const Vec3& v : tri_[static_cast<size_t>(code)].v) cl.radius = std::max(cl.radius, glm::length(v - cl.centre));
-        } else {
-          const Cluster& ch = clusters_[static_cast<size_t>(cluster_of(code))];
-          cl.radius = std::max(cl.radius, glm::length(ch.centre - cl.centre) + ch.radius);
-        }
-      }
-    }
-    cumulative_.assign(static_cast<size_t>(roots) + 1, 0.0);
-    for (int i = 0; i < roots; ++i)
-      cumulative_[static_cast<size_t>(i) + 1] =
-          cumulative_[static_cast<size_t>(i)] + tri_[static_cast<size_t>(corder_[static_cast<size_t>(i)])].area;
-    clinks_.assign(clusters_.size(), {});
-    GB_.assign(groups_.size(), Rgb(0.0));
-    HG_.assign(groups_.size(), Rgb(0.0));
-    HGacc_.assign(groups_.size(), Rgb(0.0));
-    FG_.assign(groups_.size(), 0.0);
-    FGacc_.assign(groups_.size(), 0.0);
-    gterms_.assign(groups_.size(), {});
+    std::vector<double> weight(static_cast<size_t>(roots));
+    for (int r = 0; r < roots; ++r) weight[static_cast<size_t>(r)] = element_oracle_rho(static_cast<size_t>(r));
+    ct_ = ClusterTree(std::vector<Triangle>(tri_.begin(), tri_.begin() + roots), weight);
+    const size_t groups = ct_.group_count();
+    clinks_.assign(ct_.size(), {});
+    HG_.assign(groups, Rgb(0.0));
+    HGacc_.assign(groups, Rgb(0.0));
+    FG_.assign(groups, 0.0);
+    FGacc_.assign(groups, 0.0);
+    gterms_.assign(groups, {});
     update_groups();
   }
 
-  // Bytes of the cluster structures over `roots` roots (roots - 1 clusters,
-  // about two groups each, every group's radiosity, gathering and sums).
-  static double cluster_bytes(double roots) {
-    const double groups = 2.0 * roots;
-    return roots * (sizeof(Cluster) + sizeof(int) + 2 * sizeof(double)) +
-           groups * (sizeof(Group) + sizeof(Contribution) + 3 * sizeof(Rgb) + 2 * sizeof(double) +
-                     sizeof(std::vector<std::pair<int, double>>));
-  }
-
-  // Group radiosity from the roots' (area means of their leaves), children first.
+  // Group radiosity from the roots' (area means of their leaves).
   void update_groups() {
-    for (int c = static_cast<int>(clusters_.size()) - 1; c >= 0; --c) {
-      const Cluster& cl = clusters_[static_cast<size_t>(c)];
-      for (int g = cl.group_begin; g < cl.group_end; ++g) GB_[static_cast<size_t>(g)] = Rgb(0.0);
-      for (int k = cl.contrib_begin; k < cl.contrib_end; ++k) {
-        const Contribution& m = contrib_[static_cast<size_t>(k)];
-        GB_[static_cast<size_t>(m.group)] += m.area * value(m.from);
-      }
-      for (int g = cl.group_begin; g < cl.group_end; ++g) GB_[static_cast<size_t>(g)] /= groups_[static_cast<size_t>(g)].area;
-    }
-  }
-
-  // Form factors from a point x with normal n (or, for a receiving group,
-  // its s / area: the same kernel both ways, so that area x F is
-  // reciprocal between two groups) to the normal groups of cluster c, times
-  // `visible`, appended as (-2 - group, F) and summed into f_sum.
-  void group_terms(int c, const Vec3& x, const Vec3& n, double visible, std::vector<std::pair<int, double>>& out,
-                   double& f_sum) const {
-    const Cluster& cl = clusters_[static_cast<size_t>(c)];
-    for (int g = cl.group_begin; g < cl.group_end; ++g) {
-      const Group& gr = groups_[static_cast<size_t>(g)];
-      const Vec3 r = x - gr.centroid;
-      const double d2 = glm::dot(r, r);
-      const double out_cos = glm::dot(gr.s, r), in_cos = -glm::dot(n, r);
-      if (out_cos <= 0.0 || in_cos <= 0.0) continue;
-      const double f = visible * out_cos * in_cos / (std::numbers::pi * d2 * d2);
-      out.push_back({-2 - g, f});
-      f_sum += f;
-    }
+    if (!ct_.empty()) ct_.radiosity(B_, GB_);
   }
 
   // Per group of every receiving cluster: (source, F) at the group's
   // centroid with its mean normal, over the cluster's links.
   void cluster_terms() {
-    if (clusters_.empty()) return;
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, clusters_.size(), 16), [&](const tbb::blocked_range<size_t>& r) {
+    if (ct_.empty()) return;
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, ct_.size(), 16), [&](const tbb::blocked_range<size_t>& r) {
       for (size_t c = r.begin(); c != r.end(); ++c) {
-        const Cluster& cl = clusters_[c];
+        const ClusterTree::Cluster& cl = ct_.cluster(static_cast<int>(c));
         for (int g = cl.group_begin; g < cl.group_end; ++g) {
           auto& terms = gterms_[static_cast<size_t>(g)];
           double& fsum = FG_[static_cast<size_t>(g)];
           terms.clear();
           fsum = 0.0;
-          const Group& gr = groups_[static_cast<size_t>(g)];
+          const ClusterTree::Group& gr = ct_.group(g);
           const Vec3 n = gr.s / gr.area;  // not unit: the group's mean projected area per area
           for (const Link& l : clinks_[c]) {
             if (l.visible <= 0.0) continue;
             if (l.source < 0) {
-              group_terms(cluster_of(l.source), gr.centroid, n, l.visible, terms, fsum);
+              ct_.form_factors(cluster_of(l.source), gr.centroid, n, l.visible, terms, fsum);
             } else {
               // An element source as a point (its area at its centroid), the
               // kernel its own leaves use toward this group.
@@ -1057,8 +874,8 @@ private:
     });
     // Pushed form factors: a group's and its ancestors' (parents have the
     // larger group numbers).
-    for (int g = static_cast<int>(groups_.size()) - 1; g >= 0; --g) {
-      const int up = groups_[static_cast<size_t>(g)].up;
+    for (int g = static_cast<int>(ct_.group_count()) - 1; g >= 0; --g) {
+      const int up = ct_.group(g).up;
       FGacc_[static_cast<size_t>(g)] = FG_[static_cast<size_t>(g)] + (up >= 0 ? FGacc_[static_cast<size_t>(up)] : 0.0);
     }
   }
@@ -1066,30 +883,23 @@ private:
   // What every cluster group gathers now, pushed down (accumulated over its
   // ancestors' groups) for the leaves.
   void gather_clusters() {
-    if (clusters_.empty()) return;
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, groups_.size(), 256), [&](const tbb::blocked_range<size_t>& r) {
+    if (ct_.empty()) return;
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, ct_.group_count(), 256), [&](const tbb::blocked_range<size_t>& r) {
       for (size_t g = r.begin(); g != r.end(); ++g) {
         Rgb h(0.0);
         for (const auto& [q, f] : gterms_[g]) h += f * value(q);
         HG_[g] = h;
       }
     });
-    for (int g = static_cast<int>(groups_.size()) - 1; g >= 0; --g) {
-      const int up = groups_[static_cast<size_t>(g)].up;
+    for (int g = static_cast<int>(ct_.group_count()) - 1; g >= 0; --g) {
+      const int up = ct_.group(g).up;
       HGacc_[static_cast<size_t>(g)] = HG_[static_cast<size_t>(g)] + (up >= 0 ? HGacc_[static_cast<size_t>(up)] : Rgb(0.0));
     }
   }
 
   // A point of node `code` (area-uniform over its roots), its normal and patch.
   void sample_node(int code, SplitMix& rng, Vec3& x, Vec3& n, int& patch) const {
-    int root = code;
-    if (code < 0) {
-      const Cluster& cl = clusters_[static_cast<size_t>(cluster_of(code))];
-      const double lo = cumulative_[static_cast<size_t>(cl.begin)], hi = cumulative_[static_cast<size_t>(cl.end)];
-      const double u = lo + rng.uniform() * (hi - lo);
-      auto it = std::upper_bound(cumulative_.begin() + cl.begin + 1, cumulative_.begin() + cl.end, u);
-      root = corder_[static_cast<size_t>(it - cumulative_.begin() - 1)];
-    }
+    const int root = code >= 0 ? code : ct_.root_at_area(cluster_of(code), rng.uniform());
     const Triangle& t = tri_[static_cast<size_t>(root)];
     const double a = rng.uniform(), b = rng.uniform();
     x = triangle_point(t.v[0], t.v[1], t.v[2], a, b);
@@ -1160,7 +970,7 @@ private:
   void split_cluster_pair(int p, int q, std::vector<std::pair<int, int>>& next) {
     if (p == q) {
       if (p >= 0) return;  // a planar element does not see itself
-      const Cluster& c = clusters_[static_cast<size_t>(cluster_of(p))];
+      const ClusterTree::Cluster& c = ct_.cluster(cluster_of(p));
       for (int a : c.child)
         for (int b : c.child) next.emplace_back(a, b);
       return;
@@ -1175,7 +985,7 @@ private:
       split_p = code_radius(p) >= code_radius(q);
     const int n = split_p ? p : q;
     if (n < 0) {
-      for (int c : clusters_[static_cast<size_t>(cluster_of(n))].child) next.emplace_back(split_p ? c : p, split_p ? q : c);
+      for (int c : ct_.cluster(cluster_of(n)).child) next.emplace_back(split_p ? c : p, split_p ? q : c);
       return;
     }
     int first = out_.tree.node(n).child;
@@ -1284,17 +1094,11 @@ private:
   std::vector<std::vector<Link>> links_;  // per receiver node
   std::vector<char> dirty_;               // per node: links changed since the last leaf_terms (new nodes too)
   // Clusters (ClusterMode::volume; all empty otherwise).
-  std::vector<Cluster> clusters_;
-  std::vector<int> corder_;               // roots in cluster order
-  std::vector<double> cumulative_;        // area of corder_'s first i roots
-  std::vector<Group> groups_;
-  std::vector<Contribution> contrib_;
-  std::vector<int> root_up_;              // per root: its group in its parent cluster
+  ClusterTree ct_;
   std::vector<std::vector<Link>> clinks_;  // per receiving cluster
   std::vector<std::vector<std::pair<int, double>>> gterms_;  // per group: (source, F) at its centroid
   std::vector<Rgb> GB_, HG_, HGacc_;      // per group: radiosity, gathered, gathered with its ancestors'
   std::vector<double> FG_, FGacc_;        // per group: form factor sum, with its ancestors'
-  std::vector<std::pair<int, int>> cluster_next_children_;
   std::vector<double> row_scale_;      // per node (leaves): what its approximate part is scaled by (scale_rows)
   std::vector<signed char> enclosed_;  // per node: 1 enclosed, 0 not, -1 not yet known
 };

@@ -1,0 +1,94 @@
+// Volume clusters above the roots of an element hierarchy (ClusterMode::volume
+// of hierarchical.h): a binary box hierarchy over the root triangles (median
+// splits of their centroids on the longest axis), each cluster with up to
+// kGroups oriented normal groups. The hierarchical solver links and gathers
+// over it; this file knows only geometry and the groups' radiosity.
+#pragma once
+
+#include "radiosity/form_factor.h"
+
+#include <array>
+#include <utility>
+#include <vector>
+
+namespace radmesh {
+
+class ClusterTree {
+public:
+  // Groups a cluster keeps: its children's groups (a root is one group),
+  // merged greedily, the two with the closest mean normals first.
+  static constexpr int kGroups = 8;
+
+  struct Cluster {
+    std::array<int, 2> child{};  // node codes: a root (>= 0) or a cluster (code(c) <= -2)
+    int begin = 0, end = 0;      // its roots: root_at(begin .. end - 1)
+    Vec3 centre{0.0};            // area-weighted centroid
+    double radius = 0.0;         // of a sphere about the centre holding every member
+    double area = 0.0;
+    double weight = 0.0;         // the largest per-root weight below it (the oracle's reflectance)
+    int group_begin = 0, group_end = 0;
+    int member_begin = 0, member_end = 0;  // into the members of its groups
+  };
+  // Light leaving a group towards direction w is B max(0, s . w) / pi per
+  // steradian: exact while its members' normals all face w or all face
+  // away (a flat wall is one group).
+  struct Group {
+    Vec3 s{0.0};  // sum over members of area x unit normal
+    Vec3 centroid{0.0};
+    double area = 0.0;
+    int up = -1;  // the group of the parent cluster it belongs to (-1 at the top)
+  };
+
+  static constexpr int code(int c) { return -2 - c; }
+  static constexpr int index(int code) { return -2 - code; }
+
+  ClusterTree() = default;
+  // Over `roots` (at least two), with one weight per root; cluster 0 is the
+  // top, and every cluster's children have larger numbers than it.
+  ClusterTree(const std::vector<Triangle>& roots, const std::vector<double>& weights);
+
+  // Bytes `clusters` clusters with `groups` groups take here and in the
+  // solver's per-group arrays (radiosity, gathering, form factor sums).
+  static double bytes(double clusters, double groups);
+
+  bool empty() const { return clusters_.empty(); }
+  size_t size() const { return clusters_.size(); }
+  size_t group_count() const { return groups_.size(); }
+  const Cluster& cluster(int c) const { return clusters_[static_cast<size_t>(c)]; }
+  const Group& group(int g) const { return groups_[static_cast<size_t>(g)]; }
+  int members(int c) const { return cluster(c).end - cluster(c).begin; }
+  // The group of its parent cluster root r belongs to.
+  int root_group(int r) const { return root_group_[static_cast<size_t>(r)]; }
+
+  // Group radiosity (area means over members) from the roots' radiosity
+  // (root_radiosity[r] for root r), children first.
+  void radiosity(const std::vector<Rgb>& root_radiosity, std::vector<Rgb>& group_radiosity) const;
+  // The area-mean radiosity of cluster c from its groups'.
+  Rgb mean(int c, const std::vector<Rgb>& group_radiosity) const;
+
+  // Form factors from point x with normal n to the groups of cluster c
+  // (max(0, s . r) max(0, -n . r) / (pi |r|^4) each), times `visible`,
+  // appended as (-2 - group, F) and summed into f_sum. With n = s / area of
+  // a receiving group, area x F is the same both ways between two groups.
+  void form_factors(int c, const Vec3& x, const Vec3& n, double visible, std::vector<std::pair<int, double>>& out,
+                    double& f_sum) const;
+
+  // The root of cluster c holding area fraction u in [0, 1) of it.
+  int root_at_area(int c, double u) const;
+
+private:
+  int build(int begin, int end, const std::vector<Vec3>& centroids);
+  struct Member {  // of a group: a root (>= 0) or a child group (-2 - g), with its area
+    int from;
+    double area;
+    int group;
+  };
+  std::vector<Cluster> clusters_;
+  std::vector<Group> groups_;
+  std::vector<Member> members_;
+  std::vector<int> order_;           // roots in cluster order
+  std::vector<double> cumulative_;   // area of order_'s first i roots
+  std::vector<int> root_group_;
+};
+
+}  // namespace radmesh
