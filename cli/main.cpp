@@ -44,7 +44,7 @@ struct Params {
   bool quiet = false;
   bool png = true;
   std::string discontinuity = "full";
-  std::string field = "gather";
+  std::string field = "auto";
   std::string nodal;  // --nodal fit|mean: the older name of --field fit|mean
   std::string method = methods().front().name;
   // Method options: text per declared name; flags as bools. Only those
@@ -111,7 +111,7 @@ void check_output_dir(const std::string& dir) {
 // What run and mesh write, and what quality writes.
 const char* const kRunOutputs =
     R"((radiosity|mesh|links|discontinuities)\.vtu|radiosity_round_[0-9]+\.vtu|radiosity\.pvd|probes\.csv|)"
-    R"(radiosity\.png|summary\.json)";
+    R"(radiosity\.png|summary\.json|patches\.csv)";
 const char* const kQualityOutputs = R"(quality\.csv|quality_(min_angle|aspect_ratio)\.png)";
 
 // Makes the output directory (IoError naming it when that fails) and
@@ -142,7 +142,7 @@ void check_params(Params& p, bool solving) {
   }
   p.meshing.discontinuity = parse_discontinuity_mode(p.discontinuity);
   if (!p.nodal.empty()) {
-    if (p.field != "gather" && p.field != p.nodal)
+    if (p.field != "auto" && p.field != p.nodal)
       throw InputError("--nodal " + p.nodal + " and --field " + p.field + " disagree; give one of them");
     p.field = p.nodal;
   }
@@ -209,6 +209,7 @@ int run(Params& p, bool solving) {
     for (const auto& phase : result->seconds) info.seconds.push_back(phase);
     if (!result->report.empty()) rep.note(result->report);
     const FieldReport& f = result->field;
+    if (!f.why.empty()) rep.note(f.why);
     if (f.mode == FieldMode::gather)
       rep.note("field: gather at " + std::to_string(f.display_vertices) + " vertices; direct light " +
                std::to_string(f.direct.unoccluded) + " unoccluded, " + std::to_string(f.direct.hidden) +
@@ -225,6 +226,7 @@ int run(Params& p, bool solving) {
 
   // Everything is computed: only now is the output directory touched.
   std::vector<std::string> outputs = {result ? "radiosity.vtu" : "mesh.vtu", "summary.json"};
+  if (!patches_in_summary(scene)) outputs.push_back("patches.csv");
   if (!rounds.empty()) outputs.push_back("radiosity.pvd");
   for (size_t r = 0; r < rounds.size(); ++r) outputs.push_back("radiosity_round_" + std::to_string(r) + ".vtu");
   if (result)
@@ -283,6 +285,11 @@ int run(Params& p, bool solving) {
   const std::string summary = path_in_out("summary.json");
   write_json(summary, make_summary(info, scene, out_mesh, out_quality, result ? &*result : nullptr));
   written.push_back(summary);
+  if (!patches_in_summary(scene)) {
+    const std::string csv = path_in_out("patches.csv");
+    write_patches_csv(csv, scene, out_mesh, result ? &result->solution : nullptr);
+    written.push_back(csv);
+  }
 
   if (result && !p.quiet) {
     const SolveStats& st = result->solution.stats;
@@ -442,9 +449,10 @@ int main(int argc, char** argv) {
   run_cmd->add_flag("!--no-png", run_p.png, "do not render radiosity.png");
   run_cmd->add_option("--field", run_p.field,
                       "vertex values: gather (exact direct light and a final gather of the solved radiosity "
-                      "at every vertex, default), fit (least-squares plane through the element values "
-                      "around the vertex) or mean (their area-weighted mean)")
-      ->check(CLI::IsMember({"gather", "fit", "mean"}));
+                      "at every vertex), fit (least-squares plane through the element values "
+                      "around the vertex), mean (their area-weighted mean) or auto (gather unless that would "
+                      "pass (vertex, patch) pairs over a budget, then fit; the default)")
+      ->check(CLI::IsMember({"auto", "gather", "fit", "mean"}));
   run_cmd->add_option("--nodal", run_p.nodal, "the older name of --field fit|mean")
       ->check(CLI::IsMember({"fit", "mean"}));
   add_method_options(run_cmd, run_p);

@@ -5,6 +5,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
+#include <tuple>
 
 namespace radmesh {
 
@@ -80,25 +82,56 @@ nlohmann::json make_summary(const RunInfo& info, const Scene& scene, const Mesh&
                            {"left_out", "EEE events (critical surfaces of three edges) are not computed"}};
   }
 
-  json patches = json::array();
   std::vector<Rgb> mean, element_mean;
   if (solution) {
     mean = patch_mean_radiosity(scene, mesh, solution->nodal);
     element_mean = patch_mean_radiosity(scene, mesh, solution->element);
   }
+  // Objects: patches grouped by name, in order of first appearance.
+  std::vector<std::string> names;
+  std::map<std::string, std::tuple<long long, double, Rgb, Rgb>> objects;  // count, area, sums
   for (size_t p = 0; p < scene.patches.size(); ++p) {
-    const Patch& patch = scene.patches[p];
-    json j = {{"id", p},
-              {"name", patch.name},
-              {"material", scene.material_of(patch).name},
-              {"area", scene.patch_area(static_cast<int>(p))}};
+    const std::string& name = scene.patches[p].name;
+    auto [it, fresh] = objects.try_emplace(name, 0, 0.0, Rgb(0.0), Rgb(0.0));
+    if (fresh) names.push_back(name);
+    auto& [count, area, m, em] = it->second;
+    const double a = scene.patch_area(static_cast<int>(p));
+    ++count;
+    area += a;
     if (solution) {
-      j["mean_radiosity"] = rgb(mean[p]);  // of the field users see
-      j["element_mean_radiosity"] = rgb(element_mean[p]);  // of the solver's elements
+      m += a * mean[p];
+      em += a * element_mean[p];
     }
-    patches.push_back(j);
   }
-  doc["patches"] = patches;
+  json objs = json::array();
+  for (const std::string& name : names) {
+    const auto& [count, area, m, em] = objects.at(name);
+    json j = {{"name", name}, {"patches", count}, {"area", area}};
+    if (solution && area > 0.0) {
+      j["mean_radiosity"] = rgb(m / area);
+      j["element_mean_radiosity"] = rgb(em / area);
+    }
+    objs.push_back(j);
+  }
+  doc["objects"] = objs;
+  if (!patches_in_summary(scene)) {
+    doc["patches_csv"] = "patches.csv";
+  } else {
+    json patches = json::array();
+    for (size_t p = 0; p < scene.patches.size(); ++p) {
+      const Patch& patch = scene.patches[p];
+      json j = {{"id", p},
+                {"name", patch.name},
+                {"material", scene.material_of(patch).name},
+                {"area", scene.patch_area(static_cast<int>(p))}};
+      if (solution) {
+        j["mean_radiosity"] = rgb(mean[p]);  // of the field users see
+        j["element_mean_radiosity"] = rgb(element_mean[p]);  // of the solver's elements
+      }
+      patches.push_back(j);
+    }
+    doc["patches"] = patches;
+  }
 
   if (solution) {
     const SolveStats& st = solution->stats;
@@ -145,6 +178,7 @@ nlohmann::json make_summary(const RunInfo& info, const Scene& scene, const Mesh&
     doc["skips"] = st.skips;
     const FieldReport& f = result->field;
     doc["field"] = {{"mode", to_string(f.mode)}};
+    if (!f.why.empty()) doc["field"]["why"] = f.why;
     if (f.mode == FieldMode::gather) {
       doc["field"]["display_vertices"] = f.display_vertices;
       doc["field"]["on_other_surface"] = f.on_other_surface;
@@ -163,6 +197,43 @@ nlohmann::json make_summary(const RunInfo& info, const Scene& scene, const Mesh&
     }
   }
   return doc;
+}
+
+namespace {
+// A CSV field: quoted (quotes doubled) when it holds a comma, a quote or a line break.
+std::string csv_field(const std::string& text) {
+  if (text.find_first_of(",\"\r\n") == std::string::npos) return text;
+  std::string out = "\"";
+  for (char c : text) {
+    if (c == '"') out += '"';
+    out += c;
+  }
+  return out + "\"";
+}
+}  // namespace
+
+bool patches_in_summary(const Scene& scene) { return scene.patches.size() <= kSummaryPatches; }
+
+void write_patches_csv(const std::string& path, const Scene& scene, const Mesh& mesh, const Solution* solution) {
+  std::vector<Rgb> mean, element_mean;
+  if (solution) {
+    mean = patch_mean_radiosity(scene, mesh, solution->nodal);
+    element_mean = patch_mean_radiosity(scene, mesh, solution->element);
+  }
+  write_file_atomically(path, [&](std::ostream& out) {
+    out << "id,name,material,area";
+    if (solution) out << ",mean_r,mean_g,mean_b,element_mean_r,element_mean_g,element_mean_b";
+    out << '\n';
+    out.precision(17);
+    for (size_t p = 0; p < scene.patches.size(); ++p) {
+      const Patch& patch = scene.patches[p];
+      out << p << ',' << csv_field(patch.name) << ',' << csv_field(scene.material_of(patch).name) << ','
+          << scene.patch_area(static_cast<int>(p));
+      if (solution)
+        for (const Rgb& v : {mean[p], element_mean[p]}) out << ',' << v.x << ',' << v.y << ',' << v.z;
+      out << '\n';
+    }
+  });
 }
 
 void write_quality_csv(const std::string& path, const std::vector<std::string>& patch_names,

@@ -30,8 +30,22 @@ struct RunInfo {
 // object holds the method's name, the common solve counts, every option of
 // the method (as given or its default) and every counter it published
 // (units, where a counter has one, in "solver.units").
+//
+// Per patch values: "objects" always (patches grouped by name: patch count,
+// area, area-weighted mean radiosity of the field and of the elements);
+// "patches" (one entry per patch) when the scene has at most
+// kSummaryPatches patches, else "patches_csv": "patches.csv", which
+// write_patches_csv writes beside it.
 nlohmann::json make_summary(const RunInfo& info, const Scene& scene, const Mesh& mesh,
                             const TriangleQuality& quality, const MethodResult* result);
+
+inline constexpr size_t kSummaryPatches = 10000;
+bool patches_in_summary(const Scene& scene);
+
+// patches.csv: id,name,material,area (and with a solution mean_r,mean_g,mean_b,
+// element_mean_r,element_mean_g,element_mean_b), one row per patch. Written
+// atomically. Throws IoError.
+void write_patches_csv(const std::string& path, const Scene& scene, const Mesh& mesh, const Solution* solution);
 
 // quality.csv: one row per patch and a total row (patch_id -1, name "total"):
 // patch_id,name,triangles,min_angle,max_angle,aspect_p50,aspect_p95,aspect_max,

@@ -201,6 +201,49 @@ TEST(Cli, RunWithShadowLinesReportsThemAndWhatWasSkipped) {
   fs::remove_all(out);
 }
 
+TEST(Cli, ManyPatchesGoToPatchesCsvAndObjectsStayInTheSummary) {
+  // 10082 triangles (over kSummaryPatches): summary.json groups them by
+  // object and names patches.csv, which has one row per patch.
+  const fs::path out = fresh_dir("many_patches"), dir = fresh_dir("many_patches_scene");
+  fs::create_directories(dir);
+  {
+    std::ofstream(dir / "grid.mtl") << "newmtl grey\nKd 0.5 0.5 0.5\nKe 1 1 1\n";
+    std::ofstream obj(dir / "grid.obj");
+    obj << "mtllib grid.mtl\n";
+    const int n = 71;  // n x n squares of a flat ground, two triangles each
+    for (int j = 0; j <= n; ++j)
+      for (int i = 0; i <= n; ++i) obj << "v " << i << " 0 " << j << "\n";
+    obj << "o ground\nusemtl grey\n";
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < n; ++i) {
+        const int a = j * (n + 1) + i + 1, b = a + 1, c = a + n + 2, d = a + n + 1;
+        obj << "f " << a << ' ' << d << ' ' << c << "\nf " << a << ' ' << c << ' ' << b << "\n";
+      }
+  }
+  const Result r = radmesh("mesh " + (dir / "grid.obj").string() + " --max-edge 1000 -q -o " + out.string());
+  ASSERT_EQ(r.status, 0) << r.err;
+  const nlohmann::json s = read_summary(out);
+  EXPECT_FALSE(s.contains("patches"));
+  EXPECT_EQ(s["patches_csv"], "patches.csv");
+  ASSERT_EQ(s["objects"].size(), 1u);
+  EXPECT_EQ(s["objects"][0]["name"], "ground");
+  EXPECT_EQ(s["objects"][0]["patches"], 71 * 71 * 2);
+  std::ifstream csv(out / "patches.csv");
+  std::string line;
+  std::getline(csv, line);
+  EXPECT_EQ(line, "id,name,material,area");
+  int rows = 0;
+  double area = 0.0;
+  while (std::getline(csv, line)) {
+    ++rows;
+    area += std::stod(line.substr(line.rfind(',') + 1));
+  }
+  EXPECT_EQ(rows, 71 * 71 * 2);
+  EXPECT_NEAR(area, s["objects"][0]["area"].get<double>(), 1e-9 * area);
+  fs::remove_all(out);
+  fs::remove_all(dir);
+}
+
 TEST(Cli, HierarchicalRunWritesTheRefinementSeriesWithZeroAreaFlags) {
   const fs::path out = fresh_dir("run_hier");
   const Result r = radmesh("run " + kData + "/box_on_floor/box_on_floor.obj --method hierarchical --epsilon 0.01 "
