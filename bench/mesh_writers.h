@@ -4,12 +4,15 @@
 // faces in the same order.
 #pragma once
 
+#include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -197,6 +200,50 @@ inline void write_gltf(const std::filesystem::path& p, const PolyMesh& m, const 
   put(out, static_cast<uint32_t>(bin.size()));
   put(out, 0x004E4942u);
   out.write(bin.data(), static_cast<std::streamsize>(bin.size()));
+}
+
+// The unit icosphere of 20 x 4^level triangles (each level splits every
+// triangle in four at its edge midpoints, pushed out to the sphere),
+// counter-clockwise seen from outside. Double precision.
+struct Icosphere {
+  std::vector<std::array<double, 3>> positions;
+  std::vector<std::array<int, 3>> triangles;  // 0-based
+};
+inline Icosphere icosphere(int level) {
+  auto unit = [](std::array<double, 3> p) {
+    const double n = std::sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]);
+    return std::array<double, 3>{p[0] / n, p[1] / n, p[2] / n};
+  };
+  const double t = (1.0 + std::sqrt(5.0)) / 2.0;
+  Icosphere s;
+  s.positions = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0}, {0, -1, t}, {0, 1, t},
+                 {0, -1, -t}, {0, 1, -t}, {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
+  for (auto& p : s.positions) p = unit(p);
+  s.triangles = {{0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11}, {1, 5, 9},  {5, 11, 4},
+                 {11, 10, 2}, {10, 7, 6}, {7, 1, 8},  {3, 9, 4},   {3, 4, 2},  {3, 2, 6},   {3, 6, 8},
+                 {3, 8, 9},  {4, 9, 5},  {2, 4, 11}, {6, 2, 10},  {8, 6, 7},  {9, 8, 1}};
+  for (int l = 0; l < level; ++l) {
+    std::map<std::pair<int, int>, int> mid;
+    auto m = [&](int a, int b) {
+      const auto key = std::make_pair(std::min(a, b), std::max(a, b));
+      if (auto it = mid.find(key); it != mid.end()) return it->second;
+      const auto& pa = s.positions[static_cast<size_t>(a)];
+      const auto& pb = s.positions[static_cast<size_t>(b)];
+      s.positions.push_back(unit({pa[0] + pb[0], pa[1] + pb[1], pa[2] + pb[2]}));
+      return mid[key] = static_cast<int>(s.positions.size()) - 1;
+    };
+    std::vector<std::array<int, 3>> next;
+    next.reserve(4 * s.triangles.size());
+    for (const auto& [a, b, c] : s.triangles) {
+      const int ab = m(a, b), bc = m(b, c), ca = m(c, a);
+      next.push_back({a, ab, ca});
+      next.push_back({b, bc, ab});
+      next.push_back({c, ca, bc});
+      next.push_back({ab, bc, ca});
+    }
+    s.triangles.swap(next);
+  }
+  return s;
 }
 
 // An n x n grid of quads over a bumpy height field, 2 triangles each.

@@ -1,5 +1,6 @@
 #include "bench/scaling.h"
 
+#include "bench/mesh_writers.h"
 #include "bench/plot.h"
 #include "io/atomic_file.h"
 #include "meshing/errors.h"
@@ -87,52 +88,21 @@ void room(ObjWriter& w) {
   w.quad({1.5, h, 1.5}, {2.5, h, 1.5}, {2.5, h, 2.5}, {1.5, h, 2.5});
 }
 
-P3 unit(const P3& v) {
-  const double n = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
-  return {v[0] / n, v[1] / n, v[2] / n};
-}
-
 }  // namespace
 
 std::string write_sphere_room(const std::string& dir, int level) {
-  const double t = (1.0 + std::sqrt(5.0)) / 2.0;
-  std::vector<P3> v = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0}, {0, -1, t}, {0, 1, t},
-                       {0, -1, -t}, {0, 1, -t}, {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
-  for (P3& p : v) p = unit(p);
-  std::vector<std::array<int, 3>> f = {{0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11},
-                                       {1, 5, 9},  {5, 11, 4}, {11, 10, 2}, {10, 7, 6}, {7, 1, 8},
-                                       {3, 9, 4},  {3, 4, 2},  {3, 2, 6},   {3, 6, 8},  {3, 8, 9},
-                                       {4, 9, 5},  {2, 4, 11}, {6, 2, 10},  {8, 6, 7},  {9, 8, 1}};
-  for (int l = 0; l < level; ++l) {
-    std::map<std::pair<int, int>, int> mid;
-    auto m = [&](int a, int b) {
-      const auto key = std::make_pair(std::min(a, b), std::max(a, b));
-      if (auto it = mid.find(key); it != mid.end()) return it->second;
-      v.push_back(unit({(v[static_cast<size_t>(a)][0] + v[static_cast<size_t>(b)][0]) / 2,
-                        (v[static_cast<size_t>(a)][1] + v[static_cast<size_t>(b)][1]) / 2,
-                        (v[static_cast<size_t>(a)][2] + v[static_cast<size_t>(b)][2]) / 2}));
-      return mid[key] = static_cast<int>(v.size()) - 1;
-    };
-    std::vector<std::array<int, 3>> next;
-    next.reserve(4 * f.size());
-    for (const auto& [a, b, c] : f) {
-      const int ab = m(a, b), bc = m(b, c), ca = m(c, a);
-      next.push_back({a, ab, ca});
-      next.push_back({b, bc, ab});
-      next.push_back({c, ca, bc});
-      next.push_back({ab, bc, ca});
-    }
-    f.swap(next);
-  }
+  const test::Icosphere sphere = test::icosphere(level);
   ObjWriter w;
   room(w);
   const P3 centre = {2.0, 1.2, 2.0};
   const double radius = 0.8;
-  std::vector<int> id(v.size());
+  std::vector<int> id(sphere.positions.size());
   w.object("sphere", "grey");
-  for (size_t i = 0; i < v.size(); ++i)
-    id[i] = w.vertex({centre[0] + radius * v[i][0], centre[1] + radius * v[i][1], centre[2] + radius * v[i][2]});
-  for (const auto& [a, b, c] : f)
+  for (size_t i = 0; i < id.size(); ++i) {
+    const auto& v = sphere.positions[i];
+    id[i] = w.vertex({centre[0] + radius * v[0], centre[1] + radius * v[1], centre[2] + radius * v[2]});
+  }
+  for (const auto& [a, b, c] : sphere.triangles)
     w.face({id[static_cast<size_t>(a)], id[static_cast<size_t>(b)], id[static_cast<size_t>(c)]});
   return w.write(dir, "sphere_" + std::to_string(level));
 }

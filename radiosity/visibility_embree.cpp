@@ -9,6 +9,7 @@
 
 #include <limits>
 #include <string>
+#include <vector>
 
 namespace radmesh {
 
@@ -96,56 +97,54 @@ Visibility::Visibility(const Scene& scene) : impl_(std::make_unique<Impl>()) {
 
 Visibility::~Visibility() = default;
 
-bool Visibility::visible(const Vec3& from, const Vec3& to, int ignore_a, int ignore_b) const {
-  const Impl& m = *impl_;
-  QueryContext ctx;
-  rtcInitIntersectContext(&ctx.base);
-  ctx.base.filter = ignore_filter;
-  ctx.prim_patch = m.prim_patch.data();
-  ctx.ignore_a = ignore_a;
-  ctx.ignore_b = ignore_b;
+namespace {
 
-  const Vec3 o = from - m.origin;
-  const Vec3 d = to - from;
+// A ray from `from` (relative to `origin`) along `direction` over the
+// parameter range [tnear, tfar], and a context ignoring two patches.
+RTCRay make_ray(const Vec3& from, const Vec3& origin, const Vec3& direction, float tnear, float tfar) {
+  const Vec3 o = from - origin;
   RTCRay ray;
   ray.org_x = static_cast<float>(o.x);
   ray.org_y = static_cast<float>(o.y);
   ray.org_z = static_cast<float>(o.z);
-  ray.dir_x = static_cast<float>(d.x);
-  ray.dir_y = static_cast<float>(d.y);
-  ray.dir_z = static_cast<float>(d.z);
-  ray.tnear = 1e-6f;
-  ray.tfar = 1.0f - 1e-6f;
+  ray.dir_x = static_cast<float>(direction.x);
+  ray.dir_y = static_cast<float>(direction.y);
+  ray.dir_z = static_cast<float>(direction.z);
+  ray.tnear = tnear;
+  ray.tfar = tfar;
   ray.time = 0.0f;
   ray.mask = 0xFFFFFFFFu;
   ray.id = 0;
   ray.flags = 0;
+  return ray;
+}
+
+QueryContext make_context(const std::vector<int>& prim_patch, int ignore_a, int ignore_b) {
+  QueryContext ctx;
+  rtcInitIntersectContext(&ctx.base);
+  ctx.base.filter = ignore_filter;
+  ctx.prim_patch = prim_patch.data();
+  ctx.ignore_a = ignore_a;
+  ctx.ignore_b = ignore_b;
+  return ctx;
+}
+
+}  // namespace
+
+bool Visibility::visible(const Vec3& from, const Vec3& to, int ignore_a, int ignore_b) const {
+  const Impl& m = *impl_;
+  QueryContext ctx = make_context(m.prim_patch, ignore_a, ignore_b);
+  RTCRay ray = make_ray(from, m.origin, to - from, 1e-6f, 1.0f - 1e-6f);
   rtcOccluded1(m.scene, &ctx.base, &ray);
   return ray.tfar >= 0.0f;  // Embree sets tfar to -inf when occluded
 }
 
 int Visibility::first_hit(const Vec3& from, const Vec3& direction, double reach, int ignore) const {
   const Impl& m = *impl_;
-  QueryContext ctx;
-  rtcInitIntersectContext(&ctx.base);
-  ctx.base.filter = ignore_filter;
-  ctx.prim_patch = m.prim_patch.data();
-  ctx.ignore_a = ignore;
-  ctx.ignore_b = -1;
-  const Vec3 o = from - m.origin;
+  QueryContext ctx = make_context(m.prim_patch, ignore, -1);
   RTCRayHit rh;
-  rh.ray.org_x = static_cast<float>(o.x);
-  rh.ray.org_y = static_cast<float>(o.y);
-  rh.ray.org_z = static_cast<float>(o.z);
-  rh.ray.dir_x = static_cast<float>(direction.x);
-  rh.ray.dir_y = static_cast<float>(direction.y);
-  rh.ray.dir_z = static_cast<float>(direction.z);
-  rh.ray.tnear = static_cast<float>(1e-7 * reach);  // not the surface the ray leaves (nor one lying on it)
-  rh.ray.tfar = static_cast<float>(reach);
-  rh.ray.time = 0.0f;
-  rh.ray.mask = 0xFFFFFFFFu;
-  rh.ray.id = 0;
-  rh.ray.flags = 0;
+  // Not the surface the ray leaves (nor one lying on it).
+  rh.ray = make_ray(from, m.origin, direction, static_cast<float>(1e-7 * reach), static_cast<float>(reach));
   rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
   rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
   rtcIntersect1(m.scene, &ctx.base, &rh);

@@ -1,5 +1,6 @@
 // Scene-wide structures that keep every phase near-linear: the box tree, and
 // the cluster hierarchy above the polygons.
+#include "bench/mesh_writers.h"
 #include "meshing/box_tree.h"
 #include "meshing/errors.h"
 
@@ -83,33 +84,14 @@ Scene sphere_room(int level) {
   face("walls", 0, {{0, 0, Z}, {0, Y, Z}, {X, Y, Z}, {X, 0, Z}});
   face("walls", 0, {{0, 0, 0}, {0, Y, 0}, {0, Y, Z}, {0, 0, Z}});
   face("walls", 0, {{X, 0, 0}, {X, 0, Z}, {X, Y, Z}, {X, Y, 0}});
-  const double t = (1.0 + std::sqrt(5.0)) / 2.0;
-  std::vector<Vec3> v = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0}, {0, -1, t}, {0, 1, t},
-                         {0, -1, -t}, {0, 1, -t}, {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
-  for (Vec3& p : v) p = glm::normalize(p);
-  std::vector<std::array<int, 3>> f = {{0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11},
-                                       {1, 5, 9},  {5, 11, 4}, {11, 10, 2}, {10, 7, 6}, {7, 1, 8},
-                                       {3, 9, 4},  {3, 4, 2},  {3, 2, 6},   {3, 6, 8},  {3, 8, 9},
-                                       {4, 9, 5},  {2, 4, 11}, {6, 2, 10},  {8, 6, 7},  {9, 8, 1}};
-  for (int l = 0; l < level; ++l) {
-    std::map<std::pair<int, int>, int> mid;
-    auto m = [&](int a, int b) {
-      const auto key = std::make_pair(std::min(a, b), std::max(a, b));
-      if (auto it = mid.find(key); it != mid.end()) return it->second;
-      v.push_back(glm::normalize(v[static_cast<size_t>(a)] + v[static_cast<size_t>(b)]));
-      return mid[key] = static_cast<int>(v.size()) - 1;
-    };
-    std::vector<std::array<int, 3>> next;
-    for (const auto& [a, b, c] : f) {
-      const int ab = m(a, b), bc = m(b, c), ca = m(c, a);
-      next.insert(next.end(), {{a, ab, ca}, {b, bc, ab}, {c, ca, bc}, {ab, bc, ca}});
-    }
-    f.swap(next);
-  }
+  const test::Icosphere sphere = test::icosphere(level);
+  auto point = [&](int k) {
+    const auto& p = sphere.positions[static_cast<size_t>(k)];
+    return Vec3(p[0], p[1], p[2]);
+  };
   const Vec3 centre(2.0, 1.2, 2.0);
-  for (const auto& [a, b, c] : f)
-    face("sphere", 1, {centre + 0.8 * v[static_cast<size_t>(a)], centre + 0.8 * v[static_cast<size_t>(b)],
-                       centre + 0.8 * v[static_cast<size_t>(c)]});
+  for (const auto& [a, b, c] : sphere.triangles)
+    face("sphere", 1, {centre + 0.8 * point(a), centre + 0.8 * point(b), centre + 0.8 * point(c)});
   Material wall, grey, lamp;
   wall.name = "wall";
   wall.reflectance = Rgb(0.7);
