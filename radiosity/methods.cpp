@@ -181,9 +181,9 @@ MethodResult run_method(const Method& method, const Scene& scene, const Mesh& me
     r.solution.nodal = compute_field(scene, r.mesh, r.solution.element, options, &r.field, callbacks.progress);
     r.seconds.emplace_back("direct", r.field.seconds_direct);
     r.seconds.emplace_back("gather", r.field.seconds_gather);
-  } else if (nodal_method(r.field.mode) != nodal_method(options.field)) {
-    r.solution.nodal = compute_nodal(scene, r.mesh, r.solution.element, options.crease_angle, nodal_method(r.field.mode));
   }
+  // Otherwise the solver's own field stands: automatic falls back to the
+  // fit, which is what nodal_method(automatic) gave the solver.
   return r;
 }
 
