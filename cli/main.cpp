@@ -3,6 +3,7 @@
 // printed as one line; the exit status is then non-zero.
 
 #include "io/histogram.h"
+#include "io/pixmap_io.h"
 #include "io/scene_reader.h"
 #include "io/png_render.h"
 #include "io/probe_file.h"
@@ -26,6 +27,9 @@
 #include <optional>
 #include <regex>
 
+#include <atomic>
+#include <csignal>
+
 #include <unistd.h>
 
 namespace {
@@ -41,6 +45,7 @@ struct Params {
   std::vector<std::string> meshing_given;  // meshing flags given on the command line
   SolveOptions solve;
   std::string probe_file;
+  std::string resume;  // --resume DIR: a pixmap run's -o directory
   bool quiet = false;
   bool png = true;
   std::string discontinuity = "full";
@@ -111,7 +116,12 @@ void check_output_dir(const std::string& dir) {
 // What run and mesh write, and what quality writes.
 const char* const kRunOutputs =
     R"((radiosity|mesh|links|discontinuities)\.vtu|radiosity_round_[0-9]+\.vtu|radiosity\.pvd|probes\.csv|)"
-    R"(radiosity\.png|summary\.json|patches\.csv)";
+    R"(radiosity\.png|summary\.json|patches\.csv|lightmapped\.(obj|mtl))";
+
+// Ctrl-C during a method that can stop early (Method::resumable): the first
+// one asks it to stop and save its state, a second one ends the program.
+std::atomic<bool> g_interrupted{false};
+extern "C" void on_interrupt(int) { g_interrupted.store(true); }
 const char* const kQualityOutputs = R"(quality\.csv|quality_(min_angle|aspect_ratio)\.png)";
 
 // Makes the output directory (IoError naming it when that fails) and
@@ -204,7 +214,17 @@ int run(Params& p, bool solving) {
     SolveCallbacks cb;
     cb.progress = [&](const std::string& phase, double f) { rep.update(phase, f); };
     cb.on_round = [&](const MethodResult& r, int) { rounds.push_back(r); };
+    if (!p.resume.empty()) cb.resume = std::make_shared<const PixmapState>(read_pixmap_state(p.resume));
+    if (method->resumable) {
+      struct sigaction sa {};
+      sa.sa_handler = on_interrupt;
+      sa.sa_flags = SA_RESETHAND;  // a second Ctrl-C is the default: the end
+      sigemptyset(&sa.sa_mask);
+      sigaction(SIGINT, &sa, nullptr);
+      cb.cancelled = [] { return g_interrupted.load(); };
+    }
     result = run_method(*method, scene, mesh, p.solve, p.method_given, cb);
+    if (method->resumable) std::signal(SIGINT, SIG_DFL);
     rep.end();
     for (const auto& phase : result->seconds) info.seconds.push_back(phase);
     if (!result->report.empty()) rep.note(result->report);
@@ -234,6 +254,10 @@ int run(Params& p, bool solving) {
   if (!info.mesh_report.discontinuities.empty()) outputs.push_back("discontinuities.vtu");
   if (!probes.empty()) outputs.push_back("probes.csv");
   if (result && p.png) outputs.push_back("radiosity.png");
+  if (result && result->pixmaps) {
+    outputs.push_back("lightmapped.obj");
+    outputs.push_back("lightmapped.mtl");
+  }
   prepare_output_dir(p.out_dir, kRunOutputs, outputs);
   rep.begin("write");
   std::vector<std::string> written;
@@ -267,6 +291,10 @@ int run(Params& p, bool solving) {
     const std::string lines = path_in_out("discontinuities.vtu");
     write_discontinuities_vtu(lines, info.mesh_report.discontinuities);
     written.push_back(lines);
+  }
+  if (result && result->pixmaps) {
+    for (const std::string& f : write_pixmap_state(p.out_dir, scene, *result->pixmaps)) written.push_back(f);
+    for (const std::string& f : write_lightmaps(p.out_dir, out_mesh, *result->pixmaps)) written.push_back(f);
   }
   if (!probes.empty()) {
     const std::string csv = path_in_out("probes.csv");
@@ -304,6 +332,15 @@ int run(Params& p, bool solving) {
                  st.power_emitted.x > 0 ? (st.power_emitted.x - st.power_absorbed.x - st.power_escaped.x) / st.power_emitted.x : 0.0);
   }
   for (const std::string& w : written) std::printf("%s\n", w.c_str());
+  if (result && result->interrupted) {
+    const Counter* shots = result->counter("shots");
+    std::fprintf(stderr,
+                 "[radmesh] interrupted after %lld shots; the state is saved in %s. Continue with the same options "
+                 "and: --resume %s\n",
+                 shots ? static_cast<long long>(shots->values[0]) : 0LL,
+                 (fs::path(p.out_dir) / "pixmaps").string().c_str(), p.out_dir.c_str());
+    return 130;
+  }
   return 0;
 }
 
@@ -447,6 +484,10 @@ int main(int argc, char** argv) {
                       "probe file: lines 'label x y z nx ny nz'; writes probes.csv")
       ->check(CLI::ExistingFile);
   run_cmd->add_flag("!--no-png", run_p.png, "do not render radiosity.png");
+  run_cmd->add_option("--resume", run_p.resume,
+                      "continue the pixmap run whose -o directory this is (its pixmaps/state.json), with the "
+                      "same scene and options; --shots counts the shots made before")
+      ->check(CLI::ExistingDirectory);
   run_cmd->add_option("--field", run_p.field,
                       "vertex values: gather (exact direct light and a final gather of the solved radiosity "
                       "at every vertex), fit (least-squares plane through the element values "

@@ -11,10 +11,10 @@ find_package(assimp 5 REQUIRED)
 find_package(nlohmann_json 3 REQUIRED)
 find_package(CLI11 REQUIRED)
 
-set(RADMESH_VTK_COMPONENTS CommonCore CommonDataModel CommonExecutionModel CommonMisc IOXML)
+set(RADMESH_VTK_COMPONENTS CommonCore CommonDataModel CommonExecutionModel CommonMisc IOXML IOImage)
 if(RADMESH_WITH_RENDERING)
   find_package(X11 REQUIRED)
-  list(APPEND RADMESH_VTK_COMPONENTS IOImage RenderingCore RenderingOpenGL2 RenderingFreeType
+  list(APPEND RADMESH_VTK_COMPONENTS RenderingCore RenderingOpenGL2 RenderingFreeType
        RenderingAnnotation InteractionStyle ChartsCore ViewsContext2D RenderingContextOpenGL2)
 endif()
 find_package(VTK 9 REQUIRED COMPONENTS ${RADMESH_VTK_COMPONENTS})

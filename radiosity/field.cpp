@@ -113,6 +113,7 @@ std::string to_string(FieldMode mode) {
     case FieldMode::gather: return "gather";
     case FieldMode::fit: return "fit";
     case FieldMode::mean: return "mean";
+    case FieldMode::texels: return "texels";
   }
   return "?";
 }

@@ -14,12 +14,14 @@
 #include "meshing/progress.h"
 #include "meshing/scene.h"
 #include "radiosity/field.h"
+#include "radiosity/pixmap.h"
 #include "radiosity/solution.h"
 #include "radiosity/solve.h"
 
 #include <array>
 #include <functional>
 #include <map>
+#include <memory>
 #include <string>
 #include <utility>
 #include <vector>
@@ -101,15 +103,25 @@ struct MethodResult {
   std::vector<std::pair<std::string, double>> seconds;  // phase -> wall seconds, in order
   std::string report;  // one line for people ("24128 leaves, 493567 links, ...")
   FieldReport field;   // how solution.nodal was made (run_method)
+  // The pixmap method's texel grids and state, for the files that save,
+  // resume and display them (io/pixmap_io.h); null for other methods.
+  std::shared_ptr<const PixmapOutput> pixmaps;
+  bool interrupted = false;  // stopped early by SolveCallbacks::cancelled
 
   const Counter* counter(const std::string& name) const;  // nullptr when absent
 };
 
 struct SolveCallbacks {
   ProgressFn progress;
-  // Called after every refinement round of a method that has rounds, with
-  // the result as it then stands (for a series of files).
+  // Called after every refinement round of a method that has rounds (or
+  // every --snapshot-every shots of the pixmap method), with the result as
+  // it then stands (for a series of files).
   std::function<void(const MethodResult&, int round)> on_round;
+  // Polled by methods that can stop early and still return a consistent
+  // result (Method::resumable): true stops them (MethodResult::interrupted).
+  std::function<bool()> cancelled;
+  // A saved state to continue from (Method::resumable methods only).
+  std::shared_ptr<const PixmapState> resume;
 };
 
 struct Method {
@@ -125,6 +137,11 @@ struct Method {
   std::function<MethodResult(const Scene&, const Mesh&, const SolveOptions&, const MethodOptions&,
                              const SolveCallbacks&)>
       solve;
+  // It can stop on SolveCallbacks::cancelled and resume from a saved state.
+  bool resumable = false;
+  // Its own per-vertex field is the one to show (FieldMode::texels) unless
+  // --field asks for another: the pixmap method's texels.
+  bool texel_field = false;
 };
 
 // The table. The first entry is the default method.

@@ -133,11 +133,13 @@ const Counter* MethodResult::counter(const std::string& name) const {
 // Each method's declaration, in its own file.
 Method make_hierarchical_method();  // hierarchical_method.cpp
 Method make_matrix_method();        // matrix_method.cpp
+Method make_pixmap_method();        // pixmap_method.cpp
 
 const std::vector<Method>& methods() {
   static const std::vector<Method> table = {
       make_hierarchical_method(),  // the default
       make_matrix_method(),
+      make_pixmap_method(),
   };
   return table;
 }
@@ -166,6 +168,7 @@ MethodResult run_method(const Method& method, const Scene& scene, const Mesh& me
                         const OptionValues& given, const SolveCallbacks& callbacks) {
   check_solve_options(options);
   const MethodOptions opts(method.options, given, method.name);
+  if (callbacks.resume && !method.resumable) throw InputError("--resume applies to --method pixmap only");
   const auto start = std::chrono::steady_clock::now();
   MethodResult r = method.solve(scene, mesh, options, opts, callbacks);
   // What the method's own phases leave out of its wall time (building its
@@ -175,8 +178,15 @@ MethodResult run_method(const Method& method, const Scene& scene, const Mesh& me
   for (const auto& [name, s] : r.seconds) phases += s;
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   r.seconds.insert(r.seconds.begin(), {"setup", std::max(0.0, wall - phases)});
-  r.field.mode = resolve_field_mode(options.field, scene, r.mesh, &r.field.why);
-  if (!r.field.why.empty()) r.solution.stats.skips.push_back(r.field.why);
+  if (method.texel_field) {
+    // Its own field stands unless another is asked for by name.
+    r.field.mode = options.field == FieldMode::automatic ? FieldMode::texels : options.field;
+    if (r.field.mode == FieldMode::fit || r.field.mode == FieldMode::mean)
+      r.solution.nodal = compute_nodal(scene, r.mesh, r.solution.element, options.crease_angle, nodal_method(r.field.mode));
+  } else {
+    r.field.mode = resolve_field_mode(options.field, scene, r.mesh, &r.field.why);
+    if (!r.field.why.empty()) r.solution.stats.skips.push_back(r.field.why);
+  }
   if (r.field.mode == FieldMode::gather) {
     r.solution.nodal = compute_field(scene, r.mesh, r.solution.element, options, &r.field, callbacks.progress);
     r.seconds.emplace_back("direct", r.field.seconds_direct);

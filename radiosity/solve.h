@@ -20,7 +20,9 @@ enum class NodalMethod { mean, linear_fit };
 // fit or mean (from the element values, compute_nodal); automatic: gather
 // where its cost, (display vertices) x (patches), is within
 // kGatherBudget, else fit, saying so (resolve_field_mode).
-enum class FieldMode { automatic, gather, fit, mean };
+// texels: the pixmap method's own field (bilinear over texel centres), what
+// automatic keeps for a method with Method::texel_field; not a --field value.
+enum class FieldMode { automatic, gather, fit, mean, texels };
 // "auto", "gather", "fit", "mean"; InputError naming the value otherwise.
 FieldMode parse_field_mode(const std::string& text);
 std::string to_string(FieldMode mode);

@@ -1,0 +1,1061 @@
+// Pixmap radiosity: layout of the texel grids, hemicube rows, progressive
+// refinement and the display mesh (see pixmap.h).
+
+#include "radiosity/pixmap.h"
+
+#include "meshing/errors.h"
+#include "radiosity/hemicube.h"
+#include "radiosity/transport.h"
+#include "radiosity/visibility.h"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <mutex>
+#include <numbers>
+#include <numeric>
+#include <sstream>
+#include <unordered_map>
+
+namespace radmesh {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+// ---- polygons in texel coordinates -----------------------------------------
+
+struct St {
+  double s, t;
+};
+
+// Sutherland-Hodgman of a convex polygon against s >= c (dir = +1) or
+// s <= c (dir = -1) (axis 0), or the same for t (axis 1). The crossing of
+// an edge is computed from its end points in a fixed order, so that the two
+// triangles sharing an edge cut it at the same point.
+int clip_line(const St* in, int n, St* out, int axis, double c, double dir) {
+  auto coord = [axis](const St& p) { return axis == 0 ? p.s : p.t; };
+  int m = 0;
+  for (int i = 0; i < n; ++i) {
+    const St& p = in[i];
+    const St& q = in[(i + 1) % n];
+    const double dp = dir * (coord(p) - c), dq = dir * (coord(q) - c);
+    if (dp >= 0.0) out[m++] = p;
+    if ((dp >= 0.0) != (dq >= 0.0) && dp != 0.0 && dq != 0.0) {
+      const bool swap = std::tie(q.s, q.t) < std::tie(p.s, p.t);
+      const St& a = swap ? q : p;
+      const St& b = swap ? p : q;
+      const double ca = coord(a), cb = coord(b);
+      const double t = (c - ca) / (cb - ca);
+      St x{a.s + t * (b.s - a.s), a.t + t * (b.t - a.t)};
+      if (axis == 0) x.s = c; else x.t = c;
+      out[m++] = x;
+    }
+  }
+  return m;
+}
+
+// Area and centroid of a polygon in (s, t).
+void area_centroid(const St* p, int n, double& area, St& centroid) {
+  double a = 0.0, cs = 0.0, ct = 0.0;
+  for (int i = 0; i < n; ++i) {
+    const St& u = p[i];
+    const St& w = p[(i + 1) % n];
+    const double cross = u.s * w.t - w.s * u.t;
+    a += cross;
+    cs += (u.s + w.s) * cross;
+    ct += (u.t + w.t) * cross;
+  }
+  area = 0.5 * a;
+  centroid = area != 0.0 ? St{cs / (6.0 * area), ct / (6.0 * area)} : p[0];
+}
+
+// Calls f(i, j, polygon, n) for each texel cell (i, j) the triangle
+// overlaps with non-zero area, with the triangle clipped to the cell.
+template <class F>
+void for_each_piece(const Pixmap& pm, const St tri[3], F&& f) {
+  const double smin = std::min({tri[0].s, tri[1].s, tri[2].s}), smax = std::max({tri[0].s, tri[1].s, tri[2].s});
+  const double tmin = std::min({tri[0].t, tri[1].t, tri[2].t}), tmax = std::max({tri[0].t, tri[1].t, tri[2].t});
+  const int i0 = std::clamp(static_cast<int>(std::floor(smin)), 0, pm.width - 1);
+  const int i1 = std::clamp(static_cast<int>(std::ceil(smax)) - 1, i0, pm.width - 1);
+  const int j0 = std::clamp(static_cast<int>(std::floor(tmin)), 0, pm.height - 1);
+  const int j1 = std::clamp(static_cast<int>(std::ceil(tmax)) - 1, j0, pm.height - 1);
+  St a[12], b[12];
+  for (int j = j0; j <= j1; ++j)
+    for (int i = i0; i <= i1; ++i) {
+      int n = 3;
+      std::copy(tri, tri + 3, a);
+      // The grid's outer cells reach to infinity, so that rounding at the
+      // pixmap's border loses no sliver.
+      if (i > 0) n = clip_line(a, n, b, 0, i, 1.0); else std::copy(a, a + n, b);
+      if (i < pm.width - 1) n = clip_line(b, n, a, 0, i + 1, -1.0); else std::copy(b, b + n, a);
+      if (j > 0) n = clip_line(a, n, b, 1, j, 1.0); else std::copy(a, a + n, b);
+      if (j < pm.height - 1) n = clip_line(b, n, a, 1, j + 1, -1.0); else std::copy(b, b + n, a);
+      if (n < 3) continue;
+      f(i, j, a, n);
+    }
+}
+
+// ---- the layout ------------------------------------------------------------
+
+struct UnionFind {
+  std::vector<int> parent;
+  explicit UnionFind(int n) : parent(static_cast<size_t>(n)) { std::iota(parent.begin(), parent.end(), 0); }
+  int find(int x) {
+    while (parent[x] != x) x = parent[x] = parent[parent[x]];
+    return x;
+  }
+  void unite(int a, int b) {
+    a = find(a);
+    b = find(b);
+    if (a != b) parent[std::max(a, b)] = std::min(a, b);
+  }
+};
+
+// The tangent u of a plane with normal n: the coordinate axis least aligned
+// with n, made perpendicular, so that axis-aligned walls get axis-aligned grids.
+Vec3 tangent_of(const Vec3& n) {
+  int k = 0;
+  for (int i = 1; i < 3; ++i)
+    if (std::abs(n[i]) < std::abs(n[k])) k = i;
+  Vec3 axis(0.0);
+  axis[k] = 1.0;
+  return glm::normalize(axis - glm::dot(axis, n) * n);
+}
+
+St st_of(const Pixmap& pm, const Vec3& x) { return {pm.s_of(x), pm.t_of(x)}; }
+Vec3 point_of(const Pixmap& pm, double s, double t) { return pm.origin + (s * pm.texel_u) * pm.u + (t * pm.texel_v) * pm.v; }
+
+void check_options(const PixmapOptions& o) {
+  auto bad = [](const std::string& what) { throw InputError(what); };
+  if (!(o.texel_size >= 0.0) || !std::isfinite(o.texel_size)) bad("--texel-size " + format_number(o.texel_size) + ": must be >= 0 (0: auto)");
+  if (o.max_texels < 1) bad("--max-texels " + std::to_string(o.max_texels) + ": must be >= 1");
+  if (o.block < 1) bad("pixmap block " + std::to_string(o.block) + ": must be >= 1");
+  if (!(o.unshot >= 0.0 && o.unshot < 1.0)) bad("--unshot " + format_number(o.unshot) + ": must be in [0, 1)");
+  if (o.shots < 0) bad("--shots " + std::to_string(o.shots) + ": must be >= 0");
+  if (o.max_oversampling < 1) bad("pixmap oversampling " + std::to_string(o.max_oversampling) + ": must be >= 1");
+  Hemicube::check_resolution(o.hemicube_res);
+}
+
+// Whether point x of pixmap pm lies inside a closed object: every one of 7
+// rays into its hemisphere (the normal and six at 60 degrees from it) hits
+// the back of a patch first.
+bool inside_object(const Scene& scene, const Visibility& vis, const Vec3& x, const Pixmap& pm, int patch) {
+  const double reach = 4.0 * scene.diagonal();
+  for (int r = 0; r < 7; ++r) {
+    Vec3 d = pm.normal;
+    if (r > 0) {
+      const double phi = (r - 1) * std::numbers::pi / 3.0;
+      d = 0.5 * pm.normal + 0.8660254037844386 * (std::cos(phi) * pm.u + std::sin(phi) * pm.v);
+    }
+    const int hit = vis.first_hit(x, d, reach, patch);
+    if (hit < 0 || glm::dot(scene.patches[hit].normal, d) < 0.0) return false;  // nothing, or a front face
+  }
+  return true;
+}
+
+PixmapLayout layout_of(const Scene& scene, const Mesh& coarse, const PixmapOptions& options, double memory_bytes,
+                       const Visibility* vis) {
+  check_options(options);
+  std::function<bool(const Vec3&, const Pixmap&)> enclosed;
+  if (vis) enclosed = [&](const Vec3& x, const Pixmap& pm) { return inside_object(scene, *vis, x, pm, pm.patches[0]); };
+  const int np = static_cast<int>(scene.patches.size());
+  PixmapLayout L;
+  L.texel_size = options.texel_size > 0.0 ? options.texel_size : scene.diagonal() / 100.0;
+  const double tol = 1e-9 * scene.diagonal();
+
+  // Coplanar patches of one material sharing a vertex share a pixmap.
+  UnionFind uf(np);
+  std::vector<std::vector<int>> at_vertex(scene.vertices.size());
+  for (int p = 0; p < np; ++p) {
+    const Patch& P = scene.patches[p];
+    for (int v : P.outer) at_vertex[v].push_back(p);
+    for (const auto& h : P.holes)
+      for (int v : h) at_vertex[v].push_back(p);
+  }
+  auto coplanar = [&](int a, int b) {
+    const Patch& A = scene.patches[a];
+    const Patch& B = scene.patches[b];
+    if (A.material != B.material || glm::length(A.normal - B.normal) > 1e-9) return false;
+    const Vec3& o = scene.vertices[A.outer[0]];
+    for (int v : B.outer)
+      if (std::abs(glm::dot(scene.vertices[v] - o, A.normal)) > tol) return false;
+    return true;
+  };
+  for (auto& list : at_vertex) {
+    std::vector<int> heads;
+    for (int p : list) {
+      bool joined = false;
+      for (int h : heads)
+        if (coplanar(h, p)) {
+          uf.unite(h, p);
+          joined = true;
+          break;
+        }
+      if (!joined) heads.push_back(p);
+    }
+  }
+  L.pixmap_of_patch.assign(static_cast<size_t>(np), -1);
+  for (int p = 0; p < np; ++p) {
+    const int r = uf.find(p);
+    if (L.pixmap_of_patch[r] < 0) {
+      L.pixmap_of_patch[r] = static_cast<int>(L.pixmaps.size());
+      L.pixmaps.emplace_back();
+    }
+    L.pixmap_of_patch[p] = L.pixmap_of_patch[r];
+    L.pixmaps[L.pixmap_of_patch[p]].patches.push_back(p);
+  }
+
+  // Each pixmap's frame and grid.
+  std::vector<std::vector<int>> triangles_of(L.pixmaps.size());
+  for (int t = 0; t < coarse.triangle_count(); ++t) triangles_of[L.pixmap_of_patch[coarse.patch[t]]].push_back(t);
+  double bytes = 0.0;
+  for (size_t k = 0; k < L.pixmaps.size(); ++k) {
+    Pixmap& pm = L.pixmaps[k];
+    const Patch& first = scene.patches[pm.patches[0]];
+    pm.material = first.material;
+    pm.normal = first.normal;
+    pm.u = tangent_of(pm.normal);
+    pm.v = glm::cross(pm.normal, pm.u);
+    double u0 = INFINITY, u1 = -INFINITY, v0 = INFINITY, v1 = -INFINITY;
+    for (int p : pm.patches)
+      for (int vi : scene.patches[p].outer) {
+        const Vec3& x = scene.vertices[vi];
+        u0 = std::min(u0, glm::dot(x, pm.u));
+        u1 = std::max(u1, glm::dot(x, pm.u));
+        v0 = std::min(v0, glm::dot(x, pm.v));
+        v1 = std::max(v1, glm::dot(x, pm.v));
+      }
+    const double offset = glm::dot(scene.vertices[first.outer[0]], pm.normal);
+    pm.origin = u0 * pm.u + v0 * pm.v + offset * pm.normal;
+    const double eu = u1 - u0, ev = v1 - v0;
+    double size = L.texel_size;
+    auto cells = [&](double extent) { return std::max(1.0, std::ceil(extent / size - 1e-9)); };
+    if (cells(eu) * cells(ev) > static_cast<double>(options.max_texels))
+      size *= std::sqrt(cells(eu) * cells(ev) / static_cast<double>(options.max_texels)) * (1.0 + 1e-12);
+    while (cells(eu) * cells(ev) > static_cast<double>(options.max_texels)) size *= 1.01;
+    pm.width = static_cast<int>(cells(eu));
+    pm.height = static_cast<int>(cells(ev));
+    pm.texel_u = eu > 0.0 ? eu / pm.width : size;
+    pm.texel_v = ev > 0.0 ? ev / pm.height : size;
+    pm.first = L.texels;
+    L.texels += pm.texels();
+    bytes += 90.0 * static_cast<double>(pm.texels());
+    if (bytes > memory_bytes) {
+      std::ostringstream m;
+      m.precision(3);
+      m << scene.source << ": the texel grids need more than " << memory_bytes / (1024.0 * 1024.0 * 1024.0)
+        << " GiB; use a larger --texel-size (the texel count falls with its square) or raise --max-memory";
+      throw NumericalError(m.str());
+    }
+    pm.coverage.assign(static_cast<size_t>(pm.texels()), 0.0);
+    pm.centroid.assign(static_cast<size_t>(pm.texels()), Vec3(0.0));
+    // Coverage from the pieces of the triangles in each quarter of a texel,
+    // less the quarters whose centroid lies inside a closed object standing
+    // on the patch (a block on a floor): light never reaches there, and a
+    // shooter placed there would shoot into the object's back faces.
+    Pixmap fine = pm;
+    fine.width = 2 * pm.width;
+    fine.height = 2 * pm.height;
+    fine.texel_u = 0.5 * pm.texel_u;
+    fine.texel_v = 0.5 * pm.texel_v;
+    const double quarter_area = fine.texel_u * fine.texel_v;
+    std::vector<double> fine_area(static_cast<size_t>(fine.texels()), 0.0);
+    pm.dark_quarter.assign(static_cast<size_t>(fine.texels()), 0);
+    std::vector<Vec3> fine_centroid(static_cast<size_t>(fine.texels()), Vec3(0.0));
+    for (int t : triangles_of[k]) {
+      St tri[3];
+      for (int c = 0; c < 3; ++c) tri[c] = st_of(fine, coarse.positions[coarse.triangles[t][c]]);
+      for_each_piece(fine, tri, [&](int i, int j, const St* poly, int n) {
+        double a;
+        St c;
+        area_centroid(poly, n, a, c);
+        a = std::abs(a) * quarter_area;
+        const size_t idx = static_cast<size_t>(j) * fine.width + i;
+        fine_area[idx] += a;
+        fine_centroid[idx] += a * point_of(fine, c.s, c.t);
+      });
+    }
+    for (int j = 0; j < fine.height; ++j)
+      for (int i = 0; i < fine.width; ++i) {
+        const size_t idx = static_cast<size_t>(j) * fine.width + i;
+        if (fine_area[idx] <= 0.0) continue;
+        const Vec3 c = fine_centroid[idx] / fine_area[idx];
+        if (enclosed && enclosed(c, pm)) {
+          L.enclosed_area += fine_area[idx];
+          pm.dark_quarter[idx] = 1;
+          continue;
+        }
+        const size_t texel = static_cast<size_t>(j / 2) * pm.width + static_cast<size_t>(i / 2);
+        pm.coverage[texel] += fine_area[idx];
+        pm.centroid[texel] += fine_area[idx] * c;
+      }
+    const double cell_area = pm.texel_u * pm.texel_v;
+    // Owners: a texel less than a quarter covered gives its area to its
+    // most covered neighbour that is at least a quarter covered.
+    pm.owner.assign(static_cast<size_t>(pm.texels()), -1);
+    pm.area.assign(static_cast<size_t>(pm.texels()), 0.0);
+    for (long long idx = 0; idx < pm.texels(); ++idx)
+      if (pm.coverage[idx] > 0.0) pm.centroid[idx] /= pm.coverage[idx];
+    for (int j = 0; j < pm.height; ++j)
+      for (int i = 0; i < pm.width; ++i) {
+        const size_t idx = static_cast<size_t>(j) * pm.width + i;
+        if (pm.coverage[idx] <= 0.0) continue;
+        int best = static_cast<int>(idx);
+        if (pm.coverage[idx] < 0.25 * cell_area) {
+          double most = 0.0;
+          for (int dj = -1; dj <= 1; ++dj)
+            for (int di = -1; di <= 1; ++di) {
+              const int x = i + di, y = j + dj;
+              if (x < 0 || y < 0 || x >= pm.width || y >= pm.height) continue;
+              const size_t n = static_cast<size_t>(y) * pm.width + x;
+              if (pm.coverage[n] >= 0.25 * cell_area && pm.coverage[n] > most) {
+                most = pm.coverage[n];
+                best = static_cast<int>(n);
+              }
+            }
+        }
+        pm.owner[idx] = best;
+        pm.area[best] += pm.coverage[idx];
+      }
+    for (long long idx = 0; idx < pm.texels(); ++idx)
+      if (pm.owner[idx] == idx) ++L.covered;
+
+    // Shooters: blocks of owners.
+    const int b = options.block;
+    for (int bj = 0; bj < pm.height; bj += b)
+      for (int bi = 0; bi < pm.width; bi += b) {
+        Shooter s;
+        s.pixmap = static_cast<int>(k);
+        Vec3 sum(0.0);
+        for (int j = bj; j < std::min(pm.height, bj + b); ++j)
+          for (int i = bi; i < std::min(pm.width, bi + b); ++i) {
+            const int idx = j * pm.width + i;
+            if (pm.owner[idx] != idx) continue;
+            s.texels.push_back(idx);
+            s.area += pm.area[idx];
+            sum += pm.coverage[idx] * pm.centroid[idx];
+            s.centre += Vec3(pm.coverage[idx]);
+          }
+        if (s.texels.empty()) continue;
+        s.centre = sum / s.centre.x;
+        L.shooters.push_back(std::move(s));
+      }
+  }
+  return L;
+}
+
+struct RowEntry {
+  uint32_t texel;  // global index
+  float f;
+};
+
+}  // namespace
+
+PixmapLayout make_pixmap_layout(const Scene& scene, const PixmapOptions& options, double memory_bytes) {
+  check_options(options);
+  const Visibility vis(scene);
+  return layout_of(scene, triangulate_patches(scene), options, memory_bytes, &vis);
+}
+
+std::string scene_fingerprint(const Scene& scene) {
+  uint64_t h = 1469598103934665603ull;
+  auto mix = [&h](const void* data, size_t n) {
+    const unsigned char* p = static_cast<const unsigned char*>(data);
+    for (size_t i = 0; i < n; ++i) {
+      h ^= p[i];
+      h *= 1099511628211ull;
+    }
+  };
+  auto mix_int = [&](long long v) { mix(&v, sizeof v); };
+  auto mix_vec = [&](const Vec3& v) {
+    for (int c = 0; c < 3; ++c) {
+      const double d = v[c] == 0.0 ? 0.0 : v[c];  // -0 and 0 alike
+      mix(&d, sizeof d);
+    }
+  };
+  mix_int(static_cast<long long>(scene.vertices.size()));
+  for (const Vec3& v : scene.vertices) mix_vec(v);
+  mix_int(static_cast<long long>(scene.materials.size()));
+  for (const Material& m : scene.materials) {
+    mix_vec(m.reflectance);
+    mix_vec(m.emission);
+  }
+  mix_int(static_cast<long long>(scene.patches.size()));
+  for (const Patch& p : scene.patches) {
+    mix_int(p.material);
+    mix_int(static_cast<long long>(p.outer.size()));
+    for (int v : p.outer) mix_int(v);
+    mix_int(static_cast<long long>(p.holes.size()));
+    for (const auto& hole : p.holes) {
+      mix_int(static_cast<long long>(hole.size()));
+      for (int v : hole) mix_int(v);
+    }
+  }
+  char text[17];
+  std::snprintf(text, sizeof text, "%016llx", static_cast<unsigned long long>(h));
+  return text;
+}
+
+void check_resumable(const PixmapState& state, const Scene& scene, const PixmapLayout& layout,
+                     const PixmapOptions& options, const std::string& where) {
+  auto refuse = [&](const std::string& why) { throw InputError(where + ": cannot resume: " + why); };
+  if (state.scene_fingerprint != scene_fingerprint(scene))
+    refuse("it was made from another scene (or this one edited): fingerprint " + state.scene_fingerprint +
+           ", this scene " + scene_fingerprint(scene));
+  auto same = [&](const char* flag, double saved, double now) {
+    if (saved != now)
+      refuse(std::string("it was made with ") + flag + " " + format_number(saved) + ", this run has " + flag + " " +
+             format_number(now));
+  };
+  same("--texel-size", state.texel_size, layout.texel_size);
+  same("--max-texels", static_cast<double>(state.max_texels), static_cast<double>(options.max_texels));
+  same("--hemicube-res", state.hemicube_res, options.hemicube_res);
+  same("--block", state.block, options.block);
+  same("--max-oversampling", state.max_oversampling, options.max_oversampling);
+  if (state.sizes.size() != layout.pixmaps.size())
+    refuse(std::to_string(state.sizes.size()) + " pixmaps saved, this layout has " +
+           std::to_string(layout.pixmaps.size()));
+  for (size_t k = 0; k < layout.pixmaps.size(); ++k) {
+    const Pixmap& pm = layout.pixmaps[k];
+    const size_t n = static_cast<size_t>(pm.texels()) * 3;
+    if (state.sizes[k][0] != pm.width || state.sizes[k][1] != pm.height || state.radiosity[k].size() != n ||
+        state.unshot[k].size() != n)
+      refuse("pixmap " + std::to_string(k) + " is " + std::to_string(state.sizes[k][0]) + " x " +
+             std::to_string(state.sizes[k][1]) + " texels in the state, " + std::to_string(pm.width) + " x " +
+             std::to_string(pm.height) + " here");
+    for (size_t i = 0; i < n; ++i)
+      if (!std::isfinite(state.radiosity[k][i]) || !std::isfinite(state.unshot[k][i]) ||
+          state.radiosity[k][i] < 0.0f || state.unshot[k][i] < 0.0f)
+        refuse("pixmap " + std::to_string(k) + " texel " + std::to_string(i / 3) + " holds a negative or non-finite value");
+  }
+  if (state.shots < 0) refuse("a negative shot count");
+}
+
+// ---- the solver ------------------------------------------------------------
+
+struct PixmapSolver::Impl {
+  const Scene& scene;
+  PixmapOptions options;
+  SolveOptions solve;
+  Mesh coarse;
+  PixmapLayout layout;
+  std::vector<HemicubeTriangle> polygons;
+  std::vector<Rgb> rho, emission;           // per pixmap
+  std::vector<int> shooter_of;              // per global texel: its shooter (-1: none)
+  double row_budget = 0.0;                  // bytes the cached rows may take
+  // The display mesh: geometry built once.
+  Mesh display;
+  std::vector<St> display_st;
+  std::vector<int> display_pixmap;          // per display vertex
+  std::vector<char> display_dark;           // per display vertex: of triangles inside closed objects
+  std::vector<long long> display_texel;     // per display triangle: global texel
+
+  Impl(const Scene& s, const PixmapOptions& o, const SolveOptions& so) : scene(s), options(o), solve(so) {}
+
+  long long global(int k, int idx) const { return layout.pixmaps[k].first + idx; }
+  int pixmap_of_global(long long g) const {
+    // Pixmaps are in increasing `first`.
+    const auto it = std::upper_bound(layout.pixmaps.begin(), layout.pixmaps.end(), g,
+                                     [](long long x, const Pixmap& p) { return x < p.first; });
+    return static_cast<int>(it - layout.pixmaps.begin()) - 1;
+  }
+
+  std::vector<RowEntry> compute_row(int s, Hemicube& cube, long long& oversampled) const;
+  void build_display();
+};
+
+namespace {
+
+// The pixel rectangle of face f that the quad `corners` (world points) may
+// cover, as seen by the hemicube: [x0, x1] x [y0, y1]; false when none.
+bool projected_rect(const Hemicube& cube, int f, const std::array<Vec3, 4>& corners, int& x0, int& x1, int& y0,
+                    int& y1) {
+  const Hemicube::Face& F = cube.faces()[f];
+  double xmin = INFINITY, xmax = -INFINITY, ymin = INFINITY, ymax = -INFINITY;
+  bool any = false;
+  // Project the quad clipped to z >= near (a corner behind the eye clips the
+  // quad; the clipped polygon's points on the near plane count).
+  struct P {
+    double x, y, z;
+  };
+  P a[8];
+  int n = 0;
+  double scale = 0.0;
+  for (const Vec3& c : corners) {
+    const Vec3 d = c - cube.centre();
+    a[n++] = {glm::dot(d, F.right), glm::dot(d, F.up), glm::dot(d, F.forward)};
+    scale = std::max(scale, glm::length(d));
+  }
+  const double near = 1e-12 * scale;
+  for (int i = 0; i < 4; ++i) {
+    const P& p = a[i];
+    const P& q = a[(i + 1) % 4];
+    auto add = [&](double x, double y, double z) {
+      xmin = std::min(xmin, x / z);
+      xmax = std::max(xmax, x / z);
+      ymin = std::min(ymin, y / z);
+      ymax = std::max(ymax, y / z);
+      any = true;
+    };
+    if (p.z >= near) add(p.x, p.y, p.z);
+    if ((p.z >= near) != (q.z >= near)) {
+      const double t = (near - p.z) / (q.z - p.z);
+      add(p.x + t * (q.x - p.x), p.y + t * (q.y - p.y), near);
+    }
+  }
+  if (!any) return false;
+  const double px = cube.pixel_size();
+  x0 = std::max(0, static_cast<int>(std::floor((std::max(xmin, -2.0) + 1.0) / px - 0.5)));
+  x1 = std::min(F.width - 1, static_cast<int>(std::ceil((std::min(xmax, 2.0) + 1.0) / px - 0.5)));
+  y0 = std::max(0, static_cast<int>(std::floor((std::max(ymin, F.y0 - 1.0) - F.y0) / px - 0.5)));
+  y1 = std::min(F.height - 1, static_cast<int>(std::ceil((std::min(ymax, 2.0) - F.y0) / px - 0.5)));
+  return x0 <= x1 && y0 <= y1;
+}
+
+}  // namespace
+
+std::vector<RowEntry> PixmapSolver::Impl::compute_row(int s, Hemicube& cube, long long& oversampled) const {
+  const Shooter& sh = layout.shooters[s];
+  const Pixmap& own = layout.pixmaps[sh.pixmap];
+  cube.render(sh.centre, own.u, own.v, polygons);
+  const int npm = static_cast<int>(layout.pixmaps.size());
+  std::vector<std::vector<RowEntry>> parts(static_cast<size_t>(npm));
+  std::vector<long long> over(static_cast<size_t>(npm), 0);
+  const int kmax = options.max_oversampling;
+  tbb::parallel_for(0, npm, [&](int k) {
+    if (k == sh.pixmap) return;
+    const Pixmap& pm = layout.pixmaps[k];
+    const double h = glm::dot(pm.origin - sh.centre, pm.normal);
+    if (!(h < 0.0)) return;  // the shooter is not in front of this pixmap
+    const std::array<Vec3, 4> corners = {point_of(pm, 0, 0), point_of(pm, pm.width, 0),
+                                         point_of(pm, pm.width, pm.height), point_of(pm, 0, pm.height)};
+    std::vector<double> acc;
+    std::vector<int> touched;
+    // Screen point (x, y) of a face to texel coordinates (s, t) of the
+    // point its ray hits on this plane: a ratio of affine functions (the
+    // ray w = forward + x right + y up meets the plane at c + h / (w.n) w).
+    struct Homography {
+      double d0, dx, dy, a0, ax, ay, b0, bx, by, cu, cv;
+    } H{};
+    const Vec3 co = sh.centre - pm.origin;
+    auto set_face = [&](const Hemicube::Face& F) {
+      H = {glm::dot(F.forward, pm.normal), glm::dot(F.right, pm.normal), glm::dot(F.up, pm.normal),
+           h * glm::dot(F.forward, pm.u),  h * glm::dot(F.right, pm.u),  h * glm::dot(F.up, pm.u),
+           h * glm::dot(F.forward, pm.v),  h * glm::dot(F.right, pm.v),  h * glm::dot(F.up, pm.v),
+           glm::dot(co, pm.u),             glm::dot(co, pm.v)};
+    };
+    auto hit = [&](double x, double y, double& s, double& t) {
+      const double d = H.d0 + H.dx * x + H.dy * y;
+      if (!(d < 0.0)) return false;
+      s = (H.cu + (H.a0 + H.ax * x + H.ay * y) / d) / pm.texel_u;
+      t = (H.cv + (H.b0 + H.bx * x + H.by * y) / d) / pm.texel_v;
+      return std::isfinite(s) && std::isfinite(t);
+    };
+    // The owner of the texel at (s, t), or -1 when it is not covered.
+    auto owner_at = [&](double s, double t) {
+      const int i = std::clamp(static_cast<int>(std::floor(s)), 0, pm.width - 1);
+      const int j = std::clamp(static_cast<int>(std::floor(t)), 0, pm.height - 1);
+      return pm.owner[static_cast<size_t>(j) * pm.width + i];
+    };
+    auto add = [&](int texel, double f) {
+      if (acc.empty()) acc.assign(static_cast<size_t>(pm.texels()), 0.0);
+      if (acc[texel] == 0.0) touched.push_back(texel);
+      acc[texel] += f;
+    };
+    // A sample's share goes to the covered texels around (s, t) with
+    // bilinear (tent) weights of their centres: with samples at most half
+    // a texel apart (the oversampling below), the weights a texel collects
+    // do not alias with the pixel grid as nearest-texel counting does.
+    // Without a covered texel centre around it, the texel it lies in, or
+    // `fallback` (the owner of the pixel centre's texel).
+    auto splat = [&](double s, double t, double f, int fallback) {
+      const int i0 = static_cast<int>(std::floor(s - 0.5)), j0 = static_cast<int>(std::floor(t - 0.5));
+      const double fs = s - 0.5 - i0, ft = t - 0.5 - j0;
+      int owners[4];
+      double weights[4], wsum = 0.0;
+      int n = 0;
+      for (int dj = 0; dj <= 1; ++dj)
+        for (int di = 0; di <= 1; ++di) {
+          const int i = i0 + di, j = j0 + dj;
+          if (i < 0 || j < 0 || i >= pm.width || j >= pm.height) continue;
+          const int o = pm.owner[static_cast<size_t>(j) * pm.width + i];
+          const double w = (di ? fs : 1.0 - fs) * (dj ? ft : 1.0 - ft);
+          if (o < 0 || w <= 0.0) continue;
+          owners[n] = o;
+          weights[n++] = w;
+          wsum += w;
+        }
+      if (n == 0) {
+        const int o = owner_at(s, t);
+        add(o >= 0 ? o : fallback, f);
+        return;
+      }
+      for (int q = 0; q < n; ++q) add(owners[q], f * weights[q] / wsum);
+    };
+    for (int f = 0; f < 5; ++f) {
+      int x0, x1, y0, y1;
+      if (!projected_rect(cube, f, corners, x0, x1, y0, y1)) continue;
+      const Hemicube::Face& F = cube.faces()[f];
+      set_face(F);
+      const double px = cube.pixel_size();
+      for (int y = y0; y <= y1; ++y)
+        for (int x = x0; x <= x1; ++x) {
+          const int id = F.id[static_cast<size_t>(y) * F.width + x];
+          if (id < 0 || layout.pixmap_of_patch[id] != k) continue;
+          const double sx = cube.pixel_x(x), sy = cube.pixel_y(f, y);
+          double s, t;
+          if (!hit(sx, sy, s, t)) continue;
+          int centre_owner = owner_at(s, t);
+          if (centre_owner < 0) {
+            // Rounding put the centre's point just outside the covered
+            // part: the most covered texel around it.
+            const int i = std::clamp(static_cast<int>(std::floor(s)), 0, pm.width - 1);
+            const int j = std::clamp(static_cast<int>(std::floor(t)), 0, pm.height - 1);
+            double most = 0.0;
+            for (int dj = -1; dj <= 1; ++dj)
+              for (int di = -1; di <= 1; ++di) {
+                const int a = i + di, b = j + dj;
+                if (a < 0 || b < 0 || a >= pm.width || b >= pm.height) continue;
+                const size_t n = static_cast<size_t>(b) * pm.width + a;
+                if (pm.owner[n] >= 0 && pm.coverage[n] > most) {
+                  most = pm.coverage[n];
+                  centre_owner = pm.owner[n];
+                }
+              }
+            if (centre_owner < 0) continue;
+          }
+          const double delta = cube.delta(f, x, y);
+          // Samples at most half a texel apart: texels per pixel here, from
+          // the neighbouring pixels' points.
+          double sa, ta, sb, tb;
+          int k_over = kmax;
+          if (hit(sx + px, sy, sa, ta) && hit(sx, sy + px, sb, tb)) {
+            const double j = std::max({std::abs(sa - s), std::abs(ta - t), std::abs(sb - s), std::abs(tb - t)});
+            k_over = std::clamp(static_cast<int>(std::ceil(2.0 * j - 1e-9)), 1, kmax);
+          }
+          if (k_over == 1) {
+            splat(s, t, delta, centre_owner);
+            continue;
+          }
+          ++over[k];
+          const double w = delta / (k_over * k_over);
+          for (int b = 0; b < k_over; ++b)
+            for (int a = 0; a < k_over; ++a) {
+              const double qx = sx + ((a + 0.5) / k_over - 0.5) * px, qy = sy + ((b + 0.5) / k_over - 0.5) * px;
+              double qs, qt;
+              if (hit(qx, qy, qs, qt))
+                splat(qs, qt, w, centre_owner);
+              else
+                add(centre_owner, w);
+            }
+        }
+    }
+    std::sort(touched.begin(), touched.end());
+    auto& part = parts[k];
+    part.reserve(touched.size());
+    for (int texel : touched)
+      part.push_back({static_cast<uint32_t>(pm.first + texel), static_cast<float>(acc[texel])});
+  });
+  std::vector<RowEntry> row;
+  size_t total = 0;
+  for (const auto& p : parts) total += p.size();
+  row.reserve(total);
+  for (int k = 0; k < npm; ++k) {
+    row.insert(row.end(), parts[k].begin(), parts[k].end());
+    oversampled += over[k];
+  }
+  return row;
+}
+
+void PixmapSolver::Impl::build_display() {
+  // Per pixmap: its coarse triangles cut at texel lines, vertices welded
+  // within the pixmap.
+  std::vector<std::vector<int>> triangles_of(layout.pixmaps.size());
+  for (int t = 0; t < coarse.triangle_count(); ++t) triangles_of[layout.pixmap_of_patch[coarse.patch[t]]].push_back(t);
+  for (size_t k = 0; k < layout.pixmaps.size(); ++k) {
+    const Pixmap& pm = layout.pixmaps[k];
+    // Welding: points within 1e-9 texel of each other are one vertex.
+    std::unordered_map<long long, std::vector<int>> lit_cells;
+    const double q = 1e-7;
+    auto key = [](long long a, long long b) { return a * 1000003LL + b; };
+    // Triangles inside closed objects get vertices of their own (value 0),
+    // so that the lit texels next to them do not spread light under objects.
+    std::unordered_map<long long, std::vector<int>> dark_cells;
+    auto vertex = [&](const St& p, bool dark) {
+      auto& cells = dark ? dark_cells : lit_cells;
+      const long long a = std::llround(p.s / q), b = std::llround(p.t / q);
+      for (long long da = -1; da <= 1; ++da)
+        for (long long db = -1; db <= 1; ++db) {
+          const auto it = cells.find(key(a + da, b + db));
+          if (it == cells.end()) continue;
+          for (int v : it->second)
+            if (std::abs(display_st[v].s - p.s) < 1e-9 && std::abs(display_st[v].t - p.t) < 1e-9) return v;
+        }
+      const int v = static_cast<int>(display.positions.size());
+      display.positions.push_back(point_of(pm, p.s, p.t));
+      display_st.push_back(p);
+      display_pixmap.push_back(static_cast<int>(k));
+      display_dark.push_back(dark ? 1 : 0);
+      cells[key(a, b)].push_back(v);
+      return v;
+    };
+    for (int t : triangles_of[k]) {
+      St tri[3];
+      for (int c = 0; c < 3; ++c) tri[c] = st_of(pm, coarse.positions[coarse.triangles[t][c]]);
+      const int patch = coarse.patch[t];
+      // A piece's triangles (a fan), dark or lit.
+      auto emit = [&](const St* poly, int n, long long texel, bool dark) {
+        double a;
+        St c;
+        area_centroid(poly, n, a, c);
+        if (a == 0.0) return;
+        int ids[12];
+        for (int m = 0; m < n; ++m) ids[m] = vertex(poly[m], dark);
+        for (int m = 1; m + 1 < n; ++m) {
+          std::array<int, 3> tri_ids = {ids[0], ids[m], ids[m + 1]};
+          if (tri_ids[0] == tri_ids[1] || tri_ids[1] == tri_ids[2] || tri_ids[0] == tri_ids[2]) continue;
+          // Counter-clockwise around the patch normal: (s, t) is a
+          // right-handed frame with normal u x v.
+          if (a < 0.0) std::swap(tri_ids[1], tri_ids[2]);
+          display.triangles.push_back(tri_ids);
+          display.patch.push_back(patch);
+          display_texel.push_back(dark ? -1 : texel);
+        }
+      };
+      for_each_piece(pm, tri, [&](int i, int j, const St* poly, int n) {
+        const size_t idx = static_cast<size_t>(j) * pm.width + i;
+        const int owner = pm.owner[idx];
+        const long long texel = owner >= 0 ? pm.first + owner : -1;
+        // The quarters of the texel inside closed objects (dark_quarter).
+        int dark = 0;
+        for (int q4 = 0; q4 < 4; ++q4)
+          dark += pm.dark_quarter[static_cast<size_t>(2 * j + q4 / 2) * (2 * pm.width) + 2 * i + q4 % 2];
+        if (owner < 0 || dark == 0) {
+          emit(poly, n, texel, owner < 0);
+          return;
+        }
+        // Part inside an object: cut into quarters, so that the dark part
+        // follows the object's outline to half a texel.
+        St a[12], b[12];
+        for (int q4 = 0; q4 < 4; ++q4) {
+          const int qi = q4 % 2, qj = q4 / 2;
+          int m = clip_line(poly, n, a, 0, i + 0.5, qi ? 1.0 : -1.0);
+          m = clip_line(a, m, b, 1, j + 0.5, qj ? 1.0 : -1.0);
+          if (m < 3) continue;
+          const bool q_dark = pm.dark_quarter[static_cast<size_t>(2 * j + qj) * (2 * pm.width) + 2 * i + qi];
+          emit(b, m, texel, q_dark);
+        }
+      });
+    }
+  }
+}
+
+PixmapSolver::PixmapSolver(const Scene& scene, const PixmapOptions& options, const SolveOptions& solve)
+    : impl_(std::make_unique<Impl>(scene, options, solve)) {
+  Impl& m = *impl_;
+  check_options(options);
+  m.coarse = triangulate_patches(scene);
+  const double memory = memory_limit_bytes(solve);
+  {
+    const Visibility vis(scene);
+    m.layout = layout_of(scene, m.coarse, options, memory, &vis);
+  }
+  if (m.layout.texels >= (1LL << 32)) throw NumericalError(scene.source + ": more than 2^32 texels; use a larger --texel-size");
+  for (int t = 0; t < m.coarse.triangle_count(); ++t) {
+    const auto& tri = m.coarse.triangles[t];
+    const int p = m.coarse.patch[t];
+    m.polygons.push_back({m.coarse.positions[tri[0]], m.coarse.positions[tri[1]], m.coarse.positions[tri[2]],
+                          scene.patches[p].normal, p});
+  }
+  for (const Pixmap& pm : m.layout.pixmaps) {
+    m.rho.push_back(scene.materials[pm.material].reflectance);
+    m.emission.push_back(scene.materials[pm.material].emission);
+  }
+  m.shooter_of.assign(static_cast<size_t>(m.layout.texels), -1);
+  for (size_t s = 0; s < m.layout.shooters.size(); ++s)
+    for (int t : m.layout.shooters[s].texels) m.shooter_of[m.global(m.layout.shooters[s].pixmap, t)] = static_cast<int>(s);
+  m.row_budget = std::max(0.0, memory - 90.0 * static_cast<double>(m.layout.texels));
+  m.build_display();
+}
+
+PixmapSolver::~PixmapSolver() = default;
+
+const PixmapLayout& PixmapSolver::layout() const { return impl_->layout; }
+
+PixmapState PixmapSolver::initial_state() const {
+  const Impl& m = *impl_;
+  PixmapState st;
+  st.scene_fingerprint = scene_fingerprint(m.scene);
+  st.texel_size = m.layout.texel_size;
+  st.max_texels = m.options.max_texels;
+  st.hemicube_res = m.options.hemicube_res;
+  st.block = m.options.block;
+  st.max_oversampling = m.options.max_oversampling;
+  for (size_t k = 0; k < m.layout.pixmaps.size(); ++k) {
+    const Pixmap& pm = m.layout.pixmaps[k];
+    st.sizes.push_back({pm.width, pm.height});
+    std::vector<float> b(static_cast<size_t>(pm.texels()) * 3, 0.0f);
+    for (long long i = 0; i < pm.texels(); ++i)
+      if (pm.owner[i] == i)
+        for (int c = 0; c < 3; ++c) b[i * 3 + c] = static_cast<float>(m.emission[k][c]);
+    st.radiosity.push_back(b);
+    st.unshot.push_back(std::move(b));
+  }
+  return st;
+}
+
+Rgb PixmapSolver::ambient(const PixmapState& state) const {
+  // Cohen et al. 1988: the unshot power spread over the scene's area,
+  // times the interreflection factor 1 / (1 - mean rho).
+  const Impl& m = *impl_;
+  Rgb unshot(0.0), rho_area(0.0);
+  double area = 0.0;
+  for (size_t k = 0; k < m.layout.pixmaps.size(); ++k) {
+    const Pixmap& pm = m.layout.pixmaps[k];
+    for (long long i = 0; i < pm.texels(); ++i)
+      if (pm.owner[i] == i) {
+        for (int c = 0; c < 3; ++c) unshot[c] += static_cast<double>(state.unshot[k][i * 3 + c]) * pm.area[i];
+        rho_area += m.rho[k] * pm.area[i];
+        area += pm.area[i];
+      }
+  }
+  if (!(area > 0.0)) return Rgb(0.0);
+  Rgb amb(0.0);
+  for (int c = 0; c < 3; ++c) amb[c] = unshot[c] / area / (1.0 - rho_area[c] / area);
+  return amb;
+}
+
+std::vector<std::vector<float>> PixmapSolver::display(const PixmapState& state, const Rgb& ambient) const {
+  const Impl& m = *impl_;
+  std::vector<std::vector<float>> out(m.layout.pixmaps.size());
+  for (size_t k = 0; k < m.layout.pixmaps.size(); ++k) {
+    const Pixmap& pm = m.layout.pixmaps[k];
+    out[k].assign(static_cast<size_t>(pm.texels()) * 3, 0.0f);
+    for (long long i = 0; i < pm.texels(); ++i) {
+      const int o = pm.owner[i];
+      if (o < 0) continue;
+      for (int c = 0; c < 3; ++c)
+        out[k][i * 3 + c] = static_cast<float>(static_cast<double>(state.radiosity[k][o * 3 + c]) + m.rho[k][c] * ambient[c]);
+    }
+  }
+  return out;
+}
+
+std::vector<std::pair<long long, float>> PixmapSolver::form_factors(int s) const {
+  if (s < 0 || s >= static_cast<int>(impl_->layout.shooters.size()))
+    throw InputError("shooter " + std::to_string(s) + " does not exist");
+  Hemicube cube(impl_->options.hemicube_res);
+  long long over = 0;
+  std::vector<std::pair<long long, float>> out;
+  run_in_arena(impl_->solve.threads, [&] {
+    for (const RowEntry& e : impl_->compute_row(s, cube, over)) out.emplace_back(e.texel, e.f);
+  });
+  return out;
+}
+
+PixmapRun PixmapSolver::run(PixmapState start, const PixmapCallbacks& cb) const {
+  const Impl& m = *impl_;
+  const PixmapLayout& L = m.layout;
+  PixmapRun r;
+  r.state = std::move(start);
+  PixmapState& st = r.state;
+  for (size_t k = 0; k < L.pixmaps.size(); ++k) {
+    const Pixmap& pm = L.pixmaps[k];
+    for (long long i = 0; i < pm.texels(); ++i)
+      if (pm.owner[i] == i) r.power_emitted += m.emission[k] * pm.area[i];
+  }
+  const size_t ns = L.shooters.size();
+  std::vector<double> power(ns, 0.0);  // sum of the channels' unshot power
+  auto shooter_power = [&](size_t s) {
+    const Shooter& sh = L.shooters[s];
+    const Pixmap& pm = L.pixmaps[sh.pixmap];
+    double p = 0.0;
+    for (int t : sh.texels)
+      for (int c = 0; c < 3; ++c) p += static_cast<double>(st.unshot[sh.pixmap][t * 3 + c]) * pm.area[t];
+    return p;
+  };
+  for (size_t s = 0; s < ns; ++s) power[s] = shooter_power(s);
+  const double emitted = r.power_emitted.x + r.power_emitted.y + r.power_emitted.z;
+  const double target = m.options.unshot * emitted;
+  std::vector<std::vector<RowEntry>> cache(ns);
+  std::vector<char> cached(ns, 0);
+  double cache_bytes = 0.0;
+  std::vector<long long> stamp(ns, -1);
+  std::vector<int> touched;
+  Hemicube cube(m.options.hemicube_res);
+  const double log_goal = target > 0.0 && emitted > 0.0 ? std::log(target / emitted) : 0.0;
+
+  run_in_arena(m.solve.threads, [&] {
+    while (true) {
+      double unshot = 0.0;
+      size_t best = ns;
+      for (size_t s = 0; s < ns; ++s) {
+        unshot += power[s];
+        if (power[s] > 0.0 && (best == ns || power[s] > power[best])) best = s;
+      }
+      r.unshot_fraction = emitted > 0.0 ? unshot / emitted : 0.0;
+      if (cb.progress && emitted > 0.0) {
+        double f = log_goal < 0.0 && unshot > 0.0 ? std::log(unshot / emitted) / log_goal : 1.0;
+        if (m.options.shots > 0) f = std::max(f, static_cast<double>(st.shots) / static_cast<double>(m.options.shots));
+        cb.progress("shots", std::clamp(f, 0.0, 1.0));
+      }
+      if (best == ns || unshot <= target) break;
+      if (m.options.shots > 0 && st.shots >= m.options.shots) break;
+      if (cb.cancelled && cb.cancelled()) {
+        r.interrupted = true;
+        break;
+      }
+      // The row of the shooter: cached, or rendered now.
+      const auto t0 = Clock::now();
+      std::vector<RowEntry> fresh;
+      const std::vector<RowEntry>* row = &cache[best];
+      if (!cached[best]) {
+        fresh = m.compute_row(static_cast<int>(best), cube, r.pixels_oversampled);
+        ++r.rows_computed;
+        const double bytes = static_cast<double>(fresh.size() * sizeof(RowEntry));
+        if (cache_bytes + bytes <= m.row_budget) {
+          cache[best] = std::move(fresh);
+          cached[best] = 1;
+          cache_bytes += bytes;
+          ++r.rows_cached;
+        } else {
+          row = &fresh;
+        }
+      }
+      r.seconds_hemicubes += seconds_since(t0);
+      const auto t1 = Clock::now();
+      // Shoot: the block's unshot power leaves; each texel it reaches gets
+      // rho times power x F / area.
+      const Shooter& sh = L.shooters[best];
+      const Pixmap& spm = L.pixmaps[sh.pixmap];
+      Rgb phi(0.0);
+      for (int t : sh.texels)
+        for (int c = 0; c < 3; ++c) {
+          float& u = st.unshot[sh.pixmap][t * 3 + c];
+          phi[c] += static_cast<double>(u) * spm.area[t];
+          u = 0.0f;
+        }
+      power[best] = 0.0;
+      double received = 0.0;
+      int k = -1;
+      long long k_end = 0;
+      ++st.shots;
+      ++r.shots_this_run;
+      touched.clear();
+      for (const RowEntry& e : *row) {
+        if (k < 0 || e.texel >= k_end) {
+          k = m.pixmap_of_global(e.texel);
+          k_end = L.pixmaps[k].first + L.pixmaps[k].texels();
+        }
+        const Pixmap& pm = L.pixmaps[k];
+        const long long i = e.texel - pm.first;
+        const double f = e.f;
+        received += f;
+        for (int c = 0; c < 3; ++c) {
+          const double dh = phi[c] * f / pm.area[i];
+          const double db = m.rho[k][c] * dh;
+          float& b = st.radiosity[k][i * 3 + c];
+          float& u = st.unshot[k][i * 3 + c];
+          b = static_cast<float>(static_cast<double>(b) + db);
+          u = static_cast<float>(static_cast<double>(u) + db);
+          st.power_absorbed[c] += (1.0 - m.rho[k][c]) * dh * pm.area[i];
+        }
+        const int s = m.shooter_of[e.texel];
+        if (s >= 0 && stamp[s] != st.shots) {
+          stamp[s] = st.shots;
+          touched.push_back(s);
+        }
+      }
+      st.power_escaped += phi * std::max(0.0, 1.0 - received);
+      for (int s : touched) power[s] = shooter_power(static_cast<size_t>(s));
+      r.seconds_shots += seconds_since(t1);
+      if (cb.on_snapshot && cb.snapshot_every > 0 && st.shots % cb.snapshot_every == 0) cb.on_snapshot(st);
+    }
+  });
+  r.ambient = ambient(st);
+  for (int c = 0; c < 3; ++c) {
+    double bmax = 0.0, umax = 0.0;
+    for (size_t k = 0; k < L.pixmaps.size(); ++k)
+      for (size_t i = static_cast<size_t>(c); i < st.radiosity[k].size(); i += 3) {
+        bmax = std::max(bmax, static_cast<double>(st.radiosity[k][i]));
+        umax = std::max(umax, static_cast<double>(st.unshot[k][i]));
+      }
+    r.residual[c] = bmax > 0.0 ? umax / bmax : 0.0;
+  }
+  return r;
+}
+
+void PixmapSolver::display_mesh(const std::vector<std::vector<float>>& texels, Mesh& mesh, Solution& solution,
+                                std::vector<int>& texel_of_triangle) const {
+  const Impl& m = *impl_;
+  const PixmapLayout& L = m.layout;
+  mesh = m.display;
+  solution.element.assign(mesh.triangles.size(), Rgb(0.0));
+  texel_of_triangle.assign(mesh.triangles.size(), -1);
+  auto value = [&](long long g) {
+    const int k = m.pixmap_of_global(g);
+    const size_t i = static_cast<size_t>(g - L.pixmaps[k].first) * 3;
+    return Rgb(texels[k][i], texels[k][i + 1], texels[k][i + 2]);
+  };
+  for (size_t t = 0; t < mesh.triangles.size(); ++t) {
+    const long long g = m.display_texel[t];
+    if (g < 0) continue;  // inside a closed object: no light
+    solution.element[t] = value(g);
+    texel_of_triangle[t] = static_cast<int>(g - L.pixmaps[m.pixmap_of_global(g)].first);
+  }
+  NodalField& nodal = solution.nodal;
+  nodal.points = mesh.positions;
+  nodal.source_vertex.resize(mesh.positions.size());
+  std::iota(nodal.source_vertex.begin(), nodal.source_vertex.end(), 0);
+  nodal.corners = mesh.triangles;
+  nodal.radiosity.assign(mesh.positions.size(), Rgb(0.0));
+  for (size_t v = 0; v < mesh.positions.size(); ++v) {
+    if (m.display_dark[v]) continue;
+    const int k = m.display_pixmap[v];
+    const Pixmap& pm = L.pixmaps[k];
+    const St p = m.display_st[v];
+    // Bilinear over the texel centres around p, covered texels only.
+    const int i0 = static_cast<int>(std::floor(p.s - 0.5)), j0 = static_cast<int>(std::floor(p.t - 0.5));
+    const double fs = p.s - 0.5 - i0, ft = p.t - 0.5 - j0;
+    Rgb sum(0.0);
+    double wsum = 0.0;
+    for (int dj = 0; dj <= 1; ++dj)
+      for (int di = 0; di <= 1; ++di) {
+        const int i = i0 + di, j = j0 + dj;
+        if (i < 0 || j < 0 || i >= pm.width || j >= pm.height) continue;
+        const size_t idx = static_cast<size_t>(j) * pm.width + i;
+        if (pm.owner[idx] < 0) continue;
+        const double w = (di ? fs : 1.0 - fs) * (dj ? ft : 1.0 - ft);
+        sum += w * Rgb(texels[k][idx * 3], texels[k][idx * 3 + 1], texels[k][idx * 3 + 2]);
+        wsum += w;
+      }
+    if (wsum > 1e-12) {
+      nodal.radiosity[v] = sum / wsum;
+    } else {
+      // A vertex with no covered texel centre around it with weight: the
+      // texel it lies in (clamped to the grid).
+      const int i = std::clamp(static_cast<int>(std::floor(p.s)), 0, pm.width - 1);
+      const int j = std::clamp(static_cast<int>(std::floor(p.t)), 0, pm.height - 1);
+      const int o = pm.owner[static_cast<size_t>(j) * pm.width + i];
+      if (o >= 0) nodal.radiosity[v] = Rgb(texels[k][o * 3], texels[k][o * 3 + 1], texels[k][o * 3 + 2]);
+    }
+  }
+}
+
+void PixmapSolver::display_uv(std::vector<std::array<double, 2>>& uv, std::vector<int>& pixmap) const {
+  const Impl& m = *impl_;
+  uv.resize(m.display_st.size());
+  for (size_t v = 0; v < uv.size(); ++v) {
+    const Pixmap& pm = m.layout.pixmaps[m.display_pixmap[v]];
+    uv[v] = {m.display_st[v].s / pm.width, m.display_st[v].t / pm.height};
+  }
+  pixmap = m.display_pixmap;
+}
+
+}  // namespace radmesh

@@ -1,0 +1,334 @@
+// Pixmap radiosity: the hemicube's form factors against closed forms, the
+// texel layout's exact areas, progressive refinement against the linear
+// system it solves, determinism, and saving and resuming.
+
+#include "io/obj_reader.h"
+#include "io/pixmap_io.h"
+#include "meshing/errors.h"
+#include "radiosity/hemicube.h"
+#include "radiosity/pixmap.h"
+
+#include <gtest/gtest.h>
+
+#include "test_util.h"
+
+#include <array>
+#include <cmath>
+#include <filesystem>
+#include <numeric>
+
+using namespace radmesh;
+using radmesh::test::contains;
+using radmesh::test::message_of;
+
+namespace {
+
+const std::string kData = RADMESH_TEST_DATA;
+
+// Two triangles of the quad a b c d (counter-clockwise around `normal`).
+void add_quad(std::vector<HemicubeTriangle>& out, const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d,
+              const Vec3& normal, int id) {
+  out.push_back({a, b, c, normal, id});
+  out.push_back({a, c, d, normal, id});
+}
+
+// The area-to-area form factor from the unit square [0,1]^2 of z = 0
+// (normal +z) to `target` (id 1): hemicubes at 4 x 4 Gauss-Legendre points
+// of the source, weighted.
+double square_form_factor(const std::vector<HemicubeTriangle>& target, int resolution) {
+  const double node[4] = {0.5 - 0.5 * 0.8611363115940526, 0.5 - 0.5 * 0.3399810435848563,
+                          0.5 + 0.5 * 0.3399810435848563, 0.5 + 0.5 * 0.8611363115940526};
+  const double weight[4] = {0.5 * 0.3478548451374538, 0.5 * 0.6521451548625461, 0.5 * 0.6521451548625461,
+                            0.5 * 0.3478548451374538};
+  Hemicube cube(resolution);
+  double f = 0.0;
+  for (int i = 0; i < 4; ++i)
+    for (int j = 0; j < 4; ++j) {
+      cube.render(Vec3(node[i], node[j], 0.0), Vec3(1, 0, 0), Vec3(0, 1, 0), target);
+      f += weight[i] * weight[j] * cube.form_factor(1);
+    }
+  return f;
+}
+
+TEST(Hemicube, ParallelUnitSquaresMatchHowellC11) {
+  // Unit squares one apart, facing each other: F = 0.199825 (Howell C-11).
+  std::vector<HemicubeTriangle> target;
+  add_quad(target, {0, 0, 1}, {0, 1, 1}, {1, 1, 1}, {1, 0, 1}, {0, 0, -1}, 1);
+  const double exact = 0.1998248;
+  const double coarse = square_form_factor(target, 256), fine = square_form_factor(target, 2048);
+  std::printf("C-11: resolution 256 %.6f (%.3g), 2048 %.6f (%.3g)\n", coarse, coarse / exact - 1, fine,
+              fine / exact - 1);
+  EXPECT_NEAR(coarse / exact, 1.0, 5e-3);
+  EXPECT_NEAR(fine / exact, 1.0, 5e-4);
+}
+
+TEST(Hemicube, PerpendicularUnitSquaresMatchHowellC14) {
+  // Unit squares at a right angle sharing an edge: F = 0.200044 (Howell C-14).
+  std::vector<HemicubeTriangle> target;
+  add_quad(target, {0, 0, 0}, {0, 0, 1}, {0, 1, 1}, {0, 1, 0}, {1, 0, 0}, 1);
+  const double f = square_form_factor(target, 256);
+  std::printf("C-14: resolution 256 %.6f (%.3g)\n", f, f / 0.200044 - 1);
+  EXPECT_NEAR(f / 0.200044, 1.0, 1e-2);
+}
+
+TEST(Hemicube, EveryPixelSeesAClosedCubeAndTheFactorsSumToOne) {
+  // From a point on the floor of a closed cube, every pixel sees one of the
+  // other five faces' fronts: no gap between triangles, no pixel empty, and
+  // the delta form factors sum to 1.
+  std::vector<HemicubeTriangle> cube_faces;
+  add_quad(cube_faces, {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}, {0, 0, -1}, 0);  // ceiling: its front is below
+  add_quad(cube_faces, {0, 0, 0}, {0, 1, 0}, {0, 1, 1}, {0, 0, 1}, {1, 0, 0}, 1);
+  add_quad(cube_faces, {1, 0, 0}, {1, 0, 1}, {1, 1, 1}, {1, 1, 0}, {-1, 0, 0}, 2);
+  add_quad(cube_faces, {0, 0, 0}, {0, 0, 1}, {1, 0, 1}, {1, 0, 0}, {0, 1, 0}, 3);
+  add_quad(cube_faces, {0, 1, 0}, {1, 1, 0}, {1, 1, 1}, {0, 1, 1}, {0, -1, 0}, 4);
+  add_quad(cube_faces, {0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0, 0, 1}, 5);  // the floor, in the hemicube's plane
+  for (int resolution : {2, 64, 300}) {
+    Hemicube cube(resolution);
+    cube.render(Vec3(0.3, 0.55, 0.0), Vec3(1, 0, 0), Vec3(0, 1, 0), cube_faces);
+    double sum = 0.0;
+    for (int id = 0; id < 6; ++id) sum += cube.form_factor(id);
+    EXPECT_NEAR(sum, 1.0, 1e-12) << resolution;
+    EXPECT_EQ(cube.form_factor(5), 0.0);  // coplanar with the centre
+    for (const auto& face : cube.faces())
+      for (int id : face.id) ASSERT_GE(id, 0) << resolution;
+  }
+  EXPECT_THROW(Hemicube(255), InputError);
+}
+
+TEST(Hemicube, BackFacesHideButDoNotReceive) {
+  std::vector<HemicubeTriangle> tris;
+  add_quad(tris, {-1, -1, 1}, {-1, 1, 1}, {1, 1, 1}, {1, -1, 1}, {0, 0, 1}, 7);  // faces away from the centre
+  add_quad(tris, {-1, -1, 2}, {-1, 1, 2}, {1, 1, 2}, {1, -1, 2}, {0, 0, -1}, 8);  // behind it
+  Hemicube cube(64);
+  cube.render(Vec3(0.0), Vec3(1, 0, 0), Vec3(0, 1, 0), tris);
+  EXPECT_EQ(cube.form_factor(7), 0.0);
+  EXPECT_EQ(cube.form_factor(8), 0.0);
+  EXPECT_GT(cube.form_factor(Hemicube::kBack), 0.5);
+}
+
+// ---- layout ------------------------------------------------------------------
+
+TEST(PixmapLayout, TexelAreasAddUpToThePatchesAndCoplanarNeighboursShareAGrid) {
+  const Scene scene = read_obj_scene(kData + "/cornell_box/cornell_box.obj");
+  PixmapOptions o;
+  o.texel_size = 37.0;
+  const PixmapLayout L = make_pixmap_layout(scene, o, 1e9);
+  // The four ceiling pieces around the light are one grid.
+  int ceiling = -1;
+  for (size_t p = 0; p < scene.patches.size(); ++p)
+    if (scene.patches[p].name == "ceiling") {
+      if (ceiling < 0) ceiling = L.pixmap_of_patch[p];
+      EXPECT_EQ(L.pixmap_of_patch[p], ceiling);
+    }
+  // Every patch's area is in a texel, but the floor under the two blocks
+  // (inside closed objects), in quarter texels.
+  double total = 0.0, covered = 0.0, footprints = 0.0;
+  for (size_t p = 0; p < scene.patches.size(); ++p) total += scene.patch_area(static_cast<int>(p));
+  for (const char* block : {"short_block", "tall_block"}) footprints += scene.patch_area(test::patch_named(scene, block));
+  for (size_t k = 0; k < L.pixmaps.size(); ++k) {
+    const Pixmap& pm = L.pixmaps[k];
+    const double coverage = std::accumulate(pm.coverage.begin(), pm.coverage.end(), 0.0);
+    const double owned = std::accumulate(pm.area.begin(), pm.area.end(), 0.0);
+    covered += coverage;
+    EXPECT_NEAR(owned / coverage, 1.0, 1e-12) << k;
+    EXPECT_LE(std::abs(pm.texel_u - 37.0), 37.0 / pm.width + 1e-9);  // stretched to fit its extent
+    for (long long i = 0; i < pm.texels(); ++i) {
+      EXPECT_LE(pm.coverage[i], pm.texel_u * pm.texel_v * (1 + 1e-12));
+      if (pm.owner[i] >= 0) {
+        EXPECT_EQ(pm.owner[pm.owner[i]], pm.owner[i]);  // an owner owns itself
+      }
+    }
+  }
+  EXPECT_NEAR((covered + L.enclosed_area) / total, 1.0, 1e-12);
+  std::printf("enclosed %.1f, the blocks' footprints %.1f\n", L.enclosed_area, footprints);
+  EXPECT_NEAR(L.enclosed_area / footprints, 1.0, 0.05);
+  o.max_texels = 100;
+  for (const Pixmap& pm : make_pixmap_layout(scene, o, 1e9).pixmaps) EXPECT_LE(pm.texels(), 100);
+  EXPECT_THROW(make_pixmap_layout(scene, o, 1e3), NumericalError);
+}
+
+// ---- progressive refinement -------------------------------------------------
+
+SolveOptions threads(int n) {
+  SolveOptions so;
+  so.threads = n;
+  return so;
+}
+
+TEST(PixmapSolver, FurnaceConvergesToEOverOneMinusRho) {
+  // A closed cube, every wall E = 1, rho = 0.5: B = 2. Every shot's delta
+  // form factors sum to 1, so the area mean is exact to the unshot power;
+  // single texels differ by the hemicube's aliasing and by shooting from
+  // the centre of each texel (next to an edge, a texel's exchange with its
+  // neighbour across the edge is not that of its centre).
+  const Scene scene = read_obj_scene(kData + "/furnace_cube/furnace_cube.obj");
+  PixmapOptions o;
+  o.texel_size = 0.1;
+  o.block = 1;
+  o.hemicube_res = 128;
+  o.unshot = 1e-7;
+  const PixmapSolver solver(scene, o, threads(0));
+  const PixmapRun run = solver.run(solver.initial_state());
+  EXPECT_LE(run.unshot_fraction, 1e-7);
+  const PixmapLayout& L = solver.layout();
+  double sum = 0.0, area = 0.0, worst = 0.0;
+  for (size_t k = 0; k < L.pixmaps.size(); ++k)
+    for (long long i = 0; i < L.pixmaps[k].texels(); ++i)
+      if (L.pixmaps[k].owner[i] == i) {
+        const double b = run.state.radiosity[k][i * 3];
+        sum += b * L.pixmaps[k].area[i];
+        area += L.pixmaps[k].area[i];
+        worst = std::max(worst, std::abs(b / 2.0 - 1.0));
+      }
+  std::printf("furnace: mean %.9f, worst texel %.3g\n", sum / area, worst);
+  // The state is in float: each of some 10^5 additions rounds by up to 6e-8.
+  EXPECT_NEAR(sum / area, 2.0, 2.0 * 3e-5);
+  EXPECT_LT(worst, 0.05);
+  const Rgb absorbed = run.state.power_absorbed;
+  EXPECT_NEAR(absorbed.x / run.power_emitted.x, 1.0, 1e-6);  // closed: nothing escapes
+  EXPECT_NEAR(run.state.power_escaped.x, 0.0, 1e-7 * run.power_emitted.x);  // F rounded to float
+}
+
+TEST(PixmapSolver, ConvergesToTheLinearSystemOfItsOwnFormFactors) {
+  // With one texel per shooter, progressive refinement solves
+  // B_t = E_t + rho_t sum_s F(s -> t) A_s / A_t B_s for the hemicube's
+  // F: Jacobi on the same rows must agree to the stopping tolerance.
+  const Scene scene = read_obj_scene(kData + "/box_on_floor/box_on_floor.obj");
+  PixmapOptions o;
+  o.texel_size = 0.5;
+  o.block = 1;
+  o.hemicube_res = 64;
+  o.unshot = 1e-9;
+  const PixmapSolver solver(scene, o, threads(0));
+  const PixmapLayout& L = solver.layout();
+  const size_t ns = L.shooters.size();
+  ASSERT_GT(ns, 20u);
+  std::vector<long long> texel_of(ns);
+  std::vector<int> shooter_of(static_cast<size_t>(L.texels), -1);
+  std::vector<double> area(ns), rho(ns), emission(ns);
+  for (size_t s = 0; s < ns; ++s) {
+    const Shooter& sh = L.shooters[s];
+    ASSERT_EQ(sh.texels.size(), 1u);
+    const Pixmap& pm = L.pixmaps[sh.pixmap];
+    texel_of[s] = pm.first + sh.texels[0];
+    shooter_of[texel_of[s]] = static_cast<int>(s);
+    area[s] = pm.area[sh.texels[0]];
+    rho[s] = scene.materials[pm.material].reflectance.x;
+    emission[s] = scene.materials[pm.material].emission.x;
+  }
+  std::vector<std::vector<std::pair<long long, float>>> rows(ns);
+  for (size_t s = 0; s < ns; ++s) rows[s] = solver.form_factors(static_cast<int>(s));
+  std::vector<double> b(emission), next(ns);
+  for (int it = 0; it < 500; ++it) {
+    next = emission;
+    for (size_t s = 0; s < ns; ++s)
+      for (const auto& [t, f] : rows[s]) {
+        const int r = shooter_of[t];
+        ASSERT_GE(r, 0);
+        next[r] += rho[r] * f * area[s] / area[r] * b[s];
+      }
+    b.swap(next);
+  }
+  const PixmapRun run = solver.run(solver.initial_state());
+  double bmax = 0.0, worst = 0.0;
+  for (size_t s = 0; s < ns; ++s) bmax = std::max(bmax, b[s]);
+  for (size_t s = 0; s < ns; ++s) {
+    const Shooter& sh = L.shooters[s];
+    const double pr = run.state.radiosity[sh.pixmap][static_cast<size_t>(sh.texels[0]) * 3];
+    worst = std::max(worst, std::abs(pr - b[s]) / bmax);
+  }
+  EXPECT_LT(worst, 1e-5);
+}
+
+void expect_same_state(const PixmapState& a, const PixmapState& b) {
+  ASSERT_EQ(a.shots, b.shots);
+  ASSERT_EQ(a.radiosity.size(), b.radiosity.size());
+  for (size_t k = 0; k < a.radiosity.size(); ++k) {
+    EXPECT_EQ(a.radiosity[k], b.radiosity[k]) << "pixmap " << k;
+    EXPECT_EQ(a.unshot[k], b.unshot[k]) << "pixmap " << k;
+  }
+  EXPECT_EQ(a.power_absorbed, b.power_absorbed);
+  EXPECT_EQ(a.power_escaped, b.power_escaped);
+}
+
+TEST(PixmapSolver, OneAndTwoThreadsAndAResumeGiveIdenticalStates) {
+  const Scene scene = read_obj_scene(kData + "/box_on_floor/box_on_floor.obj");
+  PixmapOptions o;
+  o.hemicube_res = 64;
+  o.shots = 60;
+  o.unshot = 0.0;
+  const PixmapSolver one(scene, o, threads(1)), two(scene, o, threads(2));
+  const PixmapRun a = one.run(one.initial_state()), b = two.run(two.initial_state());
+  EXPECT_EQ(a.state.shots, 60);
+  expect_same_state(a.state, b.state);
+  // 25 shots, saved to files and read back, then resumed to 60.
+  PixmapOptions first = o;
+  first.shots = 25;
+  const PixmapSolver part(scene, first, threads(0));
+  const PixmapRun p = part.run(part.initial_state());
+  const std::string dir = ::testing::TempDir() + "/radmesh_pixmap_resume";
+  PixmapOutput out;
+  out.solver = std::shared_ptr<const PixmapSolver>(&part, [](const PixmapSolver*) {});
+  out.state = p.state;
+  out.display = part.display(p.state, part.ambient(p.state));
+  write_pixmap_state(dir, scene, out);
+  PixmapState saved = read_pixmap_state(dir);
+  expect_same_state(saved, p.state);
+  check_resumable(saved, scene, one.layout(), o, saved.source);
+  const PixmapRun resumed = one.run(saved);
+  EXPECT_EQ(resumed.shots_this_run, 35);
+  expect_same_state(resumed.state, a.state);
+}
+
+TEST(PixmapSolver, AStateFromOtherOptionsOrAnotherSceneIsRefused) {
+  const Scene scene = read_obj_scene(kData + "/box_on_floor/box_on_floor.obj");
+  PixmapOptions o;
+  o.hemicube_res = 64;
+  const PixmapSolver solver(scene, o, threads(0));
+  const PixmapState st = solver.initial_state();
+  PixmapOptions other = o;
+  other.hemicube_res = 128;
+  EXPECT_TRUE(contains(message_of<InputError>([&] { check_resumable(st, scene, solver.layout(), other, "S"); }),
+                       "--hemicube-res 64, this run has --hemicube-res 128"));
+  Scene edited = scene;
+  edited.materials[0].reflectance.x *= 0.5;
+  EXPECT_TRUE(contains(message_of<InputError>([&] { check_resumable(st, edited, solver.layout(), o, "S"); }),
+                       "another scene"));
+  PixmapState broken = st;
+  broken.radiosity[0][0] = std::nanf("");
+  EXPECT_TRUE(contains(message_of<InputError>([&] { check_resumable(broken, scene, solver.layout(), o, "S"); }),
+                       "non-finite"));
+}
+
+TEST(PixmapSolver, DisplayMeshCoversEveryPatchAndEachTriangleLiesInItsTexel) {
+  const Scene scene = read_obj_scene(kData + "/cornell_box/cornell_box.obj");
+  PixmapOptions o;
+  o.texel_size = 40.0;
+  o.shots = 3;
+  const PixmapSolver solver(scene, o, threads(0));
+  const PixmapRun run = solver.run(solver.initial_state());
+  Mesh mesh;
+  Solution sol;
+  std::vector<int> texel;
+  const auto shown = solver.display(run.state, Rgb(0.0));
+  solver.display_mesh(shown, mesh, sol, texel);
+  const auto areas = test::patch_areas(scene, mesh);
+  for (size_t p = 0; p < scene.patches.size(); ++p) EXPECT_NEAR(areas[p] / scene.patch_area(static_cast<int>(p)), 1.0, 1e-9);
+  const PixmapLayout& L = solver.layout();
+  for (int t = 0; t < mesh.triangle_count(); ++t) {
+    const Pixmap& pm = L.pixmaps[L.pixmap_of_patch[mesh.patch[t]]];
+    const Vec3 c = mesh.centroid(t);
+    const int i = static_cast<int>(std::floor(pm.s_of(c))), j = static_cast<int>(std::floor(pm.t_of(c)));
+    // Its texel's owner, or -1 for the parts inside the blocks.
+    if (texel[t] >= 0) {
+      EXPECT_EQ(pm.owner[static_cast<size_t>(j) * pm.width + i], texel[t]);
+    }
+    // Counter-clockwise around the patch normal.
+    const auto& v = mesh.triangles[t];
+    const Vec3 n = glm::cross(mesh.positions[v[1]] - mesh.positions[v[0]], mesh.positions[v[2]] - mesh.positions[v[0]]);
+    EXPECT_GE(glm::dot(n, scene.patches[mesh.patch[t]].normal), 0.0);
+  }
+  for (const Rgb& b : sol.nodal.radiosity) EXPECT_TRUE(std::isfinite(b.x) && b.x >= 0.0);
+}
+
+}  // namespace
