@@ -139,6 +139,18 @@ struct Method {
       solve;
   // It can stop on SolveCallbacks::cancelled and resume from a saved state.
   bool resumable = false;
+  // What the conformance tests (tests/test_methods.cpp) may expect of it on
+  // their closed forms. The defaults are exact form factors: errors vanish
+  // with the solve's tolerance. A method whose form factors are estimates
+  // that do not (the pixmap method: hemicubes shot from block centres,
+  // float state) declares its relative errors here.
+  struct Accuracy {
+    double element = 0.0;     // of an element value
+    double patch_mean = 0.0;  // of a patch's mean
+    double residual = 0.0;    // the solve's final residual at its defaults
+    bool casts_rays = true;   // occlusion by shadow rays (SolveStats::rays_cast)
+    bool error_bound = true;  // reports a max-norm bound (SolveStats::error_bound)
+  } accuracy;
   // Its own per-vertex field is the one to show (FieldMode::texels) unless
   // --field asks for another: the pixmap method's texels.
   bool texel_field = false;

@@ -166,7 +166,7 @@ PixmapLayout layout_of(const Scene& scene, const Mesh& coarse, const PixmapOptio
   if (vis) enclosed = [&](const Vec3& x, const Pixmap& pm) { return inside_object(scene, *vis, x, pm, pm.patches[0]); };
   const int np = static_cast<int>(scene.patches.size());
   PixmapLayout L;
-  L.texel_size = options.texel_size > 0.0 ? options.texel_size : scene.diagonal() / 100.0;
+  L.texel_size = options.texel_size > 0.0 ? options.texel_size : scene.diagonal() / 80.0;
   const double tol = 1e-9 * scene.diagonal();
 
   // Coplanar patches of one material sharing a vertex share a pixmap.

@@ -24,16 +24,16 @@
 namespace radmesh {
 
 struct PixmapOptions {
-  // Texel edge in scene units (0: scene diagonal / 100). Each pixmap
+  // Texel edge in scene units (0: scene diagonal / 80). Each pixmap
   // stretches it to fit its extent exactly, and coarsens it where the
   // pixmap would exceed max_texels.
   double texel_size = 0.0;
   long long max_texels = 1 << 20;  // per pixmap
-  int hemicube_res = 256;          // pixels along the top face's side
+  int hemicube_res = 128;          // pixels along the top face's side
   int block = 4;                   // a shooter is block x block texels
   // Stop when the unshot power is at most this fraction of the emitted
   // power, or after `shots` shots in all (0: no limit), whichever is first.
-  double unshot = 1e-4;
+  double unshot = 1e-3;
   long long shots = 0;
   // Largest number of sub-pixels along a pixel's side when texels are
   // smaller than pixels (virtual oversampling).

@@ -10,6 +10,7 @@
 
 #include "test_util.h"
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <string>
@@ -72,8 +73,17 @@ TEST_P(Conformance, FurnaceGivesEOverOneMinusRhoEverywhere) {
     const MethodResult r = solve(GetParam(), scene, 0.25, so);
     ASSERT_FALSE(r.solution.element.empty());
     ASSERT_EQ(r.solution.element.size(), r.mesh.triangles.size());
-    for (const Rgb& b : r.solution.element) EXPECT_NEAR(b.x, expected, 1e-6 * expected) << file;
-    for (const Rgb& b : r.solution.nodal.radiosity) EXPECT_NEAR(b.z, expected, 1e-6 * expected) << file;
+    const Method::Accuracy& acc = find_method(GetParam()).accuracy;
+    const double tol = std::max(1e-6, acc.element) * expected;
+    for (const Rgb& b : r.solution.element) EXPECT_NEAR(b.x, expected, tol) << file;
+    for (const Rgb& b : r.solution.nodal.radiosity) EXPECT_NEAR(b.z, expected, tol) << file;
+    // The area mean is energy: within the patch-mean accuracy.
+    double sum = 0.0, area = 0.0;
+    for (int t = 0; t < r.mesh.triangle_count(); ++t) {
+      sum += r.solution.element[static_cast<size_t>(t)].x * r.mesh.area(t);
+      area += r.mesh.area(t);
+    }
+    EXPECT_NEAR(sum / area, expected, std::max(1e-6, acc.patch_mean) * expected) << file;
     EXPECT_TRUE(r.solution.stats.convex_enclosure);
     EXPECT_EQ(r.solution.stats.rays_cast, 0);
   }
@@ -85,6 +95,8 @@ TEST_P(Conformance, ReflectanceNearOneConvergesAsFarAsItsStoppingRuleSays) {
   // B 0.05% low (and the solver said "residual 1e-6"). At the default
   // tolerance the error must now be within it, and the reported bound must
   // hold.
+  if (!find_method(GetParam()).accuracy.error_bound)
+    GTEST_SKIP() << "reports no max-norm error bound; its own tests check rho = 0.999";
   Scene scene = read_obj_scene(kData + "/furnace_cube/furnace_cube.obj");
   for (Material& m : scene.materials) m.reflectance = Rgb(0.999);
   const MethodResult r = solve(GetParam(), scene, 0.25);
@@ -105,7 +117,7 @@ TEST_P(Conformance, ParallelPlatesMatchHowellC11) {
   int found = 0;
   for (size_t p = 0; p < scene.patches.size(); ++p)
     if (scene.patches[p].name == "receiver") {
-      EXPECT_NEAR(means[p].x / (0.5 * 0.199825) - 1.0, 0.0, 2e-4);
+      EXPECT_NEAR(means[p].x / (0.5 * 0.199825) - 1.0, 0.0, std::max(2e-4, find_method(GetParam()).accuracy.patch_mean));
       ++found;
     }
   EXPECT_EQ(found, 1);
@@ -140,14 +152,17 @@ TEST_P(Conformance, CornellBoxBalancesEnergy) {
   const Scene scene = read_obj_scene(kData + "/cornell_box/cornell_box.obj");
   const MethodResult r = solve(GetParam(), scene, 0.25);
   const SolveStats& st = r.solution.stats;
+  const Method::Accuracy& acc = find_method(GetParam()).accuracy;
   for (int c = 0; c < 3; ++c) {
     ASSERT_GT(st.power_emitted[c], 0.0);
     const double imbalance = (st.power_emitted[c] - st.power_absorbed[c] - st.power_escaped[c]) / st.power_emitted[c];
     EXPECT_LT(std::abs(imbalance), 0.01) << "channel " << c;
     EXPECT_GT(st.power_escaped[c], 0.0);  // the front is open
-    EXPECT_LT(st.residual[static_cast<size_t>(c)], 1e-4);
+    EXPECT_LT(st.residual[static_cast<size_t>(c)], std::max(1e-4, acc.residual));
   }
-  EXPECT_GT(st.rays_cast, 0);  // the blocks occlude
+  if (acc.casts_rays) {
+    EXPECT_GT(st.rays_cast, 0);  // the blocks occlude
+  }
   for (const Rgb& b : r.solution.nodal.radiosity)
     EXPECT_TRUE(std::isfinite(b.x) && std::isfinite(b.y) && std::isfinite(b.z) && b.x >= 0.0);
 }
@@ -208,7 +223,7 @@ TEST_P(Conformance, TranslatedRotatedAndScaledScenesGiveTheSamePatchMeans) {
       for (size_t p = 0; p < ref.size(); ++p)
         for (int k = 0; k < 3; ++k)
           if (ref[p][k] > 0.0) worst = std::max(worst, std::abs(means[p][k] / ref[p][k] - 1.0));
-      EXPECT_LT(worst, c.tolerance) << c.file << ", " << what;
+      EXPECT_LT(worst, std::max(c.tolerance, find_method(GetParam()).accuracy.patch_mean)) << c.file << ", " << what;
       std::printf("%s %s: largest patch-mean difference %.3g\n", c.file, what.c_str(), worst);
     }
   }
