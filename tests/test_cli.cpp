@@ -1,6 +1,7 @@
 // The radmesh program end to end: outputs on success, one-line errors and no
 // output on bad input.
 
+#include "io/pixmap_io.h"
 #include "tests/edited_obj.h"
 
 #include <gtest/gtest.h>
@@ -37,7 +38,7 @@ struct Result {
 };
 
 // Runs radmesh with `args`; captures stderr.
-Result radmesh(const std::string& args) {
+Result run_cli(const std::string& args) {
   const fs::path err = fs::temp_directory_path() / ("radmesh_cli_err_" + std::to_string(::getpid()));
   const std::string cmd = "DISPLAY= " + kExe + " " + args + " >/dev/null 2>" + err.string();
   const int rc = std::system(cmd.c_str());
@@ -67,7 +68,7 @@ TEST(Cli, RunWritesVtuSummaryAndProbes) {
     std::ofstream p(probes);
     p << "# label x y z nx ny nz\ncentre 0.5 0.5 1 0 0 -1\n";
   }
-  const Result r = radmesh("run " + kData + "/parallel_plates/parallel_plates.obj -o " + out.string() +
+  const Result r = run_cli("run " + kData + "/parallel_plates/parallel_plates.obj -o " + out.string() +
                            " --method matrix --max-edge 0.25 --probe " + probes.string());
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_TRUE(fs::exists(out / "radiosity.vtu"));
@@ -103,7 +104,7 @@ TEST(Cli, RunWritesVtuSummaryAndProbes) {
 
 TEST(Cli, DefaultMethodIsHierarchicalAndMatchesHowellOnThePlates) {
   const fs::path out = fresh_dir("plates_default");
-  const Result r = radmesh("run " + kData + "/parallel_plates/parallel_plates.obj --no-png -q -o " + out.string());
+  const Result r = run_cli("run " + kData + "/parallel_plates/parallel_plates.obj --no-png -q -o " + out.string());
   ASSERT_EQ(r.status, 0) << r.err;
   const nlohmann::json s = read_summary(out);
   EXPECT_EQ(s["solver"]["method"], "hierarchical");
@@ -124,7 +125,7 @@ TEST(Cli, DefaultMethodIsHierarchicalAndMatchesHowellOnThePlates) {
 TEST(Cli, MeshWritesMeshAndSummary) {
   const fs::path out = fresh_dir("mesh");
   const Result r =
-      radmesh("mesh " + kData + "/cornell_box/cornell_box.obj --discontinuity contacts -o " + out.string() + " -q");
+      run_cli("mesh " + kData + "/cornell_box/cornell_box.obj --discontinuity contacts -o " + out.string() + " -q");
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_TRUE(fs::exists(out / "mesh.vtu"));
   EXPECT_TRUE(fs::exists(out / "discontinuities.vtu"));  // the blocks' contact outlines
@@ -136,11 +137,11 @@ TEST(Cli, MeshWritesMeshAndSummary) {
 
 TEST(Cli, QualityOfAHierarchicalResultCountsZeroAreaTrianglesApart) {
   const fs::path out = fresh_dir("quality_hier");
-  ASSERT_EQ(radmesh("run " + kData + "/box_on_floor/box_on_floor.obj --no-png -q -o " + out.string()).status, 0);
+  ASSERT_EQ(run_cli("run " + kData + "/box_on_floor/box_on_floor.obj --no-png -q -o " + out.string()).status, 0);
   const nlohmann::json s = read_summary(out);
   const int zero = s["solver"]["zero_area_triangles"].get<int>();
   ASSERT_GT(zero, 0);
-  const Result r = radmesh("quality " + (out / "radiosity.vtu").string() + " -q -o " + (out / "q").string());
+  const Result r = run_cli("quality " + (out / "radiosity.vtu").string() + " -q -o " + (out / "q").string());
   ASSERT_EQ(r.status, 0) << r.err;
   std::ifstream csv(out / "q" / "quality.csv");
   std::string line, total;
@@ -174,7 +175,7 @@ TEST(Cli, QualityOfAHierarchicalResultCountsZeroAreaTrianglesApart) {
 TEST(Cli, MeshDefaultsToFullDiscontinuityLines) {
   // mesh has no method: its default is full (shadow lines), as for run --method matrix.
   const fs::path out = fresh_dir("mesh_default");
-  const Result r = radmesh("mesh " + kData + "/box_on_floor/box_on_floor.obj -q -o " + out.string());
+  const Result r = run_cli("mesh " + kData + "/box_on_floor/box_on_floor.obj -q -o " + out.string());
   ASSERT_EQ(r.status, 0) << r.err;
   const nlohmann::json s = read_summary(out);
   EXPECT_EQ(s["options"]["discontinuity"], "full");
@@ -184,7 +185,7 @@ TEST(Cli, MeshDefaultsToFullDiscontinuityLines) {
 
 TEST(Cli, RunWithShadowLinesReportsThemAndWhatWasSkipped) {
   const fs::path out = fresh_dir("run_full");
-  const Result r = radmesh("run " + kData + "/box_on_floor/box_on_floor.obj --discontinuity full --max-edge 0.5 "
+  const Result r = run_cli("run " + kData + "/box_on_floor/box_on_floor.obj --discontinuity full --max-edge 0.5 "
                            "--no-png -q -o " + out.string());
   ASSERT_EQ(r.status, 0) << r.err;
   const nlohmann::json s = read_summary(out);
@@ -220,7 +221,7 @@ TEST(Cli, ManyPatchesGoToPatchesCsvAndObjectsStayInTheSummary) {
         obj << "f " << a << ' ' << d << ' ' << c << "\nf " << a << ' ' << c << ' ' << b << "\n";
       }
   }
-  const Result r = radmesh("mesh " + (dir / "grid.obj").string() + " --max-edge 1000 -q -o " + out.string());
+  const Result r = run_cli("mesh " + (dir / "grid.obj").string() + " --max-edge 1000 -q -o " + out.string());
   ASSERT_EQ(r.status, 0) << r.err;
   const nlohmann::json s = read_summary(out);
   EXPECT_FALSE(s.contains("patches"));
@@ -246,7 +247,7 @@ TEST(Cli, ManyPatchesGoToPatchesCsvAndObjectsStayInTheSummary) {
 
 TEST(Cli, HierarchicalRunWritesTheRefinementSeriesWithZeroAreaFlags) {
   const fs::path out = fresh_dir("run_hier");
-  const Result r = radmesh("run " + kData + "/box_on_floor/box_on_floor.obj --method hierarchical --epsilon 0.01 "
+  const Result r = run_cli("run " + kData + "/box_on_floor/box_on_floor.obj --method hierarchical --epsilon 0.01 "
                            "--export-links --no-png -q -o " + out.string());
   ASSERT_EQ(r.status, 0) << r.err;
   const nlohmann::json s = read_summary(out);
@@ -321,7 +322,7 @@ TEST_P(CliErrors, OneLineErrorNonZeroExitNoOutput) {
   const fs::path out = fresh_dir("bad");
   std::string args = GetParam().args;
   for (size_t k; (k = args.find("DATA")) != std::string::npos;) args.replace(k, 4, kData);
-  const Result r = radmesh(args + " -o " + out.string());
+  const Result r = run_cli(args + " -o " + out.string());
   EXPECT_NE(r.status, 0);
   EXPECT_NE(r.err.find(GetParam().must_contain), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(out)) << "output written for bad input";
@@ -362,7 +363,7 @@ INSTANTIATE_TEST_SUITE_P(
 
 TEST(Cli, QualityWritesOneRowPerPatchAndATotal) {
   const fs::path out = fresh_dir("quality");
-  const Result r = radmesh("quality " + kData + "/box_on_floor/box_on_floor.obj -o " + out.string() + " -q");
+  const Result r = run_cli("quality " + kData + "/box_on_floor/box_on_floor.obj -o " + out.string() + " -q");
   ASSERT_EQ(r.status, 0) << r.err;
   std::ifstream csv(out / "quality.csv");
   std::string line;
@@ -408,9 +409,9 @@ std::vector<std::string> quality_total(const fs::path& csv_path) {
 TEST(Cli, QualityOfAWrittenMeshMatchesTheSceneRunWithShadowLines) {
   const fs::path a = fresh_dir("quality_full"), m = fresh_dir("mesh_full"), b = fresh_dir("quality_vtu");
   const std::string scene = kData + "/box_on_floor/box_on_floor.obj --discontinuity full --max-edge 0.5 -q";
-  ASSERT_EQ(radmesh("quality " + scene + " -o " + a.string()).status, 0);
-  ASSERT_EQ(radmesh("mesh " + scene + " -o " + m.string()).status, 0);
-  const Result r = radmesh("quality " + (m / "mesh.vtu").string() + " -o " + b.string() + " -q");
+  ASSERT_EQ(run_cli("quality " + scene + " -o " + a.string()).status, 0);
+  ASSERT_EQ(run_cli("mesh " + scene + " -o " + m.string()).status, 0);
+  const Result r = run_cli("quality " + (m / "mesh.vtu").string() + " -o " + b.string() + " -q");
   ASSERT_EQ(r.status, 0) << r.err;
   const auto from_scene = quality_total(a / "quality.csv"), from_mesh = quality_total(b / "quality.csv");
   ASSERT_EQ(from_scene.size(), 12u);
@@ -421,9 +422,9 @@ TEST(Cli, QualityOfAWrittenMeshMatchesTheSceneRunWithShadowLines) {
   EXPECT_GT(std::stoi(from_mesh[9]), 0);
   EXPECT_EQ(from_mesh[10], "0");             // the box is axis-aligned with the light: no D2
   // A file that is not a mesh is refused with its name.
-  const Result bad = radmesh("quality " + (m / "summary.json").string() + " -o " + b.string() + " -q");
+  const Result bad = run_cli("quality " + (m / "summary.json").string() + " -o " + b.string() + " -q");
   EXPECT_NE(bad.status, 0);
-  const Result bad_vtu = radmesh("quality " + (m / "discontinuities.vtu").string() + " -o " + b.string() + " -q");
+  const Result bad_vtu = run_cli("quality " + (m / "discontinuities.vtu").string() + " -o " + b.string() + " -q");
   EXPECT_NE(bad_vtu.status, 0);
   EXPECT_NE(bad_vtu.err.find("discontinuities.vtu"), std::string::npos) << bad_vtu.err;
   for (const auto& d : {a, m, b}) fs::remove_all(d);
@@ -434,14 +435,14 @@ TEST(Cli, ASecondRunIntoTheSameDirectoryLeavesOnlyItsOwnFiles) {
   // (matrix) writes neither: nothing of the first may be left beside it.
   const fs::path out = fresh_dir("rerun");
   const std::string scene = kData + "/box_on_floor/box_on_floor.obj";
-  ASSERT_EQ(radmesh("run " + scene + " --no-png -q --export-links --epsilon 0.01 -o " + out.string()).status, 0);
+  ASSERT_EQ(run_cli("run " + scene + " --no-png -q --export-links --epsilon 0.01 -o " + out.string()).status, 0);
   ASSERT_TRUE(fs::exists(out / "links.vtu"));
   ASSERT_TRUE(fs::exists(out / "radiosity_round_1.vtu"));
   {
     std::ofstream mine(out / "notes.txt");  // not ours: kept
     mine << "user file\n";
   }
-  ASSERT_EQ(radmesh("run " + scene + " --no-png -q --method matrix -o " + out.string()).status, 0);
+  ASSERT_EQ(run_cli("run " + scene + " --no-png -q --method matrix -o " + out.string()).status, 0);
   std::vector<std::string> names;
   for (const auto& e : fs::directory_iterator(out)) names.push_back(e.path().filename().string());
   std::sort(names.begin(), names.end());
@@ -458,7 +459,7 @@ TEST(Cli, ADuplicatedVertexLineIsAnErrorNotAnEndlessMesh) {
                                                    [](const std::string& line, int n) {
                                                      return n == 7 ? line + '\n' + line : line;  // `sed 7p`
                                                    });
-  const Result r = radmesh("mesh " + scene + " --max-edge 300 -q -o " + (dir / "out").string());
+  const Result r = run_cli("mesh " + scene + " --max-edge 300 -q -o " + (dir / "out").string());
   EXPECT_EQ(r.status, 1) << r.err;
   EXPECT_NE(r.err.find("not a simple polygon"), std::string::npos) << r.err;
   fs::remove_all(dir);
@@ -470,7 +471,7 @@ TEST(Cli, NamesThatAreNotUtf8AreWrittenReplacedNotAnInternalError) {
       kData + "/parallel_plates/parallel_plates", dir, [](const std::string& line, int) {
         return line.rfind("o receiver", 0) == 0 ? std::string("o r\xE9\x63\x65pteur") : line;  // Latin-1 e-acute
       });
-  const Result r = radmesh("run " + scene + " --no-png -q -o " + (dir / "out").string());
+  const Result r = run_cli("run " + scene + " --no-png -q -o " + (dir / "out").string());
   ASSERT_EQ(r.status, 0) << r.err;
   const nlohmann::json s = read_summary(dir / "out");
   int replaced = 0;
@@ -483,18 +484,18 @@ TEST(Cli, NamesThatAreNotUtf8AreWrittenReplacedNotAnInternalError) {
 TEST(Cli, ExitCodesAreZeroOneAndTwo) {
   // 0 success (and --help), 1 bad input, 2 usage (a flag or argument the
   // program does not know or cannot parse).
-  EXPECT_EQ(radmesh("--help").status, 0);
-  EXPECT_EQ(radmesh("run --help").status, 0);
-  EXPECT_EQ(radmesh("run").status, 2);
-  EXPECT_EQ(radmesh("run " + kData + "/cornell_box/cornell_box.obj --bogus-flag").status, 2);
-  EXPECT_EQ(radmesh("run " + kData + "/cornell_box/cornell_box.obj --rays many").status, 2);
-  EXPECT_EQ(radmesh("frobnicate").status, 2);
+  EXPECT_EQ(run_cli("--help").status, 0);
+  EXPECT_EQ(run_cli("run --help").status, 0);
+  EXPECT_EQ(run_cli("run").status, 2);
+  EXPECT_EQ(run_cli("run " + kData + "/cornell_box/cornell_box.obj --bogus-flag").status, 2);
+  EXPECT_EQ(run_cli("run " + kData + "/cornell_box/cornell_box.obj --rays many").status, 2);
+  EXPECT_EQ(run_cli("frobnicate").status, 2);
   const fs::path out = fresh_dir("exit1");
-  EXPECT_EQ(radmesh("run " + kData + "/bad/nan_coordinate.obj -o " + out.string()).status, 1);
+  EXPECT_EQ(run_cli("run " + kData + "/bad/nan_coordinate.obj -o " + out.string()).status, 1);
   // An output directory that cannot be made is bad input, found before any work.
   const fs::path file = out.string() + "_file";
   std::ofstream(file) << "x";
-  const Result r = radmesh("run " + kData + "/parallel_plates/parallel_plates.obj -o " + (file / "sub").string());
+  const Result r = run_cli("run " + kData + "/parallel_plates/parallel_plates.obj -o " + (file / "sub").string());
   EXPECT_EQ(r.status, 1) << r.err;
   EXPECT_NE(r.err.find("is not a directory"), std::string::npos) << r.err;
   fs::remove(file);
@@ -503,7 +504,7 @@ TEST(Cli, ExitCodesAreZeroOneAndTwo) {
 TEST(Cli, MeshReadsTheJsonBunnySceneWithItsMaterials) {
   const fs::path out = fresh_dir("bunny_mesh");
   const std::string scene = kData + "/bunny/bunny_room.json";
-  const Result r = radmesh("mesh " + scene + " --max-edge 10 --discontinuity contacts -q -o " + out.string());
+  const Result r = run_cli("mesh " + scene + " --max-edge 10 --discontinuity contacts -q -o " + out.string());
   ASSERT_EQ(r.status, 0) << r.err;
   const nlohmann::json s = read_summary(out);
   // room.obj: floor, 4 walls, 4 ceiling pieces and the light; bunny.ply: 3674 triangles, 1839 vertices.
@@ -529,9 +530,85 @@ TEST(Cli, MeshReadsTheJsonBunnySceneWithItsMaterials) {
 
 TEST(Cli, APlyFileAloneIsRefusedWithTheWayToGiveItAMaterial) {
   const fs::path out = fresh_dir("bunny_ply");
-  const Result r = radmesh("run " + kData + "/bunny/bunny.ply -o " + out.string());
+  const Result r = run_cli("run " + kData + "/bunny/bunny.ply -o " + out.string());
   EXPECT_NE(r.status, 0);
   EXPECT_NE(r.err.find("bunny.ply: PLY files carry no materials"), std::string::npos) << r.err;
   EXPECT_NE(r.err.find("{\"file\": \"bunny.ply\", \"material\": \"grey\"}"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(out));
+}
+
+namespace {
+
+// Lines of `path` that start with `prefix`.
+int count_lines(const fs::path& path, const std::string& prefix) {
+  std::ifstream in(path);
+  int n = 0;
+  for (std::string line; std::getline(in, line);) n += line.rfind(prefix, 0) == 0;
+  return n;
+}
+
+}  // namespace
+
+using radmesh::PixmapState;
+using radmesh::read_pixmap_state;
+
+TEST(Cli, PixmapRunSavesItsStateAndLightmapsAndAResumeIsBitIdentical) {
+  const std::string scene = kData + "/box_on_floor/box_on_floor.obj";
+  const fs::path a = fresh_dir("pixmap_a"), b = fresh_dir("pixmap_b"), c = fresh_dir("pixmap_c");
+  const std::string opts = " --method pixmap --hemicube-res 64 --unshot 0 --no-png";
+  Result r = run_cli("run " + scene + opts + " --shots 20 -o " + a.string());
+  ASSERT_EQ(r.status, 0) << r.err;
+  for (const char* f : {"radiosity.vtu", "summary.json", "pixmaps/state.json", "pixmaps/pixmap_0.vti",
+                        "lightmaps/pixmap_0.png", "lightmapped.obj", "lightmapped.mtl"})
+    EXPECT_TRUE(fs::exists(a / f)) << f;
+  const nlohmann::json s = read_summary(a);
+  EXPECT_EQ(s["solver"]["shots"], 20);
+  EXPECT_EQ(s["field"]["mode"], "texels");
+  // One vt per v; every pixmap has its texture.
+  EXPECT_EQ(count_lines(a / "lightmapped.obj", "v "), count_lines(a / "lightmapped.obj", "vt "));
+  EXPECT_EQ(count_lines(a / "lightmapped.mtl", "map_Kd lightmaps/pixmap_"), s["solver"]["pixmaps"].get<int>());
+  // 20 shots, resumed to 45, against 45 in one run.
+  r = run_cli("run " + scene + opts + " --shots 45 --resume " + a.string() + " -o " + b.string());
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_EQ(read_summary(b)["solver"]["shots_this_run"], 25);
+  r = run_cli("run " + scene + opts + " --shots 45 -o " + c.string());
+  ASSERT_EQ(r.status, 0) << r.err;
+  const PixmapState resumed = read_pixmap_state(b.string()), direct = read_pixmap_state(c.string());
+  EXPECT_EQ(resumed.shots, 45);
+  EXPECT_EQ(resumed.radiosity, direct.radiosity);
+  EXPECT_EQ(resumed.unshot, direct.unshot);
+  EXPECT_EQ(resumed.power_absorbed, direct.power_absorbed);
+  // Other options, another method: refused, naming what differs.
+  r = run_cli("run " + scene + " --method pixmap --hemicube-res 128 --resume " + a.string() + " -o " + b.string());
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.err.find("cannot resume: it was made with --hemicube-res 64, this run has --hemicube-res 128"),
+            std::string::npos)
+      << r.err;
+  r = run_cli("run " + scene + " --method matrix --resume " + a.string() + " -o " + b.string());
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.err.find("--resume applies to --method pixmap only"), std::string::npos) << r.err;
+  r = run_cli("run " + scene + " --method pixmap --resume " + c.string() + "/lightmaps -o " + b.string());
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.err.find("pixmaps/state.json: cannot open"), std::string::npos) << r.err;
+  for (const fs::path& d : {a, b, c}) fs::remove_all(d);
+}
+
+TEST(Cli, CtrlCStopsAPixmapRunWhichSavesItsStateAndSaysHowToResume) {
+  const fs::path out = fresh_dir("pixmap_interrupt");
+  const fs::path err = out.string() + "_err.txt";
+  // No stopping rule: only the interrupt ends it.
+  const std::string cmd = "DISPLAY= timeout --preserve-status -s INT 3 " + kExe + " run " + kData +
+                          "/cornell_box/cornell_box.obj --method pixmap --unshot 0 --no-png -o " + out.string() +
+                          " >/dev/null 2>" + err.string();
+  const int rc = std::system(cmd.c_str());
+  std::ifstream in(err);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_EQ(WEXITSTATUS(rc), 130) << text;
+  EXPECT_NE(text.find("interrupted after"), std::string::npos) << text;
+  EXPECT_NE(text.find("--resume " + out.string()), std::string::npos) << text;
+  const PixmapState st = read_pixmap_state(out.string());
+  EXPECT_GT(st.shots, 0);
+  EXPECT_EQ(read_summary(out)["solver"]["interrupted"], 1);
+  fs::remove_all(out);
+  fs::remove(err);
 }

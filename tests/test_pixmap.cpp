@@ -189,6 +189,38 @@ TEST(PixmapSolver, FurnaceConvergesToEOverOneMinusRho) {
   EXPECT_NEAR(run.state.power_escaped.x, 0.0, 1e-7 * run.power_emitted.x);  // F rounded to float
 }
 
+TEST(PixmapSolver, ReflectanceNearOneConvergesAndTheAmbientTermFillsWhatIsUnshot) {
+  // rho = 0.999: B = E / (1 - rho) = 1000. Stopped at an unshot power of
+  // 1e-3 of the emitted, the state lacks the bounces of what is unshot: the
+  // ambient term (Cohen et al.) puts most of it back (what remains is the
+  // rounding of some 3 x 10^5 float additions per texel).
+  Scene scene = read_obj_scene(kData + "/furnace_cube/furnace_cube.obj");
+  for (Material& m : scene.materials) m.reflectance = Rgb(0.999);
+  PixmapOptions o;
+  o.texel_size = 0.25;
+  o.block = 1;
+  o.hemicube_res = 64;
+  o.unshot = 1e-3;
+  const PixmapSolver solver(scene, o, threads(0));
+  const PixmapRun run = solver.run(solver.initial_state());
+  EXPECT_LE(run.unshot_fraction, 1e-3);
+  const auto shown = solver.display(run.state, run.ambient);
+  const PixmapLayout& L = solver.layout();
+  double raw = 0.0, with_ambient = 0.0, area = 0.0;
+  for (size_t k = 0; k < L.pixmaps.size(); ++k)
+    for (long long i = 0; i < L.pixmaps[k].texels(); ++i) {
+      const double a = L.pixmaps[k].area[i];
+      raw += a * run.state.radiosity[k][i * 3];
+      with_ambient += a * shown[k][i * 3];
+      area += a;
+    }
+  std::printf("rho 0.999: %lld shots, mean %.4f, with the ambient term %.4f\n", run.state.shots, raw / area,
+              with_ambient / area);
+  EXPECT_NEAR(raw / area, 1000.0, 1000.0 * 2e-3);
+  EXPECT_NEAR(with_ambient / area, 1000.0, 1000.0 * 5e-4);
+  EXPECT_LT(std::abs(with_ambient / area - 1000.0), 0.5 * std::abs(raw / area - 1000.0));
+}
+
 TEST(PixmapSolver, ConvergesToTheLinearSystemOfItsOwnFormFactors) {
   // With one texel per shooter, progressive refinement solves
   // B_t = E_t + rho_t sum_s F(s -> t) A_s / A_t B_s for the hemicube's
