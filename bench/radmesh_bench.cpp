@@ -213,7 +213,14 @@ std::vector<Scenario> scenes(const std::string& data) {
                   {200, 16, 1, DiscontinuityMode::contacts, "hierarchical", {{"epsilon", "0.0002"}}, FieldMode::fit},
                   {200, 16, 1, DiscontinuityMode::contacts, "hierarchical", {{"epsilon", "0.001"}}, FieldMode::mean},
                   {45, 16, 1, DiscontinuityMode::full, "matrix", {}, FieldMode::fit},
-                  {45, 16, 1, DiscontinuityMode::full, "matrix", {}, FieldMode::mean}},
+                  {45, 16, 1, DiscontinuityMode::full, "matrix", {}, FieldMode::mean},
+                  // Pixmap radiosity: texel size (mm) and hemicube resolution;
+                  // the initial mesh is not used (its own field: texels).
+                  {1000, 16, 1, DiscontinuityMode::off, "pixmap", {{"texel_size", "20"}, {"hemicube_res", "64"}}, FieldMode::automatic},
+                  {1000, 16, 1, DiscontinuityMode::off, "pixmap", {{"texel_size", "15"}, {"hemicube_res", "128"}}, FieldMode::automatic},
+                  {1000, 16, 1, DiscontinuityMode::off, "pixmap", {{"texel_size", "12"}, {"hemicube_res", "128"}}, FieldMode::automatic},
+                  {1000, 16, 1, DiscontinuityMode::off, "pixmap", {{"texel_size", "12"}, {"hemicube_res", "256"}}, FieldMode::automatic},
+                  {1000, 16, 1, DiscontinuityMode::off, "pixmap", {{"texel_size", "10"}, {"hemicube_res", "128"}}, FieldMode::automatic}},
                  {{160, 16, 1},
                   {120, 16, 1},
                   {200, 16, 1, DiscontinuityMode::contacts, "hierarchical", {{"epsilon", "0.003"}}},
