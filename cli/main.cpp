@@ -29,6 +29,7 @@
 
 #include <atomic>
 #include <csignal>
+#include <ctime>
 
 #include <unistd.h>
 
@@ -119,9 +120,22 @@ const char* const kRunOutputs =
     R"(radiosity\.png|summary\.json|patches\.csv|lightmapped\.(obj|mtl))";
 
 // Ctrl-C during a method that can stop early (Method::resumable): the first
-// one asks it to stop and save its state, a second one ends the program.
+// one asks it to stop and save its state, a second one (half a second or
+// more later: a signal sent to the process and to its group arrives twice)
+// ends the program.
 std::atomic<bool> g_interrupted{false};
-extern "C" void on_interrupt(int) { g_interrupted.store(true); }
+std::atomic<long long> g_first_interrupt_ns{0};
+extern "C" void on_interrupt(int) {
+  timespec now{};
+  clock_gettime(CLOCK_MONOTONIC, &now);  // async-signal-safe
+  const long long ns = now.tv_sec * 1000000000LL + now.tv_nsec;
+  if (!g_interrupted.exchange(true)) {
+    g_first_interrupt_ns.store(ns);
+  } else if (ns - g_first_interrupt_ns.load() > 500000000LL) {
+    std::signal(SIGINT, SIG_DFL);
+    std::raise(SIGINT);
+  }
+}
 const char* const kQualityOutputs = R"(quality\.csv|quality_(min_angle|aspect_ratio)\.png)";
 
 // Makes the output directory (IoError naming it when that fails) and
@@ -218,7 +232,6 @@ int run(Params& p, bool solving) {
     if (method->resumable) {
       struct sigaction sa {};
       sa.sa_handler = on_interrupt;
-      sa.sa_flags = SA_RESETHAND;  // a second Ctrl-C is the default: the end
       sigemptyset(&sa.sa_mask);
       sigaction(SIGINT, &sa, nullptr);
       cb.cancelled = [] { return g_interrupted.load(); };

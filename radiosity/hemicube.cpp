@@ -48,12 +48,6 @@ Hemicube::Hemicube(int resolution) : resolution_(resolution) {
     for (double& d : face) d /= total;
 }
 
-long long Hemicube::pixel_count() const {
-  long long n = 0;
-  for (const Face& F : faces_) n += static_cast<long long>(F.id.size());
-  return n;
-}
-
 void Hemicube::render(const Vec3& centre, const Vec3& u, const Vec3& v, const std::vector<HemicubeTriangle>& triangles) {
   centre_ = centre;
   const Vec3 n = glm::cross(u, v);

@@ -43,7 +43,6 @@ public:
   static void check_resolution(int resolution);
 
   int resolution() const { return resolution_; }
-  long long pixel_count() const;
 
   // Renders `triangles` as seen from `centre` into the hemisphere around
   // `normal` = cross(u, v) (u, v orthonormal: the top face's screen axes).
@@ -56,11 +55,6 @@ public:
   // The delta form factor of pixel (x, y) of face f. Normalised: the
   // pixels of all five faces sum to 1 (to rounding).
   double delta(int f, int x, int y) const { return delta_[f][static_cast<size_t>(y) * faces_[f].width + x]; }
-  // The world direction (not unit) through screen point (sx, sy) of face f.
-  Vec3 direction(int f, double sx, double sy) const {
-    const Face& F = faces_[f];
-    return F.forward + sx * F.right + sy * F.up;
-  }
   // Screen coordinates of pixel (x, y)'s centre.
   double pixel_x(int x) const { return -1.0 + (x + 0.5) * pixel_; }
   double pixel_y(int f, int y) const { return faces_[f].y0 + (y + 0.5) * pixel_; }

@@ -14,8 +14,6 @@
 #include <chrono>
 #include <cmath>
 #include <cstdint>
-#include <cstring>
-#include <mutex>
 #include <numbers>
 #include <numeric>
 #include <sstream>
@@ -333,6 +331,7 @@ PixmapLayout layout_of(const Scene& scene, const Mesh& coarse, const PixmapOptio
         Shooter s;
         s.pixmap = static_cast<int>(k);
         Vec3 sum(0.0);
+        double weight = 0.0;
         for (int j = bj; j < std::min(pm.height, bj + b); ++j)
           for (int i = bi; i < std::min(pm.width, bi + b); ++i) {
             const int idx = j * pm.width + i;
@@ -340,10 +339,10 @@ PixmapLayout layout_of(const Scene& scene, const Mesh& coarse, const PixmapOptio
             s.texels.push_back(idx);
             s.area += pm.area[idx];
             sum += pm.coverage[idx] * pm.centroid[idx];
-            s.centre += Vec3(pm.coverage[idx]);
+            weight += pm.coverage[idx];
           }
         if (s.texels.empty()) continue;
-        s.centre = sum / s.centre.x;
+        s.centre = sum / weight;
         L.shooters.push_back(std::move(s));
       }
   }

@@ -188,7 +188,6 @@ private:
 // display vertices' lightmap coordinates.
 struct PixmapOutput {
   std::shared_ptr<const PixmapSolver> solver;
-  PixmapOptions options;
   PixmapState state;
   Rgb ambient{0.0};
   std::vector<std::vector<float>> display;  // per pixmap, RGB per texel

@@ -15,12 +15,11 @@ namespace {
 
 // The result of a state: the display mesh with its values, the counts and
 // the state itself for the files.
-MethodResult result_of(const Scene& scene, const std::shared_ptr<const PixmapSolver>& solver, const PixmapOptions& po,
-                       const PixmapState& state, bool convex) {
+MethodResult result_of(const Scene& scene, const std::shared_ptr<const PixmapSolver>& solver, const PixmapState& state,
+                       bool convex) {
   MethodResult r;
   auto out = std::make_shared<PixmapOutput>();
   out->solver = solver;
-  out->options = po;
   out->state = state;
   out->ambient = solver->ambient(state);
   out->display = solver->display(state, out->ambient);
@@ -106,13 +105,13 @@ Method make_pixmap_method() {
     pc.snapshot_every = static_cast<long long>(opts.number("snapshot_every"));
     if (cb.on_round)
       pc.on_snapshot = [&](const PixmapState& s) {
-        cb.on_round(result_of(scene, solver, po, s, convex), static_cast<int>(s.shots));
+        cb.on_round(result_of(scene, solver, s, convex), static_cast<int>(s.shots));
       };
     const auto t0 = std::chrono::steady_clock::now();
     const PixmapRun run = solver->run(std::move(start), pc);
     const double run_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     const auto t1 = std::chrono::steady_clock::now();
-    MethodResult r = result_of(scene, solver, po, run.state, convex);
+    MethodResult r = result_of(scene, solver, run.state, convex);
     const double display_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
     r.interrupted = run.interrupted;
     SolveStats& st = r.solution.stats;

@@ -556,14 +556,16 @@ TEST(Cli, PixmapRunSavesItsStateAndLightmapsAndAResumeIsBitIdentical) {
   const std::string scene = kData + "/box_on_floor/box_on_floor.obj";
   const fs::path a = fresh_dir("pixmap_a"), b = fresh_dir("pixmap_b"), c = fresh_dir("pixmap_c");
   const std::string opts = " --method pixmap --hemicube-res 64 --unshot 0 --no-png";
-  Result r = run_cli("run " + scene + opts + " --shots 20 -o " + a.string());
+  Result r = run_cli("run " + scene + opts + " --shots 20 --snapshot-every 10 -o " + a.string());
   ASSERT_EQ(r.status, 0) << r.err;
   for (const char* f : {"radiosity.vtu", "summary.json", "pixmaps/state.json", "pixmaps/pixmap_0.vti",
-                        "lightmaps/pixmap_0.png", "lightmapped.obj", "lightmapped.mtl"})
+                        "lightmaps/pixmap_0.png", "lightmapped.obj", "lightmapped.mtl", "radiosity.pvd",
+                        "radiosity_round_0.vtu", "radiosity_round_1.vtu"})
     EXPECT_TRUE(fs::exists(a / f)) << f;
   const nlohmann::json s = read_summary(a);
   EXPECT_EQ(s["solver"]["shots"], 20);
   EXPECT_EQ(s["field"]["mode"], "texels");
+  EXPECT_FALSE(fs::exists(a / "radiosity_round_2.vtu"));  // a snapshot every 10 of 20 shots
   // One vt per v; every pixmap has its texture.
   EXPECT_EQ(count_lines(a / "lightmapped.obj", "v "), count_lines(a / "lightmapped.obj", "vt "));
   EXPECT_EQ(count_lines(a / "lightmapped.mtl", "map_Kd lightmaps/pixmap_"), s["solver"]["pixmaps"].get<int>());
@@ -597,7 +599,7 @@ TEST(Cli, CtrlCStopsAPixmapRunWhichSavesItsStateAndSaysHowToResume) {
   const fs::path out = fresh_dir("pixmap_interrupt");
   const fs::path err = out.string() + "_err.txt";
   // No stopping rule: only the interrupt ends it.
-  const std::string cmd = "DISPLAY= timeout --preserve-status -s INT 3 " + kExe + " run " + kData +
+  const std::string cmd = "DISPLAY= timeout --foreground --preserve-status -s INT 3 " + kExe + " run " + kData +
                           "/cornell_box/cornell_box.obj --method pixmap --unshot 0 --no-png -o " + out.string() +
                           " >/dev/null 2>" + err.string();
   const int rc = std::system(cmd.c_str());
