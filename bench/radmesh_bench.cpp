@@ -8,6 +8,7 @@
 //   radmesh_bench --make-reference [--max-edge L] [--rays N] [--reference-out F]   (Cornell box reference)
 //   radmesh_bench --load-times [--out DIR]   (scene loading per format, 10^6 triangles)
 //   radmesh_bench --scaling [--out DIR] [--max-triangles N] [--clusters volume,off] [--time-limit S]
+//   radmesh_bench --progressive [--scenes S] [--settings ...:pixmap:NAME=VALUE]   (pixmap: error at every tenth of its shots)
 //                 (bench/scaling.h: time, links and memory against input size, one process per run)
 
 #include "bench/mesh_writers.h"
@@ -553,6 +554,59 @@ int load_times(const std::string& out_dir) {
   return 0;
 }
 
+// Progressive refinement's picture over its run: the pixmap method with the
+// options of `set` (its stopping rule), then again with a snapshot at every
+// tenth of that run's shots, each snapshot's field measured against the
+// reference. The time of a snapshot is the method's wall time up to it, the
+// measuring left out.
+int progressive_study(const Scenario& sc, const Scene& scene, const std::vector<SurfaceSample>& samples,
+                      const std::vector<Rgb>& reference, Settings set, const std::string& out_dir) {
+  set.method = "pixmap";
+  const Method& method = find_method("pixmap");
+  const Mesh mesh = mesh_scene(scene, method.meshing(scene));
+  SolveOptions so;
+  so.field = FieldMode::automatic;
+  const MethodResult full = run_method(method, scene, mesh, so, set.options);
+  const long long total = static_cast<long long>(full.counter("shots")->values[0]);
+  OptionValues opts = set.options;
+  opts["snapshot_every"] = std::to_string(std::max(1LL, total / 10));
+  const auto ref = reflected_part(scene, samples, reference);
+  struct Point {
+    long long shots;
+    double seconds, l2, patch_mean;
+  };
+  std::vector<Point> points;
+  double measuring = 0.0;
+  const auto t0 = std::chrono::steady_clock::now();
+  auto measure = [&](const MethodResult& r, long long shots) {
+    const auto m0 = std::chrono::steady_clock::now();
+    const double at = std::chrono::duration<double>(m0 - t0).count() - measuring;
+    const auto values = reflected_part(scene, samples, interpolate_nodal(scene, r.mesh, r.solution.nodal, samples));
+    const FieldError e = field_error(samples, values, ref);
+    points.push_back({shots, at, e.l2, e.patch_mean});
+    measuring += std::chrono::duration<double>(std::chrono::steady_clock::now() - m0).count();
+  };
+  SolveCallbacks cb;
+  cb.on_round = [&](const MethodResult& r, int shots) { measure(r, shots); };
+  const MethodResult last = run_method(method, scene, mesh, so, opts, cb);
+  measure(last, total);
+  std::ostringstream csv;
+  csv << "scene,options,shots,fraction_of_shots,wall_s,l2,patch_mean\n";
+  std::fprintf(stderr, "%s, pixmap %s: %lld shots in all\n", sc.name.c_str(), options_text(set.options).c_str(), total);
+  for (const Point& p : points) {
+    std::fprintf(stderr, "  %6lld shots (%3.0f%%)  %7.3f s  L2 %.3e  worst patch mean %.3e\n", p.shots,
+                 100.0 * static_cast<double>(p.shots) / static_cast<double>(total), p.seconds, p.l2, p.patch_mean);
+    csv << sc.name << ',' << options_text(set.options) << ',' << p.shots << ','
+        << static_cast<double>(p.shots) / static_cast<double>(total) << ',' << p.seconds << ',' << p.l2 << ','
+        << p.patch_mean << '\n';
+  }
+  fs::create_directories(out_dir);
+  const std::string path = (fs::path(out_dir) / "progressive.csv").string();
+  write_file_atomically(path, [&](std::ostream& out) { out << csv.str(); });
+  std::printf("%s\n", path.c_str());
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -581,6 +635,10 @@ int main(int argc, char** argv) {
                "off, contacts and full; writes direct.csv and direct.png");
   bool parts = false;
   app.add_flag("--field-parts", parts, "with one --settings: the direct and gathered parts' errors per patch");
+  bool progressive = false;
+  app.add_flag("--progressive", progressive,
+               "the pixmap method's error at every tenth of its shots (with one --settings: its options); writes "
+               "progressive.csv");
   app.add_option("--max-edge", ref_edge, "reference mesh size (mm)");
   app.add_option("--rays", ref_rays, "reference shadow rays per pair");
   std::string ref_out;
@@ -629,6 +687,8 @@ int main(int argc, char** argv) {
         for (const std::string& c : custom) sweep.push_back(parse_settings(c));
       }
       if (parts) return field_parts(sc, scene, samples, ref, sweep.at(0));
+      if (progressive)
+        return progressive_study(sc, scene, samples, ref, custom.empty() ? Settings{} : sweep.at(0), out_dir);
       for (const Settings& set : sweep) {
         const Row r = run_one(sc, scene, samples, ref, set);
         std::fprintf(stderr, "%-16s %-15s edge %-6g rays %-3d q%d: %6lld elements %8.3f s  L2 %.3e  max %.3e  patch %.3e (elements %.3e) (%s)\n",

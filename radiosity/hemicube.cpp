@@ -173,6 +173,26 @@ void Hemicube::render_face(int f, const std::vector<HemicubeTriangle>& triangles
   }
 }
 
+int Hemicube::id_toward(const Vec3& d) const {
+  // The face the direction leaves the unit half cube through.
+  int best = -1;
+  double most = 0.0;
+  for (int f = 0; f < 5; ++f) {
+    const double z = glm::dot(d, faces_[f].forward);
+    if (z > most) {
+      most = z;
+      best = f;
+    }
+  }
+  if (best < 0) return kEmpty;
+  const Face& F = faces_[best];
+  const double sx = glm::dot(d, F.right) / most, sy = glm::dot(d, F.up) / most;
+  if (sy < F.y0) return kEmpty;
+  const int x = std::clamp(static_cast<int>(std::floor((sx + 1.0) / pixel_)), 0, F.width - 1);
+  const int y = std::clamp(static_cast<int>(std::floor((sy - F.y0) / pixel_)), 0, F.height - 1);
+  return F.id[static_cast<size_t>(y) * F.width + x];
+}
+
 double Hemicube::form_factor(int id) const {
   double sum = 0.0;
   for (int f = 0; f < 5; ++f)

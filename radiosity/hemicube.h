@@ -60,6 +60,10 @@ public:
   double pixel_y(int f, int y) const { return faces_[f].y0 + (y + 0.5) * pixel_; }
   double pixel_size() const { return pixel_; }
 
+  // The id the pixel in direction d (from the centre, into the hemisphere)
+  // holds; kEmpty for a direction below the horizon.
+  int id_toward(const Vec3& d) const;
+
   // Sum of the delta form factors of the pixels that hold `id`.
   double form_factor(int id) const;
 

@@ -4,6 +4,7 @@
 #include "radiosity/pixmap.h"
 
 #include "meshing/errors.h"
+#include "radiosity/form_factor.h"
 #include "radiosity/hemicube.h"
 #include "radiosity/transport.h"
 #include "radiosity/visibility.h"
@@ -321,8 +322,12 @@ PixmapLayout layout_of(const Scene& scene, const Mesh& coarse, const PixmapOptio
         pm.owner[idx] = best;
         pm.area[best] += pm.coverage[idx];
       }
-    for (long long idx = 0; idx < pm.texels(); ++idx)
+    pm.whole.assign(static_cast<size_t>(pm.texels()), 0);
+    for (long long idx = 0; idx < pm.texels(); ++idx) {
       if (pm.owner[idx] == idx) ++L.covered;
+      pm.whole[idx] = pm.owner[idx] == idx && pm.area[idx] >= (1.0 - 1e-9) * cell_area &&
+                      pm.coverage[idx] >= (1.0 - 1e-9) * cell_area;
+    }
 
     // Shooters: blocks of owners.
     const int b = options.block;
@@ -348,6 +353,10 @@ PixmapLayout layout_of(const Scene& scene, const Mesh& coarse, const PixmapOptio
   }
   return L;
 }
+
+// Texels closer to a shooter's centre than this times the shooter's
+// radius (plus a texel) take Lambert's exact form factor (the near field).
+constexpr double kNearField = 1.5;
 
 struct RowEntry {
   uint32_t texel;  // global index
@@ -525,8 +534,34 @@ std::vector<RowEntry> PixmapSolver::Impl::compute_row(int s, Hemicube& cube, lon
   cube.render(sh.centre, own.u, own.v, polygons);
   const int npm = static_cast<int>(layout.pixmaps.size());
   std::vector<std::vector<RowEntry>> parts(static_cast<size_t>(npm));
+  std::vector<std::vector<char>> near_flags(static_cast<size_t>(npm));
+  std::vector<double> near_change(static_cast<size_t>(npm), 0.0);
   std::vector<long long> over(static_cast<size_t>(npm), 0);
   const int kmax = options.max_oversampling;
+  // The near field. A hemicube sees from one point, and the shooter's
+  // exchange with texels closer than a few times its size (across an edge
+  // it shares with them) is not that of its centre: there F is integrated
+  // exactly instead, Lambert's formula to the texel from points spread over
+  // the shooter (2 x 2 per whole texel), for the texels the hemicube saw.
+  struct Source {
+    Vec3 x;
+    double w;
+  };
+  std::vector<Source> sources;
+  double reach = 0.0;
+  for (int t : sh.texels) {
+    const double w = own.area[t] / sh.area;
+    if (own.whole[t]) {
+      for (int q = 0; q < 4; ++q)
+        sources.push_back({own.centroid[t] + ((q % 2 ? 0.25 : -0.25) * own.texel_u) * own.u +
+                               ((q / 2 ? 0.25 : -0.25) * own.texel_v) * own.v,
+                           0.25 * w});
+    } else {
+      sources.push_back({own.centroid[t], w});
+    }
+    reach = std::max(reach, glm::length(own.centroid[t] - sh.centre) + std::hypot(own.texel_u, own.texel_v));
+  }
+  reach *= kNearField;
   tbb::parallel_for(0, npm, [&](int k) {
     if (k == sh.pixmap) return;
     const Pixmap& pm = layout.pixmaps[k];
@@ -563,39 +598,37 @@ std::vector<RowEntry> PixmapSolver::Impl::compute_row(int s, Hemicube& cube, lon
       return pm.owner[static_cast<size_t>(j) * pm.width + i];
     };
     auto add = [&](int texel, double f) {
+      if (!(f > 0.0)) return;  // a zero weight would list the texel twice below
       if (acc.empty()) acc.assign(static_cast<size_t>(pm.texels()), 0.0);
       if (acc[texel] == 0.0) touched.push_back(texel);
       acc[texel] += f;
     };
-    // A sample's share goes to the covered texels around (s, t) with
-    // bilinear (tent) weights of their centres: with samples at most half
-    // a texel apart (the oversampling below), the weights a texel collects
-    // do not alias with the pixel grid as nearest-texel counting does.
-    // Without a covered texel centre around it, the texel it lies in, or
-    // `fallback` (the owner of the pixel centre's texel).
+    // A sample's share goes to the texels around (s, t) with bilinear
+    // (tent) weights of their centres where all four are whole texels: with
+    // samples at most half a texel apart (the oversampling below), the
+    // weights a texel collects do not alias with the pixel grid as
+    // nearest-texel counting does, and each collects from one texel's area.
+    // Next to a border (a texel partly covered, or not at all), the texel
+    // the point lies in (its owner) takes it all: a partly covered texel
+    // then collects from exactly its covered area, which its value divides
+    // by (tent weights would bring it the light of a whole texel's area).
+    // `fallback` (the owner of the pixel centre's texel) where the point is
+    // on no covered texel.
     auto splat = [&](double s, double t, double f, int fallback) {
       const int i0 = static_cast<int>(std::floor(s - 0.5)), j0 = static_cast<int>(std::floor(t - 0.5));
-      const double fs = s - 0.5 - i0, ft = t - 0.5 - j0;
-      int owners[4];
-      double weights[4], wsum = 0.0;
-      int n = 0;
-      for (int dj = 0; dj <= 1; ++dj)
-        for (int di = 0; di <= 1; ++di) {
-          const int i = i0 + di, j = j0 + dj;
-          if (i < 0 || j < 0 || i >= pm.width || j >= pm.height) continue;
-          const int o = pm.owner[static_cast<size_t>(j) * pm.width + i];
-          const double w = (di ? fs : 1.0 - fs) * (dj ? ft : 1.0 - ft);
-          if (o < 0 || w <= 0.0) continue;
-          owners[n] = o;
-          weights[n++] = w;
-          wsum += w;
+      if (i0 >= 0 && j0 >= 0 && i0 + 1 < pm.width && j0 + 1 < pm.height) {
+        const size_t a = static_cast<size_t>(j0) * pm.width + i0, b = a + static_cast<size_t>(pm.width);
+        if (pm.whole[a] && pm.whole[a + 1] && pm.whole[b] && pm.whole[b + 1]) {
+          const double fs = s - 0.5 - i0, ft = t - 0.5 - j0;
+          add(static_cast<int>(a), f * (1.0 - fs) * (1.0 - ft));
+          add(static_cast<int>(a + 1), f * fs * (1.0 - ft));
+          add(static_cast<int>(b), f * (1.0 - fs) * ft);
+          add(static_cast<int>(b + 1), f * fs * ft);
+          return;
         }
-      if (n == 0) {
-        const int o = owner_at(s, t);
-        add(o >= 0 ? o : fallback, f);
-        return;
       }
-      for (int q = 0; q < n; ++q) add(owners[q], f * weights[q] / wsum);
+      const int o = owner_at(s, t);
+      add(o >= 0 ? o : fallback, f);
     };
     for (int f = 0; f < 5; ++f) {
       int x0, x1, y0, y1;
@@ -655,18 +688,72 @@ std::vector<RowEntry> PixmapSolver::Impl::compute_row(int s, Hemicube& cube, lon
             }
         }
     }
+    // The near field: every whole texel within reach that the hemicube saw,
+    // or that the pixel toward its centre shows (a texel a hair away from
+    // the shooter fills no pixel centre of its own).
+    std::vector<char> near_texel;
+    if (reach > 0.0) {
+      const double cs = pm.s_of(sh.centre), ct = pm.t_of(sh.centre);
+      const int i0 = std::max(0, static_cast<int>(std::floor(cs - reach / pm.texel_u)));
+      const int i1 = std::min(pm.width - 1, static_cast<int>(std::ceil(cs + reach / pm.texel_u)));
+      const int j0 = std::max(0, static_cast<int>(std::floor(ct - reach / pm.texel_v)));
+      const int j1 = std::min(pm.height - 1, static_cast<int>(std::ceil(ct + reach / pm.texel_v)));
+      for (int j = j0; j <= j1; ++j)
+        for (int i = i0; i <= i1; ++i) {
+          const int texel = j * pm.width + i;
+          if (!pm.whole[texel] || glm::length(pm.centroid[texel] - sh.centre) >= reach) continue;
+          const bool seen = !acc.empty() && acc[texel] > 0.0;
+          if (!seen) {
+            const int id = cube.id_toward(pm.centroid[texel] - sh.centre);
+            if (id < 0 || layout.pixmap_of_patch[id] != k) continue;
+            if (acc.empty()) acc.assign(static_cast<size_t>(pm.texels()), 0.0);
+            touched.push_back(texel);
+          }
+          if (near_texel.empty()) near_texel.assign(static_cast<size_t>(pm.texels()), 0);
+          near_texel[texel] = 1;
+        }
+    }
     std::sort(touched.begin(), touched.end());
     auto& part = parts[k];
+    auto& near = near_flags[k];
     part.reserve(touched.size());
-    for (int texel : touched)
-      part.push_back({static_cast<uint32_t>(pm.first + texel), static_cast<float>(acc[texel])});
+    near.reserve(touched.size());
+    for (int texel : touched) {
+      double f = acc[texel];
+      const bool is_near = !near_texel.empty() && near_texel[texel];
+      if (is_near) {
+        const int i = texel % pm.width, j = texel / pm.width;
+        const Vec3 quad[4] = {point_of(pm, i, j), point_of(pm, i + 1, j), point_of(pm, i + 1, j + 1),
+                              point_of(pm, i, j + 1)};
+        double exact = 0.0;
+        for (const Source& src : sources) exact += src.w * point_polygon_form_factor(src.x, own.normal, quad, 4, pm.normal);
+        near_change[k] += exact - f;
+        f = exact;
+      }
+      if (!(f > 0.0)) continue;
+      part.push_back({static_cast<uint32_t>(pm.first + texel), static_cast<float>(f)});
+      near.push_back(is_near);
+    }
   });
+  // The far entries give or take what the near field changed, so that the
+  // row keeps the hemicube's sum (1 in a closed scene).
+  double far = 0.0, change = 0.0;
+  for (int k = 0; k < npm; ++k) {
+    change += near_change[k];
+    for (size_t e = 0; e < parts[k].size(); ++e)
+      if (!near_flags[k][e]) far += parts[k][e].f;
+  }
+  const double scale = far > 0.0 ? std::max(0.0, (far - change) / far) : 1.0;
   std::vector<RowEntry> row;
   size_t total = 0;
   for (const auto& p : parts) total += p.size();
   row.reserve(total);
   for (int k = 0; k < npm; ++k) {
-    row.insert(row.end(), parts[k].begin(), parts[k].end());
+    for (size_t e = 0; e < parts[k].size(); ++e) {
+      RowEntry entry = parts[k][e];
+      if (!near_flags[k][e]) entry.f = static_cast<float>(entry.f * scale);
+      row.push_back(entry);
+    }
     oversampled += over[k];
   }
   return row;

@@ -57,6 +57,7 @@ struct Pixmap {
   // borders do not get the aliasing of a tiny area); -1 when not covered.
   std::vector<int> owner;
   std::vector<double> area;         // per texel: its area plus the slivers it holds (0 when owned)
+  std::vector<char> whole;          // per texel: wholly covered, holding no sliver (area = texel area)
   // Per quarter texel (a grid of 2 width x 2 height): 1 when its part of the
   // patches lies inside a closed object (left out of the coverage).
   std::vector<char> dark_quarter;
