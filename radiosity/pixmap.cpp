@@ -130,6 +130,24 @@ Vec3 tangent_of(const Vec3& n) {
 St st_of(const Pixmap& pm, const Vec3& x) { return {pm.s_of(x), pm.t_of(x)}; }
 Vec3 point_of(const Pixmap& pm, double s, double t) { return pm.origin + (s * pm.texel_u) * pm.u + (t * pm.texel_v) * pm.v; }
 
+// The texel of the 3 x 3 around (i, j) with the most coverage, at least
+// `min_coverage` and more than 0 (the first in row order on ties); -1 when none.
+int most_covered_around(const Pixmap& pm, int i, int j, double min_coverage) {
+  int best = -1;
+  double most = 0.0;
+  for (int dj = -1; dj <= 1; ++dj)
+    for (int di = -1; di <= 1; ++di) {
+      const int x = i + di, y = j + dj;
+      if (x < 0 || y < 0 || x >= pm.width || y >= pm.height) continue;
+      const size_t n = static_cast<size_t>(y) * pm.width + x;
+      if (pm.coverage[n] >= min_coverage && pm.coverage[n] > most) {
+        most = pm.coverage[n];
+        best = static_cast<int>(n);
+      }
+    }
+  return best;
+}
+
 void check_options(const PixmapOptions& o) {
   auto bad = [](const std::string& what) { throw InputError(what); };
   if (!(o.texel_size >= 0.0) || !std::isfinite(o.texel_size)) bad("--texel-size " + format_number(o.texel_size) + ": must be >= 0 (0: auto)");
@@ -307,17 +325,8 @@ PixmapLayout layout_of(const Scene& scene, const Mesh& coarse, const PixmapOptio
         if (pm.coverage[idx] <= 0.0) continue;
         int best = static_cast<int>(idx);
         if (pm.coverage[idx] < 0.25 * cell_area) {
-          double most = 0.0;
-          for (int dj = -1; dj <= 1; ++dj)
-            for (int di = -1; di <= 1; ++di) {
-              const int x = i + di, y = j + dj;
-              if (x < 0 || y < 0 || x >= pm.width || y >= pm.height) continue;
-              const size_t n = static_cast<size_t>(y) * pm.width + x;
-              if (pm.coverage[n] >= 0.25 * cell_area && pm.coverage[n] > most) {
-                most = pm.coverage[n];
-                best = static_cast<int>(n);
-              }
-            }
+          const int n = most_covered_around(pm, i, j, 0.25 * cell_area);
+          if (n >= 0) best = n;
         }
         pm.owner[idx] = best;
         pm.area[best] += pm.coverage[idx];
@@ -457,6 +466,7 @@ struct PixmapSolver::Impl {
   std::vector<Rgb> rho, emission;           // per pixmap
   std::vector<int> shooter_of;              // per global texel: its shooter (-1: none)
   double row_budget = 0.0;                  // bytes the cached rows may take
+  Rgb power_emitted{0.0};                   // sum of E x area over the texels
   // The display mesh: geometry built once.
   Mesh display;
   std::vector<St> display_st;
@@ -647,20 +657,10 @@ std::vector<RowEntry> PixmapSolver::Impl::compute_row(int s, Hemicube& cube, lon
           if (centre_owner < 0) {
             // Rounding put the centre's point just outside the covered
             // part: the most covered texel around it.
-            const int i = std::clamp(static_cast<int>(std::floor(s)), 0, pm.width - 1);
-            const int j = std::clamp(static_cast<int>(std::floor(t)), 0, pm.height - 1);
-            double most = 0.0;
-            for (int dj = -1; dj <= 1; ++dj)
-              for (int di = -1; di <= 1; ++di) {
-                const int a = i + di, b = j + dj;
-                if (a < 0 || b < 0 || a >= pm.width || b >= pm.height) continue;
-                const size_t n = static_cast<size_t>(b) * pm.width + a;
-                if (pm.owner[n] >= 0 && pm.coverage[n] > most) {
-                  most = pm.coverage[n];
-                  centre_owner = pm.owner[n];
-                }
-              }
-            if (centre_owner < 0) continue;
+            const int n = most_covered_around(pm, std::clamp(static_cast<int>(std::floor(s)), 0, pm.width - 1),
+                                              std::clamp(static_cast<int>(std::floor(t)), 0, pm.height - 1), 0.0);
+            if (n < 0) continue;
+            centre_owner = pm.owner[n];
           }
           const double delta = cube.delta(f, x, y);
           // Samples at most half a texel apart: texels per pixel here, from
@@ -863,6 +863,11 @@ PixmapSolver::PixmapSolver(const Scene& scene, const PixmapOptions& options, con
     m.rho.push_back(scene.materials[pm.material].reflectance);
     m.emission.push_back(scene.materials[pm.material].emission);
   }
+  for (size_t k = 0; k < m.layout.pixmaps.size(); ++k) {
+    const Pixmap& pm = m.layout.pixmaps[k];
+    for (long long i = 0; i < pm.texels(); ++i)
+      if (pm.owner[i] == i) m.power_emitted += m.emission[k] * pm.area[i];
+  }
   m.shooter_of.assign(static_cast<size_t>(m.layout.texels), -1);
   for (size_t s = 0; s < m.layout.shooters.size(); ++s)
     for (int t : m.layout.shooters[s].texels) m.shooter_of[m.global(m.layout.shooters[s].pixmap, t)] = static_cast<int>(s);
@@ -873,6 +878,8 @@ PixmapSolver::PixmapSolver(const Scene& scene, const PixmapOptions& options, con
 PixmapSolver::~PixmapSolver() = default;
 
 const PixmapLayout& PixmapSolver::layout() const { return impl_->layout; }
+
+Rgb PixmapSolver::power_emitted() const { return impl_->power_emitted; }
 
 PixmapState PixmapSolver::initial_state() const {
   const Impl& m = *impl_;
@@ -951,11 +958,7 @@ PixmapRun PixmapSolver::run(PixmapState start, const PixmapCallbacks& cb) const 
   PixmapRun r;
   r.state = std::move(start);
   PixmapState& st = r.state;
-  for (size_t k = 0; k < L.pixmaps.size(); ++k) {
-    const Pixmap& pm = L.pixmaps[k];
-    for (long long i = 0; i < pm.texels(); ++i)
-      if (pm.owner[i] == i) r.power_emitted += m.emission[k] * pm.area[i];
-  }
+  r.power_emitted = m.power_emitted;
   const size_t ns = L.shooters.size();
   std::vector<double> power(ns, 0.0);  // sum of the channels' unshot power
   auto shooter_power = [&](size_t s) {

@@ -150,6 +150,9 @@ public:
   PixmapSolver& operator=(const PixmapSolver&) = delete;
 
   const PixmapLayout& layout() const;
+  // Emitted power: E x area summed over the texels (the patches' E x area,
+  // less the parts inside closed objects).
+  Rgb power_emitted() const;
   // The state before any shot: B = unshot = E.
   PixmapState initial_state() const;
   // Shoots from `start` (initial_state() or a checked saved state) until the

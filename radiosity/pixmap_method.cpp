@@ -15,8 +15,7 @@ namespace {
 
 // The result of a state: the display mesh with its values, the counts and
 // the state itself for the files.
-MethodResult result_of(const Scene& scene, const std::shared_ptr<const PixmapSolver>& solver, const PixmapState& state,
-                       bool convex) {
+MethodResult result_of(const std::shared_ptr<const PixmapSolver>& solver, const PixmapState& state, bool convex) {
   MethodResult r;
   auto out = std::make_shared<PixmapOutput>();
   out->solver = solver;
@@ -34,12 +33,7 @@ MethodResult result_of(const Scene& scene, const std::shared_ptr<const PixmapSol
   st.convex_enclosure = convex;
   st.power_absorbed = state.power_absorbed;
   st.power_escaped = state.power_escaped;
-  for (size_t k = 0; k < L.pixmaps.size(); ++k) {
-    const Pixmap& pm = L.pixmaps[k];
-    const Rgb e = scene.materials[pm.material].emission;
-    for (long long i = 0; i < pm.texels(); ++i)
-      if (pm.owner[i] == i) st.power_emitted += e * pm.area[i];
-  }
+  st.power_emitted = solver->power_emitted();
   r.pixmaps = std::move(out);
   return r;
 }
@@ -66,11 +60,11 @@ Method make_pixmap_method() {
   };
   m.quick = {{"hemicube_res", "64"}};
   m.resumable = true;
-  // Measured at the quick options: furnace texels within 3.1% at rho 0.5 and
-  // 10.2% at rho 0.9
-  // (the default texel, block 4; 21% before the near field took Lambert's
-  // exact factor next to edges), their area mean exact; Howell's plates
-  // +0.14%, rotated scenes 1.3%; the residual (unshot / radiosity) 2.4e-4
+  // Measured at hemicube 64 (the quick options), the default texel and block
+  // 4: a rho 0.9 furnace's worst texel 10.2% off (31% before the near
+  // field), at rho 0.5 B - E within 3.1% (the bench); their area mean
+  // exact; Howell's plates
+  // +0.14%; rotated scenes 1.4%; the residual (unshot / radiosity) 4.4e-4
   // on the Cornell box at --unshot 1e-3.
   m.accuracy = {0.12, 0.02, 1e-3, false, false};
   m.texel_field = true;
@@ -106,13 +100,13 @@ Method make_pixmap_method() {
     pc.snapshot_every = static_cast<long long>(opts.number("snapshot_every"));
     if (cb.on_round)
       pc.on_snapshot = [&](const PixmapState& s) {
-        cb.on_round(result_of(scene, solver, s, convex), static_cast<int>(s.shots));
+        cb.on_round(result_of(solver, s, convex), static_cast<int>(s.shots));
       };
     const auto t0 = std::chrono::steady_clock::now();
     const PixmapRun run = solver->run(std::move(start), pc);
     const double run_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     const auto t1 = std::chrono::steady_clock::now();
-    MethodResult r = result_of(scene, solver, run.state, convex);
+    MethodResult r = result_of(solver, run.state, convex);
     const double display_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
     r.interrupted = run.interrupted;
     SolveStats& st = r.solution.stats;
