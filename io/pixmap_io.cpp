@@ -82,13 +82,12 @@ std::vector<std::string> write_pixmap_state(const std::string& out_dir, const Sc
   std::vector<std::string> written;
   nlohmann::json doc;
   doc["format"] = "radmesh pixmap state";
-  doc["version"] = 1;
+  doc["version"] = 2;
   doc["scene"] = scene.source;
   doc["scene_fingerprint"] = st.scene_fingerprint;
   doc["shots"] = st.shots;
   doc["options"] = {{"texel_size", st.texel_size},       {"max_texels", st.max_texels},
-                    {"hemicube_res", st.hemicube_res},   {"block", st.block},
-                    {"max_oversampling", st.max_oversampling}};
+                    {"hemicube_res", st.hemicube_res},   {"block", st.block}};
   doc["power_absorbed"] = vec(st.power_absorbed);
   doc["power_escaped"] = vec(st.power_escaped);
   doc["pixmaps"] = nlohmann::json::array();
@@ -149,7 +148,9 @@ PixmapState read_pixmap_state(const std::string& dir) {
   auto bad = [&](const std::string& what) { return InputError(json_path + ": " + what); };
   try {
     if (doc.value("format", "") != "radmesh pixmap state") throw bad("not a radmesh pixmap state (\"format\")");
-    if (doc.at("version").get<int>() != 1) throw bad("version " + doc.at("version").dump() + ", expected 1");
+    if (doc.at("version").get<int>() != 2)
+      throw bad("version " + doc.at("version").dump() +
+                ", expected 2 (a state from another radmesh version: its form factors differ; run again)");
     st.scene_fingerprint = doc.at("scene_fingerprint").get<std::string>();
     st.shots = doc.at("shots").get<long long>();
     const auto& o = doc.at("options");
@@ -157,7 +158,6 @@ PixmapState read_pixmap_state(const std::string& dir) {
     st.max_texels = o.at("max_texels").get<long long>();
     st.hemicube_res = o.at("hemicube_res").get<int>();
     st.block = o.at("block").get<int>();
-    st.max_oversampling = o.at("max_oversampling").get<int>();
     for (int c = 0; c < 3; ++c) {
       st.power_absorbed[c] = doc.at("power_absorbed").at(static_cast<size_t>(c)).get<double>();
       st.power_escaped[c] = doc.at("power_escaped").at(static_cast<size_t>(c)).get<double>();

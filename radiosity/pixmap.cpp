@@ -155,7 +155,6 @@ void check_options(const PixmapOptions& o) {
   if (o.block < 1) bad("pixmap block " + std::to_string(o.block) + ": must be >= 1");
   if (!(o.unshot >= 0.0 && o.unshot < 1.0)) bad("--unshot " + format_number(o.unshot) + ": must be in [0, 1)");
   if (o.shots < 0) bad("--shots " + std::to_string(o.shots) + ": must be >= 0");
-  if (o.max_oversampling < 1) bad("pixmap oversampling " + std::to_string(o.max_oversampling) + ": must be >= 1");
   Hemicube::check_resolution(o.hemicube_res);
 }
 
@@ -434,7 +433,6 @@ void check_resumable(const PixmapState& state, const Scene& scene, const PixmapL
   same("--max-texels", static_cast<double>(state.max_texels), static_cast<double>(options.max_texels));
   same("--hemicube-res", state.hemicube_res, options.hemicube_res);
   same("--block", state.block, options.block);
-  same("--max-oversampling", state.max_oversampling, options.max_oversampling);
   if (state.sizes.size() != layout.pixmaps.size())
     refuse(std::to_string(state.sizes.size()) + " pixmaps saved, this layout has " +
            std::to_string(layout.pixmaps.size()));
@@ -484,7 +482,7 @@ struct PixmapSolver::Impl {
     return static_cast<int>(it - layout.pixmaps.begin()) - 1;
   }
 
-  std::vector<RowEntry> compute_row(int s, Hemicube& cube, long long& oversampled) const;
+  std::vector<RowEntry> compute_row(int s, Hemicube& cube, long long& spread_pixels) const;
   void build_display();
 };
 
@@ -538,7 +536,7 @@ bool projected_rect(const Hemicube& cube, int f, const std::array<Vec3, 4>& corn
 
 }  // namespace
 
-std::vector<RowEntry> PixmapSolver::Impl::compute_row(int s, Hemicube& cube, long long& oversampled) const {
+std::vector<RowEntry> PixmapSolver::Impl::compute_row(int s, Hemicube& cube, long long& spread_pixels) const {
   const Shooter& sh = layout.shooters[s];
   const Pixmap& own = layout.pixmaps[sh.pixmap];
   cube.render(sh.centre, own.u, own.v, polygons);
@@ -547,7 +545,6 @@ std::vector<RowEntry> PixmapSolver::Impl::compute_row(int s, Hemicube& cube, lon
   std::vector<std::vector<char>> near_flags(static_cast<size_t>(npm));
   std::vector<double> near_change(static_cast<size_t>(npm), 0.0);
   std::vector<long long> over(static_cast<size_t>(npm), 0);
-  const int kmax = options.max_oversampling;
   // The near field. A hemicube sees from one point, and the shooter's
   // exchange with texels closer than a few times its size (across an edge
   // it shares with them) is not that of its centre: there F is integrated
@@ -613,46 +610,73 @@ std::vector<RowEntry> PixmapSolver::Impl::compute_row(int s, Hemicube& cube, lon
       if (acc[texel] == 0.0) touched.push_back(texel);
       acc[texel] += f;
     };
-    // A sample's share goes to the texels around (s, t) with bilinear
-    // (tent) weights of their centres where all four are whole texels: with
-    // samples at most half a texel apart (the oversampling below), the
-    // weights a texel collects do not alias with the pixel grid as
-    // nearest-texel counting does, and each collects from one texel's area.
-    // Next to a border (a texel partly covered, or not at all), the texel
-    // the point lies in (its owner) takes it all: a partly covered texel
-    // then collects from exactly its covered area, which its value divides
-    // by (tent weights would bring it the light of a whole texel's area).
-    // `fallback` (the owner of the pixel centre's texel) where the point is
-    // on no covered texel.
-    auto splat = [&](double s, double t, double f, int fallback) {
-      const int i0 = static_cast<int>(std::floor(s - 0.5)), j0 = static_cast<int>(std::floor(t - 0.5));
-      if (i0 >= 0 && j0 >= 0 && i0 + 1 < pm.width && j0 + 1 < pm.height) {
-        const size_t a = static_cast<size_t>(j0) * pm.width + i0, b = a + static_cast<size_t>(pm.width);
-        if (pm.whole[a] && pm.whole[a + 1] && pm.whole[b] && pm.whole[b + 1]) {
-          const double fs = s - 0.5 - i0, ft = t - 0.5 - j0;
-          add(static_cast<int>(a), f * (1.0 - fs) * (1.0 - ft));
-          add(static_cast<int>(a + 1), f * fs * (1.0 - ft));
-          add(static_cast<int>(b), f * (1.0 - fs) * ft);
-          add(static_cast<int>(b + 1), f * fs * ft);
-          return;
-        }
+    // A pixel's delta form factor is spread over the texels under its
+    // footprint (the box around its four corners' points on this plane), in
+    // proportion to their overlap: the limit of virtual oversampling, with
+    // no samples to alias against the texel grid. Footprints of neighbouring
+    // pixels share corners, so where the texel axes follow the screen's they
+    // tile the plane exactly; otherwise their boxes overlap a little, which
+    // blurs by at most one footprint and keeps each pixel's sum. A texel
+    // that is not covered, or covered too little to be an element, passes
+    // its share to its owner; with no owner the share goes to `fallback`
+    // (the owner under the pixel's centre).
+    std::vector<double> ws, wt;
+    auto spread = [&](double s0, double s1, double t0, double t1, double f, int fallback) {
+      s0 = std::clamp(s0, 0.0, static_cast<double>(pm.width));
+      s1 = std::clamp(s1, 0.0, static_cast<double>(pm.width));
+      t0 = std::clamp(t0, 0.0, static_cast<double>(pm.height));
+      t1 = std::clamp(t1, 0.0, static_cast<double>(pm.height));
+      const int i0 = std::min(pm.width - 1, static_cast<int>(s0)), i1 = std::min(pm.width - 1, static_cast<int>(s1));
+      const int j0 = std::min(pm.height - 1, static_cast<int>(t0)), j1 = std::min(pm.height - 1, static_cast<int>(t1));
+      if (i0 == i1 && j0 == j1) {
+        const int o = pm.owner[static_cast<size_t>(j0) * pm.width + i0];
+        add(o >= 0 ? o : fallback, f);
+        return;
       }
-      const int o = owner_at(s, t);
-      add(o >= 0 ? o : fallback, f);
+      // Overlap of [a, b] with each unit interval from i0 to i1; a footprint
+      // of zero width (a pixel seen edge on) counts as one point.
+      auto overlaps = [](double a, double b, int i0, int i1, std::vector<double>& w) {
+        w.assign(static_cast<size_t>(i1 - i0 + 1), 0.0);
+        if (i0 == i1 || !(b > a)) {
+          w[0] = 1.0;
+          return 1.0;
+        }
+        for (int i = i0; i <= i1; ++i) w[i - i0] = std::min(b, i + 1.0) - std::max(a, static_cast<double>(i));
+        return b - a;
+      };
+      const double norm = f / (overlaps(s0, s1, i0, i1, ws) * overlaps(t0, t1, j0, j1, wt));
+      for (int j = j0; j <= j1; ++j)
+        for (int i = i0; i <= i1; ++i) {
+          const int o = pm.owner[static_cast<size_t>(j) * pm.width + i];
+          add(o >= 0 ? o : fallback, norm * ws[i - i0] * wt[j - j0]);
+        }
+      ++over[k];
     };
+    std::vector<double> cs, ct;
+    std::vector<char> cok;
     for (int f = 0; f < 5; ++f) {
       int x0, x1, y0, y1;
       if (!projected_rect(cube, f, corners, x0, x1, y0, y1)) continue;
       const Hemicube::Face& F = cube.faces()[f];
       set_face(F);
       const double px = cube.pixel_size();
+      // The points of the pixel corners (x - 1/2, y - 1/2), for x in
+      // [x0, x1 + 1] and y in [y0, y1 + 1].
+      const int cw = x1 - x0 + 2, ch = y1 - y0 + 2;
+      cs.resize(static_cast<size_t>(cw) * ch);
+      ct.resize(cs.size());
+      cok.resize(cs.size());
+      for (int b = 0; b < ch; ++b)
+        for (int a = 0; a < cw; ++a) {
+          const size_t c = static_cast<size_t>(b) * cw + a;
+          cok[c] = hit(cube.pixel_x(x0 + a) - 0.5 * px, cube.pixel_y(f, y0 + b) - 0.5 * px, cs[c], ct[c]);
+        }
       for (int y = y0; y <= y1; ++y)
         for (int x = x0; x <= x1; ++x) {
           const int id = F.id[static_cast<size_t>(y) * F.width + x];
           if (id < 0 || layout.pixmap_of_patch[id] != k) continue;
-          const double sx = cube.pixel_x(x), sy = cube.pixel_y(f, y);
           double s, t;
-          if (!hit(sx, sy, s, t)) continue;
+          if (!hit(cube.pixel_x(x), cube.pixel_y(f, y), s, t)) continue;
           int centre_owner = owner_at(s, t);
           if (centre_owner < 0) {
             // Rounding put the centre's point just outside the covered
@@ -663,29 +687,21 @@ std::vector<RowEntry> PixmapSolver::Impl::compute_row(int s, Hemicube& cube, lon
             centre_owner = pm.owner[n];
           }
           const double delta = cube.delta(f, x, y);
-          // Samples at most half a texel apart: texels per pixel here, from
-          // the neighbouring pixels' points.
-          double sa, ta, sb, tb;
-          int k_over = kmax;
-          if (hit(sx + px, sy, sa, ta) && hit(sx, sy + px, sb, tb)) {
-            const double j = std::max({std::abs(sa - s), std::abs(ta - t), std::abs(sb - s), std::abs(tb - t)});
-            k_over = std::clamp(static_cast<int>(std::ceil(2.0 * j - 1e-9)), 1, kmax);
-          }
-          if (k_over == 1) {
-            splat(s, t, delta, centre_owner);
+          const size_t c = static_cast<size_t>(y - y0) * cw + (x - x0);
+          const size_t q[4] = {c, c + 1, c + cw, c + cw + 1};
+          if (!(cok[q[0]] && cok[q[1]] && cok[q[2]] && cok[q[3]])) {
+            // A corner beyond this plane's horizon: the centre's texel.
+            add(centre_owner, delta);
             continue;
           }
-          ++over[k];
-          const double w = delta / (k_over * k_over);
-          for (int b = 0; b < k_over; ++b)
-            for (int a = 0; a < k_over; ++a) {
-              const double qx = sx + ((a + 0.5) / k_over - 0.5) * px, qy = sy + ((b + 0.5) / k_over - 0.5) * px;
-              double qs, qt;
-              if (hit(qx, qy, qs, qt))
-                splat(qs, qt, w, centre_owner);
-              else
-                add(centre_owner, w);
-            }
+          double s0 = cs[q[0]], s1 = s0, t0 = ct[q[0]], t1 = t0;
+          for (int e = 1; e < 4; ++e) {
+            s0 = std::min(s0, cs[q[e]]);
+            s1 = std::max(s1, cs[q[e]]);
+            t0 = std::min(t0, ct[q[e]]);
+            t1 = std::max(t1, ct[q[e]]);
+          }
+          spread(s0, s1, t0, t1, delta, centre_owner);
         }
     }
     // The near field: every whole texel within reach that the hemicube saw,
@@ -754,7 +770,7 @@ std::vector<RowEntry> PixmapSolver::Impl::compute_row(int s, Hemicube& cube, lon
       if (!near_flags[k][e]) entry.f = static_cast<float>(entry.f * scale);
       row.push_back(entry);
     }
-    oversampled += over[k];
+    spread_pixels += over[k];
   }
   return row;
 }
@@ -889,7 +905,6 @@ PixmapState PixmapSolver::initial_state() const {
   st.max_texels = m.options.max_texels;
   st.hemicube_res = m.options.hemicube_res;
   st.block = m.options.block;
-  st.max_oversampling = m.options.max_oversampling;
   for (size_t k = 0; k < m.layout.pixmaps.size(); ++k) {
     const Pixmap& pm = m.layout.pixmaps[k];
     st.sizes.push_back({pm.width, pm.height});
@@ -1005,7 +1020,7 @@ PixmapRun PixmapSolver::run(PixmapState start, const PixmapCallbacks& cb) const 
       std::vector<RowEntry> fresh;
       const std::vector<RowEntry>* row = &cache[best];
       if (!cached[best]) {
-        fresh = m.compute_row(static_cast<int>(best), cube, r.pixels_oversampled);
+        fresh = m.compute_row(static_cast<int>(best), cube, r.pixels_spread);
         ++r.rows_computed;
         const double bytes = static_cast<double>(fresh.size() * sizeof(RowEntry));
         if (cache_bytes + bytes <= m.row_budget) {

@@ -3,8 +3,8 @@
 // the elements, square blocks of texels the shooters. Progressive refinement
 // (Cohen, Chen, Wallace & Greenberg 1988) shoots from the block with the most
 // unshot power through a hemicube item buffer of whole polygons; each pixel
-// that sees a pixmap maps back to one of its texels (virtual oversampling
-// where texels are smaller than pixels). The state (radiosity and unshot
+// that sees a pixmap spreads its delta form factor over the texels under its
+// footprint (virtual oversampling taken to its limit). The state (radiosity and unshot
 // radiosity per texel, in float) can be saved and resumed bit for bit.
 #pragma once
 
@@ -35,9 +35,6 @@ struct PixmapOptions {
   // power, or after `shots` shots in all (0: no limit), whichever is first.
   double unshot = 1e-3;
   long long shots = 0;
-  // Largest number of sub-pixels along a pixel's side when texels are
-  // smaller than pixels (virtual oversampling).
-  int max_oversampling = 8;
 };
 
 // One texel grid: x(s, t) = origin + s texel_u u + t texel_v v, for texel
@@ -104,7 +101,7 @@ struct PixmapState {
   std::string scene_fingerprint;
   double texel_size = 0.0;
   long long max_texels = 0;
-  int hemicube_res = 0, block = 0, max_oversampling = 0;
+  int hemicube_res = 0, block = 0;
   std::vector<std::array<int, 2>> sizes;  // per pixmap: width, height
   std::string source;  // where it was read from, for messages (not saved)
 };
@@ -123,7 +120,7 @@ struct PixmapRun {
   long long shots_this_run = 0;
   long long rows_computed = 0;  // hemicubes rendered
   long long rows_cached = 0;    // rows kept for later shots
-  long long pixels_oversampled = 0;
+  long long pixels_spread = 0;  // pixels whose footprint covers more than one texel
   double unshot_fraction = 0.0;  // unshot power / emitted power (sum of channels)
   Rgb ambient{0.0};              // Cohen et al.'s ambient radiosity at the end
   std::array<double, 3> residual{0, 0, 0};  // max unshot / max radiosity per channel

@@ -125,7 +125,7 @@ Method make_pixmap_method() {
                   count("shots_this_run", static_cast<double>(run.shots_this_run)),
                   count("hemicubes", static_cast<double>(run.rows_computed)),
                   count("rows_cached", static_cast<double>(run.rows_cached)),
-                  count("pixels_oversampled", static_cast<double>(run.pixels_oversampled)),
+                  count("pixels_spread", static_cast<double>(run.pixels_spread)),
                   measure("unshot_fraction", run.unshot_fraction),
                   Counter{"ambient", {run.ambient.x, run.ambient.y, run.ambient.z}, "", true, false},
                   count("interrupted", run.interrupted ? 1.0 : 0.0)};
