@@ -5,7 +5,7 @@
 //
 //   radmesh_bench [--out DIR] [--scenes a,b] [--quick]
 //   radmesh_bench --direct [--out DIR] [--quick]   (meshing study: direct light only)
-//   radmesh_bench --make-reference [--max-edge L] [--rays N] [--reference-out F]   (Cornell box reference)
+//   radmesh_bench --make-reference [--scenes S] [--max-edge L] [--rays N] [--reference-out F]   (stored references)
 //   radmesh_bench --load-times [--out DIR]   (scene loading per format, 10^6 triangles)
 //   radmesh_bench --scaling [--out DIR] [--max-triangles N] [--clusters volume,off] [--time-limit S]
 //   radmesh_bench --progressive [--scenes S] [--settings ...:pixmap:NAME=VALUE]   (pixmap: error at every tenth of its shots)
@@ -54,7 +54,7 @@ struct Settings {
   DiscontinuityMode discontinuity = DiscontinuityMode::contacts;
   std::string method = "matrix";  // a name in methods()
   OptionValues options = {};      // the method's options (the rest take defaults)
-  FieldMode field = FieldMode::gather;  // "field=MODE" in --settings
+  FieldMode field = FieldMode::automatic;  // "field=MODE" in --settings; auto as in radmesh run
 };
 
 // "epsilon=0.001;tvertex=split": the options of a row, in the CSV and series names.
@@ -71,6 +71,9 @@ struct Scenario {
   // part B - E (see reflected_part).
   std::function<std::vector<Rgb>(const Scene&, const std::vector<SurfaceSample>&)> reference;
   std::vector<Settings> sweep, quick;
+  // A scene with no closed form keeps its reference in data/<name>/reference.csv,
+  // made by --make-reference with this element size (scene units).
+  double reference_edge = 0.0;
 };
 
 // Per-sample constant E / (1 - rho): the furnace's closed form.
@@ -119,7 +122,7 @@ std::vector<Rgb> direct_reference(const Scene& s, const std::vector<SurfaceSampl
 // A stored converged solution (see data/README.md), at the same samples.
 std::vector<Rgb> stored_reference(const std::string& csv, const Scene& s, const std::vector<SurfaceSample>& samples) {
   std::ifstream in(csv);
-  if (!in) throw IoError(csv + ": no reference; make it with radmesh_bench --make-reference");
+  if (!in) throw IoError(csv + ": no reference; make it with radmesh_bench --make-reference --scenes NAME");
   std::vector<Rgb> r;
   std::string line;
   int ln = 0;
@@ -176,9 +179,11 @@ std::vector<Scenario> scenes(const std::string& data) {
                     {0.4, 16, 1, DiscontinuityMode::off, "matrix", {}, FieldMode::gather}};
   out.push_back({"floating_occluder", "floating_occluder/floating_occluder.obj", direct_reference, floating,
                  floating_quick});
-  const std::string ref = data + "/cornell_box/reference.csv";
-  out.push_back({"cornell_box", "cornell_box/cornell_box.obj",
-                 [ref](const Scene& s, const std::vector<SurfaceSample>& sm) { return stored_reference(ref, s, sm); },
+  auto stored = [&data](const std::string& name) {
+    const std::string csv = data + "/" + name + "/reference.csv";
+    return [csv](const Scene& s, const std::vector<SurfaceSample>& sm) { return stored_reference(csv, s, sm); };
+  };
+  out.push_back({"cornell_box", "cornell_box/cornell_box.obj", stored("cornell_box"),
                  {{160, 16, 1},
                   {120, 16, 1},
                   {90, 16, 1},
@@ -217,15 +222,34 @@ std::vector<Scenario> scenes(const std::string& data) {
                   {45, 16, 1, DiscontinuityMode::full, "matrix", {}, FieldMode::mean},
                   // Pixmap radiosity: texel size (mm) and hemicube resolution;
                   // the initial mesh is not used (its own field: texels).
-                  {1000, 16, 1, DiscontinuityMode::off, "pixmap", {{"texel_size", "20"}, {"hemicube_res", "64"}}, FieldMode::automatic},
-                  {1000, 16, 1, DiscontinuityMode::off, "pixmap", {{"texel_size", "15"}, {"hemicube_res", "128"}}, FieldMode::automatic},
-                  {1000, 16, 1, DiscontinuityMode::off, "pixmap", {{"texel_size", "12"}, {"hemicube_res", "128"}}, FieldMode::automatic},
-                  {1000, 16, 1, DiscontinuityMode::off, "pixmap", {{"texel_size", "12"}, {"hemicube_res", "256"}}, FieldMode::automatic},
-                  {1000, 16, 1, DiscontinuityMode::off, "pixmap", {{"texel_size", "10"}, {"hemicube_res", "128"}}, FieldMode::automatic}},
+                  {1000, 16, 1, DiscontinuityMode::off, "pixmap", {{"texel_size", "20"}, {"hemicube_res", "64"}}},
+                  {1000, 16, 1, DiscontinuityMode::off, "pixmap", {{"texel_size", "15"}, {"hemicube_res", "64"}}},
+                  {1000, 16, 1, DiscontinuityMode::off, "pixmap", {{"texel_size", "15"}, {"hemicube_res", "128"}}},
+                  {1000, 16, 1, DiscontinuityMode::off, "pixmap", {{"texel_size", "12"}, {"hemicube_res", "128"}}},
+                  {1000, 16, 1, DiscontinuityMode::off, "pixmap", {{"texel_size", "12"}, {"hemicube_res", "256"}}},
+                  {1000, 16, 1, DiscontinuityMode::off, "pixmap", {{"texel_size", "10"}, {"hemicube_res", "128"}}}},
                  {{160, 16, 1},
                   {120, 16, 1},
                   {200, 16, 1, DiscontinuityMode::contacts, "hierarchical", {{"epsilon", "0.003"}}},
-                  {200, 16, 1, DiscontinuityMode::contacts, "hierarchical", {{"epsilon", "0.003"}}, FieldMode::fit}}});
+                  {200, 16, 1, DiscontinuityMode::contacts, "hierarchical", {{"epsilon", "0.003"}}, FieldMode::fit}},
+                 28.0});
+  // A box on an open floor under a small light: light bounces between the
+  // floor and the box's sides (no closed form; a stored reference).
+  std::vector<Settings> box_sweep = {
+      {0.8, 16, 1, DiscontinuityMode::full},
+      {0.5, 16, 1, DiscontinuityMode::full},
+      {0.35, 16, 1, DiscontinuityMode::full},
+      {0.25, 16, 1, DiscontinuityMode::full},
+      {0.8, 16, 1, DiscontinuityMode::contacts, "hierarchical", {{"epsilon", "0.003"}}},
+      {0.8, 16, 1, DiscontinuityMode::contacts, "hierarchical", {{"epsilon", "0.001"}}},
+      {0.8, 16, 1, DiscontinuityMode::contacts, "hierarchical", {{"epsilon", "0.0003"}}}};
+  for (const char* texel : {"0.16", "0.12", "0.08", "0.06"})
+    for (const char* res : {"64", "128", "256"})
+      box_sweep.push_back({1000, 16, 1, DiscontinuityMode::off, "pixmap", {{"texel_size", texel}, {"hemicube_res", res}}});
+  out.push_back({"box_on_floor", "box_on_floor/box_on_floor.obj", stored("box_on_floor"), box_sweep,
+                 {{0.5, 16, 1, DiscontinuityMode::full},
+                  {1000, 16, 1, DiscontinuityMode::off, "pixmap", {{"texel_size", "0.12"}, {"hemicube_res", "64"}}}},
+                 0.1});
   return out;
 }
 
@@ -408,14 +432,17 @@ int field_parts(const Scenario& sc, const Scene& scene, const std::vector<Surfac
   return 0;
 }
 
-// The Cornell box reference: at every sample, the exact direct light
-// (radiosity/direct.h: the visible part of every emitter, clipped exactly)
-// plus the indirect light gathered from a fine matrix solution (its element
-// radiosity less emission, Lambert's point form factor to every element and
-// `rays` shadow rays each). Only the indirect part carries solver and mesh
-// error, and the final gather smooths that.
-int make_reference(const std::string& data, double max_edge, int rays, const std::string& path_out) {
-  const Scene scene = read_obj_scene(data + "/cornell_box/cornell_box.obj");
+// A stored reference (the Cornell box, the box on the floor): at every
+// sample, the exact direct light (radiosity/direct.h: the visible part of
+// every emitter, clipped exactly) plus the indirect light gathered from a fine
+// matrix solution (its element radiosity less emission, Lambert's point form
+// factor to every element and `rays` shadow rays each). Only the indirect
+// part carries solver and mesh error, and the final gather smooths that.
+int make_reference(const std::string& data, const Scenario& sc, double max_edge, int rays, const std::string& path_out) {
+  if (!(sc.reference_edge > 0.0))
+    throw InputError("--make-reference: " + sc.name + " has a closed-form reference; nothing to make");
+  if (!(max_edge > 0.0)) max_edge = sc.reference_edge;
+  const Scene scene = read_obj_scene(data + "/" + sc.obj);
   const auto samples = surface_samples(scene, kSamples);
   MeshingOptions mo;
   mo.max_edge = max_edge;
@@ -439,11 +466,12 @@ int make_reference(const std::string& data, double max_edge, int rays, const std
     value[k] = scene.material_of(samples[k].patch).emission + gathered[k] +
                direct.reflected(samples[k].x, samples[k].patch);
   });
-  const std::string path = path_out.empty() ? data + "/cornell_box/reference.csv" : path_out;
+  const std::string path = path_out.empty() ? data + "/" + sc.name + "/reference.csv" : path_out;
   write_file_atomically(path, [&](std::ostream& out) {
-    out << "# Cornell box reference radiosity at the benchmark's " << samples.size()
+    out << "# " << sc.name << " reference radiosity at the benchmark's " << samples.size()
         << " sample points (radiosity/error_metric.h surface_samples(scene, " << kSamples << ")).\n"
-        << "# Made by: radmesh_bench --make-reference --max-edge " << max_edge << " --rays " << rays
+        << "# Made by: radmesh_bench --make-reference --scenes " << sc.name << " --max-edge " << max_edge
+        << " --rays " << rays
         << ": exact direct light (radiosity/direct.h) plus the indirect light gathered at each point from a "
            "matrix solve with full discontinuity meshing ("
         << mesh.triangle_count() << " elements, receiver quadrature level 3).\n"
@@ -613,7 +641,7 @@ int main(int argc, char** argv) {
   CLI::App app{"radmesh time-versus-error benchmark"};
   std::string out_dir = "bench-out", data = RADMESH_DATA_DIR, only;
   bool quick = false, reference = false, direct = false;
-  double ref_edge = 28.0;
+  double ref_edge = 0.0;
   int ref_rays = 32;
   app.add_option("--out", out_dir, "output directory for bench.csv and bench.png");
   app.add_option("--data", data, "the data directory");
@@ -625,7 +653,8 @@ int main(int argc, char** argv) {
                  "EDGE:RAYS:QUAD_LEVEL[:off|contacts|full[:METHOD[:NAME=VALUE]...]] (repeatable; METHOD a "
                  "method of radmesh run --method, default matrix; NAME=VALUE its options as in radmesh run, "
                  "e.g. 200:16:1:contacts:hierarchical:epsilon=0.001:tvertex=anchor)");
-  app.add_flag("--make-reference", reference, "compute data/cornell_box/reference.csv and exit");
+  app.add_flag("--make-reference", reference,
+               "compute data/NAME/reference.csv for the scenes with a stored reference (or those of --scenes) and exit");
   bool loads = false;
   app.add_flag("--load-times", loads,
                "scene loading instead: a 10^6-triangle grid in every format (and a quarter of it), read_scene "
@@ -639,7 +668,7 @@ int main(int argc, char** argv) {
   app.add_flag("--progressive", progressive,
                "the pixmap method's error at every tenth of its shots (with one --settings: its options); writes "
                "progressive.csv");
-  app.add_option("--max-edge", ref_edge, "reference mesh size (mm)");
+  app.add_option("--max-edge", ref_edge, "reference mesh size in scene units (default: the scene's own)");
   app.add_option("--rays", ref_rays, "reference shadow rays per pair");
   std::string ref_out;
   app.add_option("--reference-out", ref_out, "with --make-reference: write here instead of the data directory");
@@ -665,7 +694,16 @@ int main(int argc, char** argv) {
       for (std::string m; std::getline(ms, m, ',');) so.modes.push_back(m);
       return bench::scaling_benchmark(so);
     }
-    if (reference) return make_reference(data, ref_edge, ref_rays, ref_out);
+    if (reference) {
+      std::vector<Scenario> stored;
+      for (const Scenario& sc : scenes(data))
+        if (sc.reference_edge > 0.0 && (only.empty() || ("," + only + ",").find("," + sc.name + ",") != std::string::npos))
+          stored.push_back(sc);
+      if (!ref_out.empty() && stored.size() != 1)
+        throw InputError("--reference-out needs exactly one scene (--scenes NAME)");
+      for (const Scenario& sc : stored) make_reference(data, sc, ref_edge, ref_rays, ref_out);
+      return 0;
+    }
     if (direct) return direct_study(data, out_dir, quick);
     if (loads) return load_times(out_dir);
     fs::create_directories(out_dir);
