@@ -158,16 +158,18 @@ void check_options(const PixmapOptions& o) {
   Hemicube::check_resolution(o.hemicube_res);
 }
 
-// Whether point x of pixmap pm lies inside a closed object: every one of 7
-// rays into its hemisphere (the normal and six at 60 degrees from it) hits
+// Whether point x of patch `patch` lies inside a closed object: every one of
+// 7 rays into its hemisphere (the normal and six at 60 degrees from it) hits
 // the back of a patch first.
-bool inside_object(const Scene& scene, const Visibility& vis, const Vec3& x, const Pixmap& pm, int patch) {
+bool inside_object(const Scene& scene, const Visibility& vis, const Vec3& x, int patch) {
   const double reach = 4.0 * scene.diagonal();
+  const Vec3 n = scene.patches[patch].normal;
+  const Vec3 u = tangent_of(n), v = glm::cross(n, u);
   for (int r = 0; r < 7; ++r) {
-    Vec3 d = pm.normal;
+    Vec3 d = n;
     if (r > 0) {
       const double phi = (r - 1) * std::numbers::pi / 3.0;
-      d = 0.5 * pm.normal + 0.8660254037844386 * (std::cos(phi) * pm.u + std::sin(phi) * pm.v);
+      d = 0.5 * n + 0.8660254037844386 * (std::cos(phi) * u + std::sin(phi) * v);
     }
     const int hit = vis.first_hit(x, d, reach, patch);
     if (hit < 0 || glm::dot(scene.patches[hit].normal, d) < 0.0) return false;  // nothing, or a front face
@@ -178,8 +180,6 @@ bool inside_object(const Scene& scene, const Visibility& vis, const Vec3& x, con
 PixmapLayout layout_of(const Scene& scene, const Mesh& coarse, const PixmapOptions& options, double memory_bytes,
                        const Visibility* vis) {
   check_options(options);
-  std::function<bool(const Vec3&, const Pixmap&)> enclosed;
-  if (vis) enclosed = [&](const Vec3& x, const Pixmap& pm) { return inside_object(scene, *vis, x, pm, pm.patches[0]); };
   const int np = static_cast<int>(scene.patches.size());
   PixmapLayout L;
   L.texel_size = options.texel_size > 0.0 ? options.texel_size : scene.diagonal() / 80.0;
@@ -227,6 +227,11 @@ PixmapLayout layout_of(const Scene& scene, const Mesh& coarse, const PixmapOptio
     L.pixmaps[L.pixmap_of_patch[p]].patches.push_back(p);
   }
 
+  // Triangles inside closed objects, by the ray test at their centroids.
+  L.enclosed.assign(static_cast<size_t>(coarse.triangle_count()), 0);
+  if (vis)
+    for (int t = 0; t < coarse.triangle_count(); ++t)
+      L.enclosed[t] = inside_object(scene, *vis, coarse.centroid(t), coarse.patch[t]);
   // Each pixmap's frame and grid.
   std::vector<std::vector<int>> triangles_of(L.pixmaps.size());
   for (int t = 0; t < coarse.triangle_count(); ++t) triangles_of[L.pixmap_of_patch[coarse.patch[t]]].push_back(t);
@@ -271,46 +276,28 @@ PixmapLayout layout_of(const Scene& scene, const Mesh& coarse, const PixmapOptio
     }
     pm.coverage.assign(static_cast<size_t>(pm.texels()), 0.0);
     pm.centroid.assign(static_cast<size_t>(pm.texels()), Vec3(0.0));
-    // Coverage from the pieces of the triangles in each quarter of a texel,
-    // less the quarters whose centroid lies inside a closed object standing
-    // on the patch (a block on a floor): light never reaches there, and a
-    // shooter placed there would shoot into the object's back faces.
-    Pixmap fine = pm;
-    fine.width = 2 * pm.width;
-    fine.height = 2 * pm.height;
-    fine.texel_u = 0.5 * pm.texel_u;
-    fine.texel_v = 0.5 * pm.texel_v;
-    const double quarter_area = fine.texel_u * fine.texel_v;
-    std::vector<double> fine_area(static_cast<size_t>(fine.texels()), 0.0);
-    pm.dark_quarter.assign(static_cast<size_t>(fine.texels()), 0);
-    std::vector<Vec3> fine_centroid(static_cast<size_t>(fine.texels()), Vec3(0.0));
+    // Coverage from the pieces of the triangles in each texel, less the
+    // triangles inside a closed object standing on the patch (a block on a
+    // floor): light never reaches there, and a shooter placed there would
+    // shoot into the object's back faces. The coarse mesh is cut along the
+    // contact lines, so each triangle is wholly inside or outside.
     for (int t : triangles_of[k]) {
+      if (L.enclosed[t]) {
+        L.enclosed_area += coarse.area(t);
+        continue;
+      }
       St tri[3];
-      for (int c = 0; c < 3; ++c) tri[c] = st_of(fine, coarse.positions[coarse.triangles[t][c]]);
-      for_each_piece(fine, tri, [&](int i, int j, const St* poly, int n) {
+      for (int c = 0; c < 3; ++c) tri[c] = st_of(pm, coarse.positions[coarse.triangles[t][c]]);
+      for_each_piece(pm, tri, [&](int i, int j, const St* poly, int n) {
         double a;
         St c;
         area_centroid(poly, n, a, c);
-        a = std::abs(a) * quarter_area;
-        const size_t idx = static_cast<size_t>(j) * fine.width + i;
-        fine_area[idx] += a;
-        fine_centroid[idx] += a * point_of(fine, c.s, c.t);
+        a = std::abs(a) * pm.texel_u * pm.texel_v;
+        const size_t idx = static_cast<size_t>(j) * pm.width + i;
+        pm.coverage[idx] += a;
+        pm.centroid[idx] += a * point_of(pm, c.s, c.t);
       });
     }
-    for (int j = 0; j < fine.height; ++j)
-      for (int i = 0; i < fine.width; ++i) {
-        const size_t idx = static_cast<size_t>(j) * fine.width + i;
-        if (fine_area[idx] <= 0.0) continue;
-        const Vec3 c = fine_centroid[idx] / fine_area[idx];
-        if (enclosed && enclosed(c, pm)) {
-          L.enclosed_area += fine_area[idx];
-          pm.dark_quarter[idx] = 1;
-          continue;
-        }
-        const size_t texel = static_cast<size_t>(j / 2) * pm.width + static_cast<size_t>(i / 2);
-        pm.coverage[texel] += fine_area[idx];
-        pm.centroid[texel] += fine_area[idx] * c;
-      }
     const double cell_area = pm.texel_u * pm.texel_v;
     // Owners: a texel less than a quarter covered gives its area to its
     // most covered neighbour that is at least a quarter covered.
@@ -362,6 +349,10 @@ PixmapLayout layout_of(const Scene& scene, const Mesh& coarse, const PixmapOptio
   return L;
 }
 
+// The method's mesh (pixmap_meshing_options): the dark part under a block
+// follows the block's outline exactly.
+Mesh outline_triangulation(const Scene& scene) { return mesh_scene(scene, pixmap_meshing_options(scene)); }
+
 // Texels closer to a shooter's centre than this times the shooter's
 // radius (plus a texel) take Lambert's exact form factor (the near field).
 constexpr double kNearField = 1.5;
@@ -376,7 +367,14 @@ struct RowEntry {
 PixmapLayout make_pixmap_layout(const Scene& scene, const PixmapOptions& options, double memory_bytes) {
   check_options(options);
   const Visibility vis(scene);
-  return layout_of(scene, triangulate_patches(scene), options, memory_bytes, &vis);
+  return layout_of(scene, outline_triangulation(scene), options, memory_bytes, &vis);
+}
+
+MeshingOptions pixmap_meshing_options(const Scene& scene) {
+  MeshingOptions mo;
+  mo.max_edge = scene.diagonal();
+  mo.discontinuity = DiscontinuityMode::contacts;
+  return mo;
 }
 
 std::string scene_fingerprint(const Scene& scene) {
@@ -830,29 +828,10 @@ void PixmapSolver::Impl::build_display() {
           display_texel.push_back(dark ? -1 : texel);
         }
       };
+      const bool dark = layout.enclosed[t];
       for_each_piece(pm, tri, [&](int i, int j, const St* poly, int n) {
-        const size_t idx = static_cast<size_t>(j) * pm.width + i;
-        const int owner = pm.owner[idx];
-        const long long texel = owner >= 0 ? pm.first + owner : -1;
-        // The quarters of the texel inside closed objects (dark_quarter).
-        int dark = 0;
-        for (int q4 = 0; q4 < 4; ++q4)
-          dark += pm.dark_quarter[static_cast<size_t>(2 * j + q4 / 2) * (2 * pm.width) + 2 * i + q4 % 2];
-        if (owner < 0 || dark == 0) {
-          emit(poly, n, texel, owner < 0);
-          return;
-        }
-        // Part inside an object: cut into quarters, so that the dark part
-        // follows the object's outline to half a texel.
-        St a[12], b[12];
-        for (int q4 = 0; q4 < 4; ++q4) {
-          const int qi = q4 % 2, qj = q4 / 2;
-          int m = clip_line(poly, n, a, 0, i + 0.5, qi ? 1.0 : -1.0);
-          m = clip_line(a, m, b, 1, j + 0.5, qj ? 1.0 : -1.0);
-          if (m < 3) continue;
-          const bool q_dark = pm.dark_quarter[static_cast<size_t>(2 * j + qj) * (2 * pm.width) + 2 * i + qi];
-          emit(b, m, texel, q_dark);
-        }
+        const int owner = pm.owner[static_cast<size_t>(j) * pm.width + i];
+        emit(poly, n, owner >= 0 && !dark ? pm.first + owner : -1, dark || owner < 0);
       });
     }
   }
@@ -862,17 +841,20 @@ PixmapSolver::PixmapSolver(const Scene& scene, const PixmapOptions& options, con
     : impl_(std::make_unique<Impl>(scene, options, solve)) {
   Impl& m = *impl_;
   check_options(options);
-  m.coarse = triangulate_patches(scene);
+  m.coarse = outline_triangulation(scene);
   const double memory = memory_limit_bytes(solve);
   {
     const Visibility vis(scene);
     m.layout = layout_of(scene, m.coarse, options, memory, &vis);
   }
   if (m.layout.texels >= (1LL << 32)) throw NumericalError(scene.source + ": more than 2^32 texels; use a larger --texel-size");
-  for (int t = 0; t < m.coarse.triangle_count(); ++t) {
-    const auto& tri = m.coarse.triangles[t];
-    const int p = m.coarse.patch[t];
-    m.polygons.push_back({m.coarse.positions[tri[0]], m.coarse.positions[tri[1]], m.coarse.positions[tri[2]],
+  // The hemicube renders whole polygons (their coarsest triangulation): the
+  // contact lines would only add triangles.
+  const Mesh polygons = triangulate_patches(scene);
+  for (int t = 0; t < polygons.triangle_count(); ++t) {
+    const auto& tri = polygons.triangles[t];
+    const int p = polygons.patch[t];
+    m.polygons.push_back({polygons.positions[tri[0]], polygons.positions[tri[1]], polygons.positions[tri[2]],
                           scene.patches[p].normal, p});
   }
   for (const Pixmap& pm : m.layout.pixmaps) {

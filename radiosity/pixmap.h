@@ -55,9 +55,6 @@ struct Pixmap {
   std::vector<int> owner;
   std::vector<double> area;         // per texel: its area plus the slivers it holds (0 when owned)
   std::vector<char> whole;          // per texel: wholly covered, holding no sliver (area = texel area)
-  // Per quarter texel (a grid of 2 width x 2 height): 1 when its part of the
-  // patches lies inside a closed object (left out of the coverage).
-  std::vector<char> dark_quarter;
 
   long long texels() const { return static_cast<long long>(width) * height; }
   // Texel coordinates (s, t) of point x of the plane.
@@ -83,8 +80,17 @@ struct PixmapLayout {
   // Area of the patches left out because it lies inside closed objects
   // standing on them (the floor under a block): no light reaches it.
   double enclosed_area = 0.0;
+  // Per triangle of the coarse mesh the layout was made from (the patches cut
+  // along their contact lines): 1 when it lies inside a closed object.
+  std::vector<char> enclosed;
   double texel_size = 0.0;           // the texel size asked for (resolved)
 };
+
+// What the pixmap method meshes: every patch cut along its contact lines
+// (where another patch stands on it or passes through), no finer than the
+// mesher's angle bound needs. Each triangle then lies wholly inside or
+// outside every closed object standing on its patch.
+MeshingOptions pixmap_meshing_options(const Scene& scene);
 
 // The texel grids of a scene. Throws InputError when the options are out of
 // range and NumericalError when the texels would not fit in `memory_bytes`.
@@ -139,8 +145,9 @@ struct PixmapCallbacks {
 
 class PixmapSolver {
 public:
-  // `scene` must outlive the solver. Builds the layout and the polygons the
-  // hemicube renders (the patches' coarsest triangulation).
+  // `scene` must outlive the solver. Builds the layout and display mesh on
+  // the patches cut along their contact lines (pixmap_meshing_options), and
+  // the polygons the hemicube renders (the patches' coarsest triangulation).
   PixmapSolver(const Scene& scene, const PixmapOptions& options, const SolveOptions& solve);
   ~PixmapSolver();
   PixmapSolver(const PixmapSolver&) = delete;

@@ -68,14 +68,10 @@ Method make_pixmap_method() {
   // on the Cornell box at --unshot 1e-3.
   m.accuracy = {0.12, 0.02, 1e-3, false, false};
   m.texel_field = true;
-  m.meshing = [](const Scene& scene) {
-    // The geometry is never cut for the solve: the initial mesh is the
-    // coarsest one (the display mesh follows the texels).
-    MeshingOptions mo;
-    mo.max_edge = scene.diagonal();
-    mo.discontinuity = DiscontinuityMode::off;
-    return mo;
-  };
+  // The geometry is never cut finer for the solve: the initial mesh is the
+  // coarsest one with the contact lines, which the solver makes itself
+  // whatever the meshing flags (the display mesh follows the texels).
+  m.meshing = pixmap_meshing_options;
   m.solve = [](const Scene& scene, const Mesh&, const SolveOptions& so, const MethodOptions& opts,
                const SolveCallbacks& cb) {
     PixmapOptions po;

@@ -121,7 +121,7 @@ TEST(PixmapLayout, TexelAreasAddUpToThePatchesAndCoplanarNeighboursShareAGrid) {
       EXPECT_EQ(L.pixmap_of_patch[p], ceiling);
     }
   // Every patch's area is in a texel, but the floor under the two blocks
-  // (inside closed objects), in quarter texels.
+  // (inside closed objects), cut exactly along the blocks' outlines.
   double total = 0.0, covered = 0.0, footprints = 0.0;
   for (size_t p = 0; p < scene.patches.size(); ++p) total += scene.patch_area(static_cast<int>(p));
   for (const char* block : {"short_block", "tall_block"}) footprints += scene.patch_area(test::patch_named(scene, block));
@@ -141,7 +141,7 @@ TEST(PixmapLayout, TexelAreasAddUpToThePatchesAndCoplanarNeighboursShareAGrid) {
   }
   EXPECT_NEAR((covered + L.enclosed_area) / total, 1.0, 1e-12);
   std::printf("enclosed %.1f, the blocks' footprints %.1f\n", L.enclosed_area, footprints);
-  EXPECT_NEAR(L.enclosed_area / footprints, 1.0, 0.05);
+  EXPECT_NEAR(L.enclosed_area / footprints, 1.0, 1e-9);
   o.max_texels = 100;
   for (const Pixmap& pm : make_pixmap_layout(scene, o, 1e9).pixmaps) EXPECT_LE(pm.texels(), 100);
   EXPECT_THROW(make_pixmap_layout(scene, o, 1e3), NumericalError);
@@ -348,7 +348,10 @@ TEST(PixmapSolver, DisplayMeshCoversEveryPatchAndEachTriangleLiesInItsTexel) {
   const auto areas = test::patch_areas(scene, mesh);
   for (size_t p = 0; p < scene.patches.size(); ++p) EXPECT_NEAR(areas[p] / scene.patch_area(static_cast<int>(p)), 1.0, 1e-9);
   const PixmapLayout& L = solver.layout();
+  double dark = 0.0, footprints = 0.0;
+  for (const char* block : {"short_block", "tall_block"}) footprints += scene.patch_area(test::patch_named(scene, block));
   for (int t = 0; t < mesh.triangle_count(); ++t) {
+    if (texel[t] < 0) dark += mesh.area(t);
     const Pixmap& pm = L.pixmaps[L.pixmap_of_patch[mesh.patch[t]]];
     const Vec3 c = mesh.centroid(t);
     const int i = static_cast<int>(std::floor(pm.s_of(c))), j = static_cast<int>(std::floor(pm.t_of(c)));
@@ -361,6 +364,9 @@ TEST(PixmapSolver, DisplayMeshCoversEveryPatchAndEachTriangleLiesInItsTexel) {
     const Vec3 n = glm::cross(mesh.positions[v[1]] - mesh.positions[v[0]], mesh.positions[v[2]] - mesh.positions[v[0]]);
     EXPECT_GE(glm::dot(n, scene.patches[mesh.patch[t]].normal), 0.0);
   }
+  // What is shown dark is exactly the floor under the blocks: no dark teeth
+  // outside their outlines, no lit floor under them.
+  EXPECT_NEAR(dark / footprints, 1.0, 1e-9);
   for (const Rgb& b : sol.nodal.radiosity) EXPECT_TRUE(std::isfinite(b.x) && b.x >= 0.0);
 }
 
