@@ -362,6 +362,23 @@ struct RowEntry {
   float f;
 };
 
+// A shooter's row. The far texels take the hemicube's factor from the
+// block as a whole; the near ones, from each of the shooter's texels
+// (sh.texels order) by Lambert's formula, so that a block straddling a
+// shadow shoots its lit and dark texels' power from where they are. Each
+// source texel i delivers far_scale[i] x its power along the far entries,
+// which keeps its row's sum at the hemicube's (1 in a closed scene).
+struct Row {
+  std::vector<RowEntry> far;         // increasing texel; F from the block, before far_scale
+  std::vector<uint32_t> near;        // increasing global texel
+  std::vector<float> near_f;         // near.size() x sources: F from each source texel
+  std::vector<float> far_scale;      // per source texel
+  double bytes() const {
+    return static_cast<double>(far.size() * sizeof(RowEntry) + near.size() * sizeof(uint32_t) +
+                               (near_f.size() + far_scale.size()) * sizeof(float));
+  }
+};
+
 }  // namespace
 
 PixmapLayout make_pixmap_layout(const Scene& scene, const PixmapOptions& options, double memory_bytes) {
@@ -480,7 +497,7 @@ struct PixmapSolver::Impl {
     return static_cast<int>(it - layout.pixmaps.begin()) - 1;
   }
 
-  std::vector<RowEntry> compute_row(int s, Hemicube& cube, long long& spread_pixels) const;
+  Row compute_row(int s, Hemicube& cube, long long& spread_pixels) const;
   void build_display();
 };
 
@@ -534,35 +551,42 @@ bool projected_rect(const Hemicube& cube, int f, const std::array<Vec3, 4>& corn
 
 }  // namespace
 
-std::vector<RowEntry> PixmapSolver::Impl::compute_row(int s, Hemicube& cube, long long& spread_pixels) const {
+Row PixmapSolver::Impl::compute_row(int s, Hemicube& cube, long long& spread_pixels) const {
   const Shooter& sh = layout.shooters[s];
   const Pixmap& own = layout.pixmaps[sh.pixmap];
   cube.render(sh.centre, own.u, own.v, polygons);
   const int npm = static_cast<int>(layout.pixmaps.size());
-  std::vector<std::vector<RowEntry>> parts(static_cast<size_t>(npm));
-  std::vector<std::vector<char>> near_flags(static_cast<size_t>(npm));
-  std::vector<double> near_change(static_cast<size_t>(npm), 0.0);
+  const size_t nsrc = sh.texels.size();
+  std::vector<std::vector<RowEntry>> far_parts(static_cast<size_t>(npm));
+  std::vector<std::vector<uint32_t>> near_parts(static_cast<size_t>(npm));
+  std::vector<std::vector<float>> near_values(static_cast<size_t>(npm));
+  // Per pixmap: the hemicube's factor to its near texels, and per source
+  // texel the exact one (sum over the near texels).
+  std::vector<double> near_hemicube(static_cast<size_t>(npm), 0.0);
+  std::vector<std::vector<double>> near_exact(static_cast<size_t>(npm), std::vector<double>(nsrc, 0.0));
   std::vector<long long> over(static_cast<size_t>(npm), 0);
   // The near field. A hemicube sees from one point, and the shooter's
   // exchange with texels closer than a few times its size (across an edge
   // it shares with them) is not that of its centre: there F is integrated
   // exactly instead, Lambert's formula to the texel from points spread over
-  // the shooter (2 x 2 per whole texel), for the texels the hemicube saw.
+  // each source texel (2 x 2 per whole texel), for the texels the hemicube
+  // saw.
   struct Source {
     Vec3 x;
-    double w;
+    double w;    // share of its texel
+    size_t i;    // its texel, in sh.texels
   };
   std::vector<Source> sources;
   double reach = 0.0;
-  for (int t : sh.texels) {
-    const double w = own.area[t] / sh.area;
+  for (size_t i = 0; i < nsrc; ++i) {
+    const int t = sh.texels[i];
     if (own.whole[t]) {
       for (int q = 0; q < 4; ++q)
         sources.push_back({own.centroid[t] + ((q % 2 ? 0.25 : -0.25) * own.texel_u) * own.u +
                                ((q / 2 ? 0.25 : -0.25) * own.texel_v) * own.v,
-                           0.25 * w});
+                           0.25, i});
     } else {
-      sources.push_back({own.centroid[t], w});
+      sources.push_back({own.centroid[t], 1.0, i});
     }
     reach = std::max(reach, glm::length(own.centroid[t] - sh.centre) + std::hypot(own.texel_u, own.texel_v));
   }
@@ -728,48 +752,45 @@ std::vector<RowEntry> PixmapSolver::Impl::compute_row(int s, Hemicube& cube, lon
         }
     }
     std::sort(touched.begin(), touched.end());
-    auto& part = parts[k];
-    auto& near = near_flags[k];
-    part.reserve(touched.size());
-    near.reserve(touched.size());
+    std::vector<double> per(nsrc);
     for (int texel : touched) {
-      double f = acc[texel];
-      const bool is_near = !near_texel.empty() && near_texel[texel];
-      if (is_near) {
-        const int i = texel % pm.width, j = texel / pm.width;
-        const Vec3 quad[4] = {point_of(pm, i, j), point_of(pm, i + 1, j), point_of(pm, i + 1, j + 1),
-                              point_of(pm, i, j + 1)};
-        double exact = 0.0;
-        for (const Source& src : sources) exact += src.w * point_polygon_form_factor(src.x, own.normal, quad, 4, pm.normal);
-        near_change[k] += exact - f;
-        f = exact;
+      const double f = acc[texel];
+      if (near_texel.empty() || !near_texel[texel]) {
+        if (f > 0.0) far_parts[k].push_back({static_cast<uint32_t>(pm.first + texel), static_cast<float>(f)});
+        continue;
       }
-      if (!(f > 0.0)) continue;
-      part.push_back({static_cast<uint32_t>(pm.first + texel), static_cast<float>(f)});
-      near.push_back(is_near);
+      const int i = texel % pm.width, j = texel / pm.width;
+      const Vec3 quad[4] = {point_of(pm, i, j), point_of(pm, i + 1, j), point_of(pm, i + 1, j + 1),
+                            point_of(pm, i, j + 1)};
+      std::fill(per.begin(), per.end(), 0.0);
+      for (const Source& src : sources)
+        per[src.i] += src.w * point_polygon_form_factor(src.x, own.normal, quad, 4, pm.normal);
+      near_hemicube[k] += f;
+      near_parts[k].push_back(static_cast<uint32_t>(pm.first + texel));
+      for (size_t q = 0; q < nsrc; ++q) {
+        near_values[k].push_back(static_cast<float>(per[q]));
+        near_exact[k][q] += per[q];
+      }
     }
   });
-  // The far entries give or take what the near field changed, so that the
-  // row keeps the hemicube's sum (1 in a closed scene).
-  double far = 0.0, change = 0.0;
+  // Each source texel's far entries give or take what the near field
+  // changed, so that its row keeps the hemicube's sum (1 in a closed scene).
+  double far = 0.0, hemicube = 0.0;
+  std::vector<double> exact(nsrc, 0.0);
+  Row row;
   for (int k = 0; k < npm; ++k) {
-    change += near_change[k];
-    for (size_t e = 0; e < parts[k].size(); ++e)
-      if (!near_flags[k][e]) far += parts[k][e].f;
-  }
-  const double scale = far > 0.0 ? std::max(0.0, (far - change) / far) : 1.0;
-  std::vector<RowEntry> row;
-  size_t total = 0;
-  for (const auto& p : parts) total += p.size();
-  row.reserve(total);
-  for (int k = 0; k < npm; ++k) {
-    for (size_t e = 0; e < parts[k].size(); ++e) {
-      RowEntry entry = parts[k][e];
-      if (!near_flags[k][e]) entry.f = static_cast<float>(entry.f * scale);
-      row.push_back(entry);
-    }
+    for (const RowEntry& e : far_parts[k]) far += e.f;
+    hemicube += near_hemicube[k];
+    for (size_t q = 0; q < nsrc; ++q) exact[q] += near_exact[k][q];
+    row.far.insert(row.far.end(), far_parts[k].begin(), far_parts[k].end());
+    row.near.insert(row.near.end(), near_parts[k].begin(), near_parts[k].end());
+    row.near_f.insert(row.near_f.end(), near_values[k].begin(), near_values[k].end());
     spread_pixels += over[k];
   }
+  hemicube += far;
+  row.far_scale.resize(nsrc);
+  for (size_t q = 0; q < nsrc; ++q)
+    row.far_scale[q] = static_cast<float>(far > 0.0 ? std::max(0.0, (hemicube - exact[q]) / far) : 1.0);
   return row;
 }
 
@@ -937,15 +958,20 @@ std::vector<std::vector<float>> PixmapSolver::display(const PixmapState& state, 
   return out;
 }
 
-std::vector<std::pair<long long, float>> PixmapSolver::form_factors(int s) const {
+std::vector<std::vector<std::pair<long long, double>>> PixmapSolver::form_factors(int s) const {
   if (s < 0 || s >= static_cast<int>(impl_->layout.shooters.size()))
     throw InputError("shooter " + std::to_string(s) + " does not exist");
   Hemicube cube(impl_->options.hemicube_res);
   long long over = 0;
-  std::vector<std::pair<long long, float>> out;
-  run_in_arena(impl_->solve.threads, [&] {
-    for (const RowEntry& e : impl_->compute_row(s, cube, over)) out.emplace_back(e.texel, e.f);
-  });
+  Row row;
+  run_in_arena(impl_->solve.threads, [&] { row = impl_->compute_row(s, cube, over); });
+  const size_t nsrc = row.far_scale.size();
+  std::vector<std::vector<std::pair<long long, double>>> out(nsrc);
+  for (size_t q = 0; q < nsrc; ++q) {
+    for (const RowEntry& e : row.far) out[q].emplace_back(e.texel, static_cast<double>(e.f) * row.far_scale[q]);
+    for (size_t n = 0; n < row.near.size(); ++n) out[q].emplace_back(row.near[n], row.near_f[n * nsrc + q]);
+    std::sort(out[q].begin(), out[q].end());
+  }
   return out;
 }
 
@@ -969,11 +995,12 @@ PixmapRun PixmapSolver::run(PixmapState start, const PixmapCallbacks& cb) const 
   for (size_t s = 0; s < ns; ++s) power[s] = shooter_power(s);
   const double emitted = r.power_emitted.x + r.power_emitted.y + r.power_emitted.z;
   const double target = m.options.unshot * emitted;
-  std::vector<std::vector<RowEntry>> cache(ns);
+  std::vector<Row> cache(ns);
   std::vector<char> cached(ns, 0);
   double cache_bytes = 0.0;
   std::vector<long long> stamp(ns, -1);
   std::vector<int> touched;
+  std::vector<Rgb> phis;  // per source texel of the shooter: its unshot power
   Hemicube cube(m.options.hemicube_res);
   const double log_goal = target > 0.0 && emitted > 0.0 ? std::log(target / emitted) : 0.0;
 
@@ -999,12 +1026,12 @@ PixmapRun PixmapSolver::run(PixmapState start, const PixmapCallbacks& cb) const 
       }
       // The row of the shooter: cached, or rendered now.
       const auto t0 = Clock::now();
-      std::vector<RowEntry> fresh;
-      const std::vector<RowEntry>* row = &cache[best];
+      Row fresh;
+      const Row* row = &cache[best];
       if (!cached[best]) {
         fresh = m.compute_row(static_cast<int>(best), cube, r.pixels_spread);
         ++r.rows_computed;
-        const double bytes = static_cast<double>(fresh.size() * sizeof(RowEntry));
+        const double bytes = fresh.bytes();
         if (cache_bytes + bytes <= m.row_budget) {
           cache[best] = std::move(fresh);
           cached[best] = 1;
@@ -1017,48 +1044,61 @@ PixmapRun PixmapSolver::run(PixmapState start, const PixmapCallbacks& cb) const 
       r.seconds_hemicubes += seconds_since(t0);
       const auto t1 = Clock::now();
       // Shoot: the block's unshot power leaves; each texel it reaches gets
-      // rho times power x F / area.
+      // rho times the power arriving / its area: along the far entries the
+      // source texels' power times their far_scale, along the near ones
+      // each source texel's own.
       const Shooter& sh = L.shooters[best];
       const Pixmap& spm = L.pixmaps[sh.pixmap];
-      Rgb phi(0.0);
-      for (int t : sh.texels)
+      const size_t nsrc = sh.texels.size();
+      phis.assign(nsrc, Rgb(0.0));
+      Rgb phi(0.0), phi_far(0.0);
+      for (size_t q = 0; q < nsrc; ++q) {
+        const int t = sh.texels[q];
         for (int c = 0; c < 3; ++c) {
           float& u = st.unshot[sh.pixmap][t * 3 + c];
-          phi[c] += static_cast<double>(u) * spm.area[t];
+          phis[q][c] = static_cast<double>(u) * spm.area[t];
           u = 0.0f;
         }
+        phi += phis[q];
+        phi_far += phis[q] * static_cast<double>(row->far_scale[q]);
+      }
       power[best] = 0.0;
-      double received = 0.0;
+      Rgb received(0.0);
       int k = -1;
       long long k_end = 0;
       ++st.shots;
       ++r.shots_this_run;
       touched.clear();
-      for (const RowEntry& e : *row) {
-        if (k < 0 || e.texel >= k_end) {
-          k = m.pixmap_of_global(e.texel);
+      auto deposit = [&](uint32_t texel, const Rgb& arriving) {
+        if (k < 0 || texel < L.pixmaps[k].first || texel >= k_end) {
+          k = m.pixmap_of_global(texel);
           k_end = L.pixmaps[k].first + L.pixmaps[k].texels();
         }
         const Pixmap& pm = L.pixmaps[k];
-        const long long i = e.texel - pm.first;
-        const double f = e.f;
-        received += f;
+        const long long i = texel - pm.first;
+        received += arriving;
         for (int c = 0; c < 3; ++c) {
-          const double dh = phi[c] * f / pm.area[i];
+          const double dh = arriving[c] / pm.area[i];
           const double db = m.rho[k][c] * dh;
           float& b = st.radiosity[k][i * 3 + c];
           float& u = st.unshot[k][i * 3 + c];
           b = static_cast<float>(static_cast<double>(b) + db);
           u = static_cast<float>(static_cast<double>(u) + db);
-          st.power_absorbed[c] += (1.0 - m.rho[k][c]) * dh * pm.area[i];
+          st.power_absorbed[c] += (1.0 - m.rho[k][c]) * arriving[c];
         }
-        const int s = m.shooter_of[e.texel];
+        const int s = m.shooter_of[texel];
         if (s >= 0 && stamp[s] != st.shots) {
           stamp[s] = st.shots;
           touched.push_back(s);
         }
+      };
+      for (const RowEntry& e : row->far) deposit(e.texel, phi_far * static_cast<double>(e.f));
+      for (size_t n = 0; n < row->near.size(); ++n) {
+        Rgb arriving(0.0);
+        for (size_t q = 0; q < nsrc; ++q) arriving += phis[q] * static_cast<double>(row->near_f[n * nsrc + q]);
+        deposit(row->near[n], arriving);
       }
-      st.power_escaped += phi * std::max(0.0, 1.0 - received);
+      for (int c = 0; c < 3; ++c) st.power_escaped[c] += std::max(0.0, phi[c] - received[c]);
       for (int s : touched) power[s] = shooter_power(static_cast<size_t>(s));
       r.seconds_shots += seconds_since(t1);
       if (cb.on_snapshot && cb.snapshot_every > 0 && st.shots % cb.snapshot_every == 0) cb.on_snapshot(st);

@@ -163,9 +163,10 @@ public:
   // unshot fraction or the shot count of the options is reached.
   PixmapRun run(PixmapState start, const PixmapCallbacks& callbacks = {}) const;
 
-  // Form factors from shooter `s` to texels, (global texel index, F) in
-  // increasing texel order, as the shots use them (rounded to float).
-  std::vector<std::pair<long long, float>> form_factors(int s) const;
+  // Form factors from each texel of shooter `s` (in Shooter::texels order)
+  // to texels, (global texel index, F) in increasing texel order, as the
+  // shots use them: a source texel's power times F reaches the texel.
+  std::vector<std::vector<std::pair<long long, double>>> form_factors(int s) const;
 
   // Radiosity per texel for display: the state plus rho times `ambient`,
   // owners' values copied to the texels they hold (per pixmap, RGB floats
