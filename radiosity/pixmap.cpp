@@ -923,7 +923,10 @@ PixmapState PixmapSolver::initial_state() const {
 
 Rgb PixmapSolver::ambient(const PixmapState& state) const {
   // Cohen et al. 1988: the unshot power spread over the scene's area,
-  // times the interreflection factor 1 / (1 - mean rho).
+  // times the interreflection factor 1 / (1 - mean rho); in an open scene
+  // only the share of it that stays, taken as the share of the power ended
+  // so far that was absorbed rather than escaped, so that the power the
+  // ambient term absorbs is what the unshot power will leave in the scene.
   const Impl& m = *impl_;
   Rgb unshot(0.0), rho_area(0.0);
   double area = 0.0;
@@ -938,7 +941,11 @@ Rgb PixmapSolver::ambient(const PixmapState& state) const {
   }
   if (!(area > 0.0)) return Rgb(0.0);
   Rgb amb(0.0);
-  for (int c = 0; c < 3; ++c) amb[c] = unshot[c] / area / (1.0 - rho_area[c] / area);
+  for (int c = 0; c < 3; ++c) {
+    const double ended = state.power_absorbed[c] + state.power_escaped[c];
+    const double stays = ended > 0.0 ? state.power_absorbed[c] / ended : 1.0;
+    amb[c] = stays * unshot[c] / area / (1.0 - rho_area[c] / area);
+  }
   return amb;
 }
 

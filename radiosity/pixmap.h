@@ -33,7 +33,7 @@ struct PixmapOptions {
   int block = 4;                   // a shooter is block x block texels
   // Stop when the unshot power is at most this fraction of the emitted
   // power, or after `shots` shots in all (0: no limit), whichever is first.
-  double unshot = 1e-3;
+  double unshot = 1e-4;
   long long shots = 0;
 };
 

@@ -51,7 +51,7 @@ Method make_pixmap_method() {
       {"max_texels", K::integer, "", "most texels one pixmap may have (its texels grow to fit)", 1 << 20, 1, 1 << 26, {}},
       {"hemicube_res", K::integer, "", "hemicube pixels along the top face's side (even)", 128, 2, 16384, {}},
       {"block", K::integer, "", "a shooter is a block of block x block texels", 4, 1, 256, {}},
-      {"unshot", K::real, "", "stop when the unshot power is at most this fraction of the emitted power", 1e-3, 0.0,
+      {"unshot", K::real, "", "stop when the unshot power is at most this fraction of the emitted power", 1e-4, 0.0,
        0.999, {}},
       {"shots", K::integer, "", "stop after this many shots in all, those before a resume included (0: no limit)", 0,
        0, 1e15, {}},

@@ -151,11 +151,12 @@ TEST(PixmapLayout, TexelAreasAddUpToThePatchesAndCoplanarNeighboursShareAGrid) {
 
 // The area mean of the first channel of per-texel values (a state's or a
 // display's), over the texels holding a value.
-double area_mean(const PixmapLayout& L, const std::vector<std::vector<float>>& values) {
+// Over the pixmaps of material `material` (-1: all).
+double area_mean(const PixmapLayout& L, const std::vector<std::vector<float>>& values, int material = -1) {
   double sum = 0.0, area = 0.0;
   for (size_t k = 0; k < L.pixmaps.size(); ++k)
     for (long long i = 0; i < L.pixmaps[k].texels(); ++i)
-      if (L.pixmaps[k].owner[i] == i) {
+      if ((material < 0 || L.pixmaps[k].material == material) && L.pixmaps[k].owner[i] == i) {
         sum += values[k][i * 3] * L.pixmaps[k].area[i];
         area += L.pixmaps[k].area[i];
       }
@@ -220,6 +221,37 @@ TEST(PixmapSolver, ReflectanceNearOneConvergesAndTheAmbientTermFillsWhatIsUnshot
   EXPECT_NEAR(raw, 1000.0, 1000.0 * 2e-3);
   EXPECT_NEAR(with_ambient, 1000.0, 1000.0 * 5e-4);
   EXPECT_LT(std::abs(with_ambient - 1000.0), 0.5 * std::abs(raw - 1000.0));
+}
+
+TEST(PixmapSolver, InAnOpenSceneTheAmbientTermCountsOnlyThePowerThatStays) {
+  // The box on the floor is open: most of the light leaves. Stopped early,
+  // the state lacks what is unshot; an ambient term that spread all of it
+  // over the scene (as in a closed one) would put back several times what
+  // stays. Against a converged run, the ambient term must close most of
+  // the gap, without overshooting it.
+  const Scene scene = read_obj_scene(kData + "/box_on_floor/box_on_floor.obj");
+  PixmapOptions o;
+  o.texel_size = 0.25;
+  o.hemicube_res = 64;
+  o.unshot = 1e-7;
+  // Over the white surfaces (the light's emission would hide the rest).
+  const int white = static_cast<int>(std::find_if(scene.materials.begin(), scene.materials.end(),
+                                                  [](const Material& m) { return m.emission.x == 0.0; }) -
+                                     scene.materials.begin());
+  const PixmapSolver converged(scene, o, threads(0));
+  const double exact =
+      area_mean(converged.layout(), converged.run(converged.initial_state()).state.radiosity, white);
+  o.unshot = 0.02;
+  const PixmapSolver early(scene, o, threads(0));
+  const PixmapRun run = early.run(early.initial_state());
+  const double raw = area_mean(early.layout(), run.state.radiosity, white);
+  const double with_ambient = area_mean(early.layout(), early.display(run.state, run.ambient), white);
+  const double stays = run.state.power_absorbed.x / (run.state.power_absorbed.x + run.state.power_escaped.x);
+  std::printf("open scene: converged %.6f, early %.6f, with the ambient term %.6f (%.0f%% of the power ended stayed)\n",
+              exact, raw, with_ambient, 100.0 * stays);
+  ASSERT_LT(stays, 0.8);
+  EXPECT_LT(raw, exact);
+  EXPECT_LT(std::abs(with_ambient - exact), 0.3 * (exact - raw));
 }
 
 TEST(PixmapSolver, ConvergesToTheLinearSystemOfItsOwnFormFactors) {
