@@ -82,7 +82,7 @@ std::vector<std::string> write_pixmap_state(const std::string& out_dir, const Sc
   std::vector<std::string> written;
   nlohmann::json doc;
   doc["format"] = "radmesh pixmap state";
-  doc["version"] = 2;
+  doc["version"] = 3;
   doc["scene"] = scene.source;
   doc["scene_fingerprint"] = st.scene_fingerprint;
   doc["shots"] = st.shots;
@@ -148,9 +148,9 @@ PixmapState read_pixmap_state(const std::string& dir) {
   auto bad = [&](const std::string& what) { return InputError(json_path + ": " + what); };
   try {
     if (doc.value("format", "") != "radmesh pixmap state") throw bad("not a radmesh pixmap state (\"format\")");
-    if (doc.at("version").get<int>() != 2)
+    if (doc.at("version").get<int>() != 3)
       throw bad("version " + doc.at("version").dump() +
-                ", expected 2 (a state from another radmesh version: its form factors differ; run again)");
+                ", expected 3 (a state from another radmesh version: its texels and form factors differ; run again)");
     st.scene_fingerprint = doc.at("scene_fingerprint").get<std::string>();
     st.shots = doc.at("shots").get<long long>();
     const auto& o = doc.at("options");
