@@ -128,6 +128,13 @@ Vec3 tangent_of(const Vec3& n) {
 }
 
 St st_of(const Pixmap& pm, const Vec3& x) { return {pm.s_of(x), pm.t_of(x)}; }
+
+// Whether segments pq and ab cross (touching counts).
+bool segments_cross(const St& p, const St& q, const St& a, const St& b) {
+  auto side = [](const St& o, const St& u, const St& v) { return (u.s - o.s) * (v.t - o.t) - (u.t - o.t) * (v.s - o.s); };
+  const double d1 = side(a, b, p), d2 = side(a, b, q), d3 = side(p, q, a), d4 = side(p, q, b);
+  return ((d1 <= 0.0 && d2 >= 0.0) || (d1 >= 0.0 && d2 <= 0.0)) && ((d3 <= 0.0 && d4 >= 0.0) || (d3 >= 0.0 && d4 <= 0.0));
+}
 Vec3 point_of(const Pixmap& pm, double s, double t) { return pm.origin + (s * pm.texel_u) * pm.u + (t * pm.texel_v) * pm.v; }
 
 // The texel of the 3 x 3 around (i, j) with the most coverage, at least
@@ -234,6 +241,24 @@ PixmapLayout layout_of(const Scene& scene, const Mesh& coarse, const PixmapOptio
       L.enclosed[t] = inside_object(scene, *vis, coarse.centroid(t), coarse.patch[t]);
   // Each pixmap's frame and grid.
   std::vector<std::vector<int>> triangles_of(L.pixmaps.size());
+  // The contact lines inside each pixmap's patches (feature edges of the
+  // coarse mesh, found by the triangles that have them), in world points
+  // until the pixmap's frame is known.
+  std::vector<std::vector<std::pair<Vec3, Vec3>>> contact_world(L.pixmaps.size());
+  if (!coarse.feature_edges.empty()) {
+    std::unordered_map<uint64_t, int> pixmap_of_edge;
+    auto edge_key = [](int a, int b) {
+      return (static_cast<uint64_t>(std::min(a, b)) << 32) | static_cast<uint32_t>(std::max(a, b));
+    };
+    for (int t = 0; t < coarse.triangle_count(); ++t)
+      for (int c = 0; c < 3; ++c)
+        pixmap_of_edge.emplace(edge_key(coarse.triangles[t][c], coarse.triangles[t][(c + 1) % 3]),
+                               L.pixmap_of_patch[coarse.patch[t]]);
+    for (const auto& e : coarse.feature_edges)
+      if (const auto it = pixmap_of_edge.find(edge_key(e[0], e[1])); it != pixmap_of_edge.end())
+        contact_world[static_cast<size_t>(it->second)].push_back({coarse.positions[e[0]], coarse.positions[e[1]]});
+  }
+  std::vector<std::vector<std::pair<St, St>>> contact_lines(L.pixmaps.size());
   for (int t = 0; t < coarse.triangle_count(); ++t) triangles_of[L.pixmap_of_patch[coarse.patch[t]]].push_back(t);
   double bytes = 0.0;
   for (size_t k = 0; k < L.pixmaps.size(); ++k) {
@@ -276,6 +301,7 @@ PixmapLayout layout_of(const Scene& scene, const Mesh& coarse, const PixmapOptio
     }
     pm.coverage.assign(static_cast<size_t>(pm.texels()), 0.0);
     pm.centroid.assign(static_cast<size_t>(pm.texels()), Vec3(0.0));
+    for (const auto& [a, c] : contact_world[k]) contact_lines[k].push_back({st_of(pm, a), st_of(pm, c)});
     // Coverage from the pieces of the triangles in each texel, less the
     // triangles inside a closed object standing on the patch (a block on a
     // floor): light never reaches there, and a shooter placed there would
@@ -324,26 +350,75 @@ PixmapLayout layout_of(const Scene& scene, const Mesh& coarse, const PixmapOptio
                       pm.coverage[idx] >= (1.0 - 1e-9) * cell_area;
     }
 
-    // Shooters: blocks of owners.
+    // Shooters: blocks of owners, split where a contact line (a wall or
+    // an object standing on the patch) runs between two of their texels'
+    // centroids, so that no shooter sits on one side of a wall and shoots
+    // the other side's power.
+    const std::vector<std::pair<St, St>>& lines = contact_lines[k];
+    std::vector<std::vector<int>> near_lines;  // per texel: the lines whose box meets it
+    if (!lines.empty()) {
+      near_lines.resize(static_cast<size_t>(pm.texels()));
+      for (size_t e = 0; e < lines.size(); ++e) {
+        const auto& [a, c] = lines[e];
+        const int i0 = std::clamp(static_cast<int>(std::floor(std::min(a.s, c.s))), 0, pm.width - 1);
+        const int i1 = std::clamp(static_cast<int>(std::floor(std::max(a.s, c.s))), 0, pm.width - 1);
+        const int j0 = std::clamp(static_cast<int>(std::floor(std::min(a.t, c.t))), 0, pm.height - 1);
+        const int j1 = std::clamp(static_cast<int>(std::floor(std::max(a.t, c.t))), 0, pm.height - 1);
+        for (int j = j0; j <= j1; ++j)
+          for (int i = i0; i <= i1; ++i) near_lines[static_cast<size_t>(j) * pm.width + i].push_back(static_cast<int>(e));
+      }
+    }
+    // Whether the segment between the centroids of texels x and y of a
+    // block crosses one of the block's contact lines (those near any of its
+    // texels: the segment stays inside the block).
+    std::vector<int> block_lines;
+    auto separated = [&](int x, int y) {
+      const St p = st_of(pm, pm.centroid[x]), q = st_of(pm, pm.centroid[y]);
+      for (int e : block_lines)
+        if (segments_cross(p, q, lines[static_cast<size_t>(e)].first, lines[static_cast<size_t>(e)].second)) return true;
+      return false;
+    };
     const int b = options.block;
     for (int bj = 0; bj < pm.height; bj += b)
       for (int bi = 0; bi < pm.width; bi += b) {
-        Shooter s;
-        s.pixmap = static_cast<int>(k);
-        Vec3 sum(0.0);
-        double weight = 0.0;
+        std::vector<int> owners;
+        block_lines.clear();
         for (int j = bj; j < std::min(pm.height, bj + b); ++j)
           for (int i = bi; i < std::min(pm.width, bi + b); ++i) {
             const int idx = j * pm.width + i;
-            if (pm.owner[idx] != idx) continue;
-            s.texels.push_back(idx);
-            s.area += pm.area[idx];
+            if (!near_lines.empty())
+              block_lines.insert(block_lines.end(), near_lines[static_cast<size_t>(idx)].begin(),
+                                 near_lines[static_cast<size_t>(idx)].end());
+            if (pm.owner[idx] == idx) owners.push_back(idx);
+          }
+        std::sort(block_lines.begin(), block_lines.end());
+        block_lines.erase(std::unique(block_lines.begin(), block_lines.end()), block_lines.end());
+        // Groups: owners joined where nothing separates them.
+        UnionFind groups(static_cast<int>(owners.size()));
+        if (!block_lines.empty()) {
+          for (size_t x = 0; x < owners.size(); ++x)
+            for (size_t y = x + 1; y < owners.size(); ++y)
+              if (!separated(owners[x], owners[y])) groups.unite(static_cast<int>(x), static_cast<int>(y));
+        } else {
+          for (size_t x = 1; x < owners.size(); ++x) groups.unite(0, static_cast<int>(x));
+        }
+        for (size_t g = 0; g < owners.size(); ++g) {
+          if (groups.find(static_cast<int>(g)) != static_cast<int>(g)) continue;
+          Shooter sh;
+          sh.pixmap = static_cast<int>(k);
+          Vec3 sum(0.0);
+          double weight = 0.0;
+          for (size_t x = 0; x < owners.size(); ++x) {
+            if (groups.find(static_cast<int>(x)) != static_cast<int>(g)) continue;
+            const int idx = owners[x];
+            sh.texels.push_back(idx);
+            sh.area += pm.area[idx];
             sum += pm.coverage[idx] * pm.centroid[idx];
             weight += pm.coverage[idx];
           }
-        if (s.texels.empty()) continue;
-        s.centre = sum / weight;
-        L.shooters.push_back(std::move(s));
+          sh.centre = sum / weight;
+          L.shooters.push_back(std::move(sh));
+        }
       }
   }
   return L;
