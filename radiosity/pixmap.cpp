@@ -135,6 +135,7 @@ bool segments_cross(const St& p, const St& q, const St& a, const St& b) {
   const double d1 = side(a, b, p), d2 = side(a, b, q), d3 = side(p, q, a), d4 = side(p, q, b);
   return ((d1 <= 0.0 && d2 >= 0.0) || (d1 >= 0.0 && d2 <= 0.0)) && ((d3 <= 0.0 && d4 >= 0.0) || (d3 >= 0.0 && d4 <= 0.0));
 }
+
 Vec3 point_of(const Pixmap& pm, double s, double t) { return pm.origin + (s * pm.texel_u) * pm.u + (t * pm.texel_v) * pm.v; }
 
 // The texel of the 3 x 3 around (i, j) with the most coverage, at least
@@ -355,17 +356,28 @@ PixmapLayout layout_of(const Scene& scene, const Mesh& coarse, const PixmapOptio
     // centroids, so that no shooter sits on one side of a wall and shoots
     // the other side's power.
     const std::vector<std::pair<St, St>>& lines = contact_lines[k];
-    std::vector<std::vector<int>> near_lines;  // per texel: the lines whose box meets it
+    // Per texel: the lines that may pass through it, found by walking each
+    // line in steps at most a texel long (each step's box), so that the cost
+    // is the lines' length in texels.
+    std::vector<std::vector<int>> near_lines;
     if (!lines.empty()) {
       near_lines.resize(static_cast<size_t>(pm.texels()));
       for (size_t e = 0; e < lines.size(); ++e) {
         const auto& [a, c] = lines[e];
-        const int i0 = std::clamp(static_cast<int>(std::floor(std::min(a.s, c.s))), 0, pm.width - 1);
-        const int i1 = std::clamp(static_cast<int>(std::floor(std::max(a.s, c.s))), 0, pm.width - 1);
-        const int j0 = std::clamp(static_cast<int>(std::floor(std::min(a.t, c.t))), 0, pm.height - 1);
-        const int j1 = std::clamp(static_cast<int>(std::floor(std::max(a.t, c.t))), 0, pm.height - 1);
-        for (int j = j0; j <= j1; ++j)
-          for (int i = i0; i <= i1; ++i) near_lines[static_cast<size_t>(j) * pm.width + i].push_back(static_cast<int>(e));
+        const int steps = 1 + static_cast<int>(std::ceil(std::max(std::abs(c.s - a.s), std::abs(c.t - a.t))));
+        for (int q = 0; q < steps; ++q) {
+          const St u = {a.s + (c.s - a.s) * q / steps, a.t + (c.t - a.t) * q / steps};
+          const St w = {a.s + (c.s - a.s) * (q + 1) / steps, a.t + (c.t - a.t) * (q + 1) / steps};
+          const int i0 = std::clamp(static_cast<int>(std::floor(std::min(u.s, w.s))), 0, pm.width - 1);
+          const int i1 = std::clamp(static_cast<int>(std::floor(std::max(u.s, w.s))), 0, pm.width - 1);
+          const int j0 = std::clamp(static_cast<int>(std::floor(std::min(u.t, w.t))), 0, pm.height - 1);
+          const int j1 = std::clamp(static_cast<int>(std::floor(std::max(u.t, w.t))), 0, pm.height - 1);
+          for (int j = j0; j <= j1; ++j)
+            for (int i = i0; i <= i1; ++i) {
+              auto& list = near_lines[static_cast<size_t>(j) * pm.width + i];
+              if (list.empty() || list.back() != static_cast<int>(e)) list.push_back(static_cast<int>(e));
+            }
+        }
       }
     }
     // Whether the segment between the centroids of texels x and y of a
