@@ -259,7 +259,6 @@ PixmapLayout layout_of(const Scene& scene, const Mesh& coarse, const PixmapOptio
       if (const auto it = pixmap_of_edge.find(edge_key(e[0], e[1])); it != pixmap_of_edge.end())
         contact_world[static_cast<size_t>(it->second)].push_back({coarse.positions[e[0]], coarse.positions[e[1]]});
   }
-  std::vector<std::vector<std::pair<St, St>>> contact_lines(L.pixmaps.size());
   for (int t = 0; t < coarse.triangle_count(); ++t) triangles_of[L.pixmap_of_patch[coarse.patch[t]]].push_back(t);
   double bytes = 0.0;
   for (size_t k = 0; k < L.pixmaps.size(); ++k) {
@@ -302,7 +301,6 @@ PixmapLayout layout_of(const Scene& scene, const Mesh& coarse, const PixmapOptio
     }
     pm.coverage.assign(static_cast<size_t>(pm.texels()), 0.0);
     pm.centroid.assign(static_cast<size_t>(pm.texels()), Vec3(0.0));
-    for (const auto& [a, c] : contact_world[k]) contact_lines[k].push_back({st_of(pm, a), st_of(pm, c)});
     // Coverage from the pieces of the triangles in each texel, less the
     // triangles inside a closed object standing on the patch (a block on a
     // floor): light never reaches there, and a shooter placed there would
@@ -355,7 +353,8 @@ PixmapLayout layout_of(const Scene& scene, const Mesh& coarse, const PixmapOptio
     // an object standing on the patch) runs between two of their texels'
     // centroids, so that no shooter sits on one side of a wall and shoots
     // the other side's power.
-    const std::vector<std::pair<St, St>>& lines = contact_lines[k];
+    std::vector<std::pair<St, St>> lines;
+    for (const auto& [a, c] : contact_world[k]) lines.push_back({st_of(pm, a), st_of(pm, c)});
     // Per texel: the lines that may pass through it, found by walking each
     // line in steps at most a texel long (each step's box), so that the cost
     // is the lines' length in texels.

@@ -46,15 +46,19 @@ Method make_pixmap_method() {
   m.name = "pixmap";
   m.help = "progressive refinement onto texel grids (pixmaps) with hemicube item-buffer form factors; "
            "saves lightmaps and a state that --resume continues";
+  const PixmapOptions d;  // the defaults, in one place
   m.options = {
-      {"texel_size", K::real, "scene units", "texel edge of the pixmaps (0: scene diagonal / 80)", 0.0, 0.0, 1e300, {}},
-      {"max_texels", K::integer, "", "most texels one pixmap may have (its texels grow to fit)", 1 << 20, 1, 1 << 26, {}},
-      {"hemicube_res", K::integer, "", "hemicube pixels along the top face's side (even)", 128, 2, 16384, {}},
-      {"block", K::integer, "", "a shooter is a block of block x block texels", 4, 1, 256, {}},
-      {"unshot", K::real, "", "stop when the unshot power is at most this fraction of the emitted power", 1e-4, 0.0,
+      {"texel_size", K::real, "scene units", "texel edge of the pixmaps (0: scene diagonal / 80)", d.texel_size, 0.0,
+       1e300, {}},
+      {"max_texels", K::integer, "", "most texels one pixmap may have (its texels grow to fit)",
+       static_cast<double>(d.max_texels), 1, 1 << 26, {}},
+      {"hemicube_res", K::integer, "", "hemicube pixels along the top face's side (even)",
+       static_cast<double>(d.hemicube_res), 2, 16384, {}},
+      {"block", K::integer, "", "a shooter is a block of block x block texels", static_cast<double>(d.block), 1, 256, {}},
+      {"unshot", K::real, "", "stop when the unshot power is at most this fraction of the emitted power", d.unshot, 0.0,
        0.999, {}},
-      {"shots", K::integer, "", "stop after this many shots in all, those before a resume included (0: no limit)", 0,
-       0, 1e15, {}},
+      {"shots", K::integer, "", "stop after this many shots in all, those before a resume included (0: no limit)",
+       static_cast<double>(d.shots), 0, 1e15, {}},
       {"snapshot_every", K::integer, "", "write a snapshot of the field every this many shots (0: none)", 0, 0, 1e15,
        {}},
   };
