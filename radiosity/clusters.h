@@ -1,13 +1,17 @@
-// Volume clusters above the roots of an element hierarchy (ClusterMode::volume
-// of hierarchical.h): a binary box hierarchy over the root triangles (median
-// splits of their centroids on the longest axis), each cluster with up to
-// kGroups oriented normal groups. The hierarchical solver links and gathers
-// over it; this file knows only geometry and the groups' radiosity.
+// Clusters above the roots of an element hierarchy (ClusterMode of
+// hierarchical.h), each with up to kGroups oriented normal groups:
+//   volume  a binary box hierarchy over the root triangles (median splits of
+//           their centroids on the longest axis);
+//   shape   Tanaka and Noma's hierarchical shape approximation: the roots'
+//           vertices clustered by an octree, one clustering per level, and
+//           every triangle hung under the coarser triangle it maps to.
+// The hierarchical solver links and gathers over it; this file knows only
+// geometry and the groups' radiosity.
 #pragma once
 
 #include "radiosity/form_factor.h"
 
-#include <array>
+#include <span>
 #include <utility>
 #include <vector>
 
@@ -20,7 +24,7 @@ public:
   static constexpr int kGroups = 8;
 
   struct Cluster {
-    std::array<int, 2> child{};  // node codes: a root (>= 0) or a cluster (code(c) <= -2)
+    int child_begin = 0, child_end = 0;  // into the children (children(c))
     int begin = 0, end = 0;      // its roots: root_at(begin .. end - 1)
     Vec3 centre{0.0};            // area-weighted centroid
     double radius = 0.0;         // of a sphere about the centre holding every member
@@ -45,7 +49,24 @@ public:
   ClusterTree() = default;
   // Over `roots` (at least two), with one weight per root; cluster 0 is the
   // top, and every cluster's children have larger numbers than it.
-  ClusterTree(const std::vector<Triangle>& roots, const std::vector<double>& weights);
+  static ClusterTree volume(const std::vector<Triangle>& roots, const std::vector<double>& weights);
+  // Octree vertex clustering (Rossignac and Borrel), as Tanaka and Noma
+  // build their hierarchy from it. The roots' corners are put in cells of
+  // an octree over the scene, from the finest level at which the shortest
+  // root edge has its ends in different cells up to the whole scene. Going
+  // one level up, a node (a root, or a coarser triangle standing for the
+  // nodes under it) maps to the cells its three corners fall in: three
+  // different cells make a triangle, and every node mapping to it hangs
+  // under it; two make a segment and one a point, and such a node hangs
+  // under a triangle of that level having that segment as an edge (or, for
+  // a point or failing that, either end as a corner). A node that finds no
+  // such triangle keeps its own place and tries again a level up. A
+  // triangle with a single node under it is that node. What is left when
+  // the octree runs out of levels hangs under the top cluster. So a
+  // cluster made at a level is a piece of surface about that level's cell
+  // in size (a cap of a sphere, the side of a statue), with the small
+  // objects that collapsed into its corners' cells.
+  static ClusterTree shape(const std::vector<Triangle>& roots, const std::vector<double>& weights);
 
   // Bytes `clusters` clusters with `groups` groups take here and in the
   // solver's per-group arrays (radiosity, gathering, form factor sums).
@@ -57,6 +78,11 @@ public:
   const Cluster& cluster(int c) const { return clusters_[static_cast<size_t>(c)]; }
   const Group& group(int g) const { return groups_[static_cast<size_t>(g)]; }
   int members(int c) const { return cluster(c).end - cluster(c).begin; }
+  // Node codes of cluster c's children: a root (>= 0) or a cluster (code(c) <= -2).
+  std::span<const int> children(int c) const {
+    const Cluster& cl = cluster(c);
+    return {children_.data() + cl.child_begin, static_cast<size_t>(cl.child_end - cl.child_begin)};
+  }
   // The group of its parent cluster root r belongs to.
   int root_group(int r) const { return root_group_[static_cast<size_t>(r)]; }
 
@@ -77,13 +103,19 @@ public:
   int root_at_area(int c, double u) const;
 
 private:
-  int build(int begin, int end, const std::vector<Vec3>& centroids);
+  // Lays out the clusters of `tree` (children lists of node codes, -2 - t
+  // for tree node t; node 0 the top) in preorder, then computes the
+  // clusters' geometry and groups.
+  void finish(const std::vector<std::vector<int>>& tree, const std::vector<Triangle>& roots,
+              const std::vector<double>& weights);
+  int lay_out(int t, const std::vector<std::vector<int>>& tree);
   struct Member {  // of a group: a root (>= 0) or a child group (-2 - g), with its area
     int from;
     double area;
     int group;
   };
   std::vector<Cluster> clusters_;
+  std::vector<int> children_;
   std::vector<Group> groups_;
   std::vector<Member> members_;
   std::vector<int> order_;           // roots in cluster order

@@ -62,7 +62,7 @@ public:
     const ElementTree& tree = out_.tree;
     report("link", 0.0);
     auto t0 = std::chrono::steady_clock::now();
-    if (hopt_.clusters == ClusterMode::volume && tree.root_count() >= 2) {
+    if (hopt_.clusters != ClusterMode::off && tree.root_count() >= 2) {
       build_clusters();
       link_pairs(link_cluster_pairs({{cluster_code(0), cluster_code(0)}}));
       report("link", 1.0);
@@ -683,7 +683,7 @@ private:
   }
 
   // ---------------------------------------------------------------- clusters
-  // ClusterMode::volume: the cluster tree above the roots (clusters.h). A
+  // ClusterMode volume or shape: the cluster tree above the roots (clusters.h). A
   // link has a node code at each end: an element node (>= 0) or a cluster
   // (cluster_code(c) <= -2). A link from a cluster is gathered per group of
   // the source; a cluster receives per group of its own (at the group's
@@ -826,7 +826,9 @@ private:
                            "raise --max-memory");
     std::vector<double> weight(static_cast<size_t>(roots));
     for (int r = 0; r < roots; ++r) weight[static_cast<size_t>(r)] = element_oracle_rho(static_cast<size_t>(r));
-    ct_ = ClusterTree(std::vector<Triangle>(tri_.begin(), tri_.begin() + roots), weight);
+    const std::vector<Triangle> root_triangles(tri_.begin(), tri_.begin() + roots);
+    ct_ = hopt_.clusters == ClusterMode::shape ? ClusterTree::shape(root_triangles, weight)
+                                               : ClusterTree::volume(root_triangles, weight);
     const size_t groups = ct_.group_count();
     clinks_.assign(ct_.size(), {});
     HG_.assign(groups, Rgb(0.0));
@@ -974,9 +976,9 @@ private:
   void split_cluster_pair(int p, int q, std::vector<std::pair<int, int>>& next) {
     if (p == q) {
       if (p >= 0) return;  // a planar element does not see itself
-      const ClusterTree::Cluster& c = ct_.cluster(cluster_of(p));
-      for (int a : c.child)
-        for (int b : c.child) next.emplace_back(a, b);
+      const auto children = ct_.children(cluster_of(p));
+      for (int a : children)
+        for (int b : children) next.emplace_back(a, b);
       return;
     }
     auto may_split = [&](int code) { return code < 0 || splittable(code); };
@@ -989,7 +991,7 @@ private:
       split_p = code_radius(p) >= code_radius(q);
     const int n = split_p ? p : q;
     if (n < 0) {
-      for (int c : ct_.cluster(cluster_of(n)).child) next.emplace_back(split_p ? c : p, split_p ? q : c);
+      for (int c : ct_.children(cluster_of(n))) next.emplace_back(split_p ? c : p, split_p ? q : c);
       return;
     }
     int first = out_.tree.node(n).child;
@@ -1097,7 +1099,7 @@ private:
   std::vector<std::vector<std::pair<int, double>>> terms_;  // per leaf: (source node, F x visibility at the leaf)
   std::vector<std::vector<Link>> links_;  // per receiver node
   std::vector<char> dirty_;               // per node: links changed since the last leaf_terms (new nodes too)
-  // Clusters (ClusterMode::volume; all empty otherwise).
+  // Clusters (ClusterMode volume or shape; all empty otherwise).
   ClusterTree ct_;
   std::vector<std::vector<Link>> clinks_;  // per receiving cluster
   std::vector<std::vector<std::pair<int, double>>> gterms_;  // per group: (source, F) at its centroid
@@ -1119,13 +1121,15 @@ TVertexMode parse_tvertex_mode(const std::string& name) {
 ClusterMode parse_cluster_mode(const std::string& name) {
   if (name == "off") return ClusterMode::off;
   if (name == "volume") return ClusterMode::volume;
-  throw InputError("cluster mode '" + name + "': expected volume or off");
+  if (name == "shape") return ClusterMode::shape;
+  throw InputError("cluster mode '" + name + "': expected shape, volume or off");
 }
 
 const char* to_string(ClusterMode mode) {
   switch (mode) {
     case ClusterMode::off: return "off";
     case ClusterMode::volume: return "volume";
+    case ClusterMode::shape: return "shape";
   }
   return "?";
 }

@@ -34,8 +34,10 @@ enum class ClusterMode {
   volume,  // a box hierarchy of clusters (Smits-Arvo-Greenberg, Sillion), each
            // with a few oriented normal groups: linking starts from the root
            // cluster's self-link, so links grow about linearly
+  shape,   // Tanaka and Noma's hierarchical shape approximation (octree vertex
+           // clustering) as the hierarchy, with the same groups and linking
 };
-// "off", "volume"; InputError naming the value otherwise.
+// "off", "volume", "shape"; InputError naming the value otherwise.
 ClusterMode parse_cluster_mode(const std::string& name);
 const char* to_string(ClusterMode mode);
 
@@ -84,7 +86,7 @@ struct HierarchicalStats {
   int sweeps = 0;                 // gather + push-pull sweeps, all rounds
   double seconds_link = 0.0, seconds_solve = 0.0;
   std::vector<long long> links_per_round;
-  int clusters = 0;                // cluster nodes above the roots (ClusterMode::volume)
+  int clusters = 0;                // cluster nodes above the roots (ClusterMode volume or shape)
   int cluster_groups = 0;          // their normal groups
   long long cluster_links = 0;     // links with a cluster at one end or both (in `links`)
   std::vector<int> leaves_per_round;
@@ -110,7 +112,7 @@ struct HierarchicalLink {
   double visible = 1.0;
 };
 
-// A link with a cluster at one end or both (ClusterMode::volume): centres
+// A link with a cluster at one end or both (ClusterMode volume or shape): centres
 // of its two ends, the element node at an end that is one (-1 for a
 // cluster), the cluster at an end that is one (-1 for an element), F x
 // visibility from the two centres (the cluster's area over pi d^2), the

@@ -52,6 +52,14 @@ LineSet link_line_set(const Scene& scene, const HierarchicalSolution& h) {
   return out;
 }
 
+// The cluster modes, the default first.
+std::vector<std::string> cluster_choices(ClusterMode first) {
+  std::vector<std::string> out = {to_string(first)};
+  for (ClusterMode m : {ClusterMode::volume, ClusterMode::shape, ClusterMode::off})
+    if (m != first) out.emplace_back(to_string(m));
+  return out;
+}
+
 // The per-cell level, zero_area flag and link count of a hierarchical
 // solution's conforming mesh.
 std::vector<std::pair<std::string, std::vector<int>>> hierarchical_fields(const HierarchicalSolution& h) {
@@ -90,8 +98,9 @@ Method make_hierarchical_method() {
        d.baum_relative, 0.0, 1.0, {}},
       {"clusters", Kind::choice, "",
        "what sits above the initial mesh's triangles: volume (a box hierarchy of clusters with oriented normal "
-       "groups, links grow about linearly) or off (every pair of initial triangles is linked)",
-       0.0, 0.0, 0.0, {to_string(d.clusters), to_string(d.clusters == ClusterMode::off ? ClusterMode::volume : ClusterMode::off)}},
+       "groups, links grow about linearly), shape (Tanaka and Noma's hierarchical shape approximation: octree "
+       "vertex clustering, the same groups and linking) or off (every pair of initial triangles is linked)",
+       0.0, 0.0, 0.0, cluster_choices(d.clusters)},
       {"export_links", Kind::flag, "",
        "also write links.vtu, every link as a line from receiver to source (fields receiver_level, source_level, "
        "receiver_patch, source_patch, form_factor, visible, transport; level and patch -1 at a cluster end)",

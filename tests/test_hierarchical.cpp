@@ -285,7 +285,7 @@ TEST(HierarchicalStress, MemoryLimitIsAClearErrorBeforeAnyCrash) {
   SolveOptions tiny, small;
   tiny.max_memory_gb = 1e-6;
   small.max_memory_gb = 8.0 / 1024.0;  // 8 MiB
-  for (ClusterMode mode : {ClusterMode::off, ClusterMode::volume}) {
+  for (ClusterMode mode : {ClusterMode::off, ClusterMode::volume, ClusterMode::shape}) {
     HierarchicalOptions ho;
     ho.clusters = mode;
     auto message = [&](const SolveOptions& o) {
