@@ -675,7 +675,7 @@ int main(int argc, char** argv) {
   bool scaling = false;
   bench::ScalingOptions so;
   so.radmesh = RADMESH_CLI;
-  std::string modes = "volume,off";
+  std::string modes = "volume,shape,off";
   app.add_flag("--scaling", scaling,
                "scaling benchmark instead: rooms of 10^3 .. --max-triangles input triangles and the bunny, each "
                "run by the radmesh program in its own process; writes scaling.csv, scaling_time.png, "

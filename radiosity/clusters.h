@@ -47,8 +47,11 @@ public:
   static constexpr int index(int code) { return -2 - code; }
 
   ClusterTree() = default;
-  // Over `roots` (at least two), with one weight per root; cluster 0 is the
-  // top, and every cluster's children have larger numbers than it.
+  // Both builders: over `roots` (at least two; fewer give an empty tree),
+  // with one weight per root; cluster 0 is the top, and every cluster's
+  // children have larger numbers than it.
+  //
+  // Median splits of the roots' centroids on the longest axis: binary.
   static ClusterTree volume(const std::vector<Triangle>& roots, const std::vector<double>& weights);
   // Octree vertex clustering (Rossignac and Borrel), as Tanaka and Noma
   // build their hierarchy from it. The roots' corners are put in cells of
