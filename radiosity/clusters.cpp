@@ -338,7 +338,7 @@ Rgb ClusterTree::mean(int c, const std::vector<Rgb>& group_radiosity) const {
 }
 
 void ClusterTree::form_factors(int c, const Vec3& x, const Vec3& n, double visible,
-                               std::vector<std::pair<int, double>>& out, double& f_sum) const {
+                               std::vector<std::pair<int, double>>& out, double& f_sum, const float* per_group) const {
   const Cluster& cl = cluster(c);
   for (int g = cl.group_begin; g < cl.group_end; ++g) {
     const Group& gr = groups_[static_cast<size_t>(g)];
@@ -346,7 +346,9 @@ void ClusterTree::form_factors(int c, const Vec3& x, const Vec3& n, double visib
     const double d2 = glm::dot(r, r);
     const double out_cos = glm::dot(gr.s, r), in_cos = -glm::dot(n, r);
     if (out_cos <= 0.0 || in_cos <= 0.0) continue;
-    const double f = visible * out_cos * in_cos / (std::numbers::pi * d2 * d2);
+    const double seen = per_group ? per_group[g - cl.group_begin] : visible;
+    if (!(seen > 0.0)) continue;
+    const double f = seen * out_cos * in_cos / (std::numbers::pi * d2 * d2);
     out.push_back({-2 - g, f});
     f_sum += f;
   }

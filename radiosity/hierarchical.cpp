@@ -36,6 +36,11 @@ struct Link {
   double f = 0.0;         // F(receiver -> source) without occlusion
   double visible = 1.0;   // fraction of the shadow rays that got through
   double spread = 0.0;    // how much the point form factor varies over the receiver (oracle)
+  // A partly visible link with a cluster end: where its visible fraction per
+  // normal group of that end starts in the solver's group_visible_ (-1:
+  // `visible` for every group). The end is the receiver when it is a
+  // cluster, else the source.
+  int group_visible = -1;
   bool partial() const { return visible > 0.0 && visible < 1.0; }
 };
 
@@ -297,6 +302,7 @@ private:
   void check_memory() {
     const long long links = count_links();
     const double bytes = static_cast<double>(links) * kLinkBytes +
+                         static_cast<double>(group_visible_.size()) * sizeof(float) +
                          static_cast<double>(out_.stats.leaf_terms) * sizeof(std::pair<int, double>) +
                          ClusterTree::bytes(static_cast<double>(ct_.size()), static_cast<double>(ct_.group_count()));
     if (bytes > limit_)
@@ -464,7 +470,7 @@ private:
     for (const Link* l : path) {
       if (l->visible <= 0.0) continue;  // hidden: kept as a link, never gathered
       if (l->source < 0) {  // a cluster: its normal groups, seen from the leaf's centroid
-        ct_.form_factors(cluster_of(l->source), c, t.normal, l->visible, terms_[x], F_approx_[x]);
+        ct_.form_factors(cluster_of(l->source), c, t.normal, l->visible, terms_[x], F_approx_[x], group_visible(*l));
         continue;
       }
       const double f = form_factor(pts, tri_[static_cast<size_t>(l->source)]) * l->visible;
@@ -860,15 +866,17 @@ private:
           const Vec3 n = gr.s / gr.area;  // not unit: the group's mean projected area per area
           for (const Link& l : clinks_[c]) {
             if (l.visible <= 0.0) continue;
+            const float* seen = group_visible(l);
+            const double visible = seen ? seen[g - cl.group_begin] : l.visible;
             if (l.source < 0) {
-              ct_.form_factors(cluster_of(l.source), gr.centroid, n, l.visible, terms, fsum);
+              ct_.form_factors(cluster_of(l.source), gr.centroid, n, visible, terms, fsum);
             } else {
               // An element source as a point (its area at its centroid), the
               // kernel its own leaves use toward this group.
               const Triangle& t = tri_[static_cast<size_t>(l.source)];
               const Vec3 r = gr.centroid - t.centroid();
               const double d2 = glm::dot(r, r);
-              const double f = l.visible * t.area * std::max(0.0, glm::dot(t.normal, r)) *
+              const double f = visible * t.area * std::max(0.0, glm::dot(t.normal, r)) *
                                std::max(0.0, -glm::dot(n, r)) / (std::numbers::pi * d2 * d2);
               if (!(f > 0.0)) continue;
               terms.push_back({l.source, f});
@@ -903,9 +911,10 @@ private:
     }
   }
 
-  // A point of node `code` (area-uniform over its roots), its normal and patch.
-  void sample_node(int code, SplitMix& rng, Vec3& x, Vec3& n, int& patch) const {
-    const int root = code >= 0 ? code : ct_.root_at_area(cluster_of(code), rng.uniform());
+  // A point of node `code` (area-uniform over its roots), its normal, patch
+  // and root.
+  void sample_node(int code, SplitMix& rng, Vec3& x, Vec3& n, int& patch, int& root) const {
+    root = code >= 0 ? code : ct_.root_at_area(cluster_of(code), rng.uniform());
     const Triangle& t = tri_[static_cast<size_t>(root)];
     const double a = rng.uniform(), b = rng.uniform();
     x = triangle_point(t.v[0], t.v[1], t.v[2], a, b);
@@ -916,9 +925,15 @@ private:
   // Visible fraction between two nodes, at least one a cluster: shadow rays
   // between area-uniform points of both, weighted by the point kernel
   // (cosines at both ends over r^4), so that members facing away count for
-  // nothing. One stream per pair, order-free.
-  double cluster_visible(int p, int q, RayCount& count) const {
+  // nothing. One stream per pair, order-free. The same rays, sorted by the
+  // normal group of the cluster end (the receiver p if a cluster, else the
+  // source q) their point fell in, give each group its own fraction in
+  // `per_group` (the whole pair's where a group got no ray): a floor piece
+  // and the dim sides of the box standing on it, in one cluster, do not see
+  // a light alike.
+  double cluster_visible(int p, int q, RayCount& count, std::array<float, ClusterTree::kGroups>& per_group) const {
     const int rays = opt_.rays;
+    per_group.fill(1.0f);
     if (visibility_.convex_enclosure()) {
       count.skipped += rays;
       ++count.unoccludable;
@@ -926,24 +941,42 @@ private:
     }
     const bool swap = code_key(q) < code_key(p);
     const int a = swap ? q : p, b = swap ? p : q;
+    const int end = p < 0 ? p : q;  // the cluster end whose groups are told apart
+    const bool end_is_a = end == a;
+    const ClusterTree::Cluster& cl = ct_.cluster(cluster_of(end));
+    std::array<double, ClusterTree::kGroups> gweight{}, gopen{};
     SplitMix rng(pair_seed(code_key(a), code_key(b)));
     double weight = 0.0, open = 0.0;
     int used = 0;
     for (int k = 0; k < 4 * rays && used < rays; ++k) {
       Vec3 x, nx, y, ny;
-      int px = -1, py = -1;
-      sample_node(a, rng, x, nx, px);
-      sample_node(b, rng, y, ny, py);
+      int px = -1, py = -1, rx = -1, ry = -1;
+      sample_node(a, rng, x, nx, px, rx);
+      sample_node(b, rng, y, ny, py, ry);
       const Vec3 r = y - x;
       const double d2 = glm::dot(r, r);
       const double w = std::max(0.0, glm::dot(nx, r)) * std::max(0.0, -glm::dot(ny, r)) / (d2 * d2);
       if (!(w > 0.0)) continue;
       ++used;
+      int g = ct_.root_group(end_is_a ? rx : ry);
+      while (g >= 0 && (g < cl.group_begin || g >= cl.group_end)) g = ct_.group(g).up;
+      const bool through = visibility_.visible(x, y, px, py);
       weight += w;
-      if (visibility_.visible(x, y, px, py)) open += w;
+      if (through) open += w;
+      if (g >= 0) {
+        gweight[static_cast<size_t>(g - cl.group_begin)] += w;
+        if (through) gopen[static_cast<size_t>(g - cl.group_begin)] += w;
+      }
     }
     count.cast += used;
-    return weight > 0.0 ? open / weight : 1.0;
+    const double visible = weight > 0.0 ? open / weight : 1.0;
+    for (size_t g = 0; g < per_group.size(); ++g)
+      per_group[g] = static_cast<float>(gweight[g] > 0.0 ? gopen[g] / gweight[g] : visible);
+    return visible;
+  }
+  // Per-group visible fractions of a link (see Link::group_visible), or null.
+  const float* group_visible(const Link& l) const {
+    return l.group_visible >= 0 ? group_visible_.data() + l.group_visible : nullptr;
   }
 
   // The pair's kernel error factor (F bound x size over gap), or a negative
@@ -1018,6 +1051,7 @@ private:
           pairs.emplace_back(p, q);
       }
       std::vector<Link> ev(pairs.size());
+      std::vector<std::array<float, ClusterTree::kGroups>> per_group(pairs.size());
       std::vector<RayCount> rays(pairs.size());
       std::vector<char> split(pairs.size(), 0);
       tbb::parallel_for(tbb::blocked_range<size_t>(0, pairs.size(), 16), [&](const tbb::blocked_range<size_t>& r) {
@@ -1035,7 +1069,7 @@ private:
           l.spread = shape;
           const double d = glm::length(code_centre(q) - code_centre(p));
           l.f = code_area(q) / (std::numbers::pi * d * d);
-          l.visible = cluster_visible(p, q, rays[i]);
+          l.visible = cluster_visible(p, q, rays[i], per_group[i]);
           if (wants_cluster_refinement(p, l)) split[i] = 1;
         }
       });
@@ -1049,8 +1083,14 @@ private:
           split_cluster_pair(p, q, next);
           continue;
         }
-        const Link& l = ev[i];
+        Link& l = ev[i];
         if (!(l.f > 0.0)) continue;
+        if (l.partial()) {
+          const ClusterTree::Cluster& end = ct_.cluster(cluster_of(p < 0 ? p : q));
+          l.group_visible = static_cast<int>(group_visible_.size());
+          group_visible_.insert(group_visible_.end(), per_group[i].begin(),
+                                per_group[i].begin() + (end.group_end - end.group_begin));
+        }
         if (p >= 0) {
           links_[static_cast<size_t>(p)].push_back(l);
           dirty_[static_cast<size_t>(p)] = 1;
@@ -1101,6 +1141,7 @@ private:
   std::vector<char> dirty_;               // per node: links changed since the last leaf_terms (new nodes too)
   // Clusters (ClusterMode volume or shape; all empty otherwise).
   ClusterTree ct_;
+  std::vector<float> group_visible_;  // per partly visible cluster link, per group of its cluster end
   std::vector<std::vector<Link>> clinks_;  // per receiving cluster
   std::vector<std::vector<std::pair<int, double>>> gterms_;  // per group: (source, F) at its centroid
   std::vector<Rgb> GB_, HG_, HGacc_;      // per group: radiosity, gathered, gathered with its ancestors'
