@@ -13,10 +13,12 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <memory>
 #include <cmath>
 #include <string>
+#include <tuple>
 #include <limits>
 #include <numbers>
 #include <set>
@@ -941,10 +943,12 @@ private:
     }
     const bool swap = code_key(q) < code_key(p);
     const int a = swap ? q : p, b = swap ? p : q;
-    const int end = p < 0 ? p : q;  // the cluster end whose groups are told apart
-    const bool end_is_a = end == a;
-    const ClusterTree::Cluster& cl = ct_.cluster(cluster_of(end));
-    std::array<double, ClusterTree::kGroups> gweight{}, gopen{};
+    const bool end_is_a = (p < 0 ? p : q) == a;  // the cluster end whose groups are told apart
+    // Per ray: the root its point at that end fell in, its weight, and
+    // whether it got through (sorted by group only when the link is partly
+    // visible, the only case where the groups can differ).
+    thread_local std::vector<std::tuple<int, double, bool>> seen;
+    seen.clear();
     SplitMix rng(pair_seed(code_key(a), code_key(b)));
     double weight = 0.0, open = 0.0;
     int used = 0;
@@ -958,20 +962,26 @@ private:
       const double w = std::max(0.0, glm::dot(nx, r)) * std::max(0.0, -glm::dot(ny, r)) / (d2 * d2);
       if (!(w > 0.0)) continue;
       ++used;
-      int g = ct_.root_group(end_is_a ? rx : ry);
-      while (g >= 0 && (g < cl.group_begin || g >= cl.group_end)) g = ct_.group(g).up;
       const bool through = visibility_.visible(x, y, px, py);
       weight += w;
       if (through) open += w;
-      if (g >= 0) {
-        gweight[static_cast<size_t>(g - cl.group_begin)] += w;
-        if (through) gopen[static_cast<size_t>(g - cl.group_begin)] += w;
-      }
+      seen.emplace_back(end_is_a ? rx : ry, w, through);
     }
     count.cast += used;
     const double visible = weight > 0.0 ? open / weight : 1.0;
-    for (size_t g = 0; g < per_group.size(); ++g)
-      per_group[g] = static_cast<float>(gweight[g] > 0.0 ? gopen[g] / gweight[g] : visible);
+    if (visible > 0.0 && visible < 1.0) {
+      const ClusterTree::Cluster& cl = ct_.cluster(cluster_of(p < 0 ? p : q));
+      std::array<double, ClusterTree::kGroups> gweight{}, gopen{};
+      for (const auto& [root, w, through] : seen) {
+        int g = ct_.root_group(root);
+        while (g >= 0 && (g < cl.group_begin || g >= cl.group_end)) g = ct_.group(g).up;
+        if (g < 0) continue;
+        gweight[static_cast<size_t>(g - cl.group_begin)] += w;
+        if (through) gopen[static_cast<size_t>(g - cl.group_begin)] += w;
+      }
+      for (size_t g = 0; g < per_group.size(); ++g)
+        per_group[g] = static_cast<float>(gweight[g] > 0.0 ? gopen[g] / gweight[g] : visible);
+    }
     return visible;
   }
   // Per-group visible fractions of a link (see Link::group_visible), or null.
