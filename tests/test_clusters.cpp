@@ -57,20 +57,25 @@ TEST(BoxTree, FindsExactlyTheOverlappingBoxes) {
 
 #include <array>
 #include <cmath>
+#include <functional>
 #include <map>
 
 namespace radmesh {
 namespace {
 
+// Adds a face: its name, material (0 wall, 1 grey, 2 lamp) and outline.
+using AddFace = std::function<void(const std::string&, int, std::vector<Vec3>)>;
+
 // A closed 4 x 3 x 4 room (walls facing in, rho 0.7) with a 1 x 1 light
 // flush in the ceiling (a hole in it, so the room stays closed and every
-// face is two-sided where it must be) and an icosphere of 20 x 4^level
-// triangles (rho 0.5) floating inside.
-Scene sphere_room(int level) {
+// face is two-sided where it must be), holding what `contents` adds (grey,
+// rho 0.5).
+Scene room(const std::string& name, const std::function<void(const AddFace&)>& contents) {
   std::vector<RawFace> faces;
-  auto face = [&](const std::string& name, int material, std::vector<Vec3> pts, std::vector<std::vector<Vec3>> holes = {}) {
+  auto face = [&](const std::string& face_name, int material, std::vector<Vec3> pts,
+                  std::vector<std::vector<Vec3>> holes = {}) {
     RawFace f;
-    f.name = name;
+    f.name = face_name;
     f.material = material;
     f.points = std::move(pts);
     f.holes = std::move(holes);
@@ -85,14 +90,7 @@ Scene sphere_room(int level) {
   face("walls", 0, {{0, 0, Z}, {0, Y, Z}, {X, Y, Z}, {X, 0, Z}});
   face("walls", 0, {{0, 0, 0}, {0, Y, 0}, {0, Y, Z}, {0, 0, Z}});
   face("walls", 0, {{X, 0, 0}, {X, 0, Z}, {X, Y, Z}, {X, Y, 0}});
-  const test::Icosphere sphere = test::icosphere(level);
-  auto point = [&](int k) {
-    const auto& p = sphere.positions[static_cast<size_t>(k)];
-    return Vec3(p[0], p[1], p[2]);
-  };
-  const Vec3 centre(2.0, 1.2, 2.0);
-  for (const auto& [a, b, c] : sphere.triangles)
-    face("sphere", 1, {centre + 0.8 * point(a), centre + 0.8 * point(b), centre + 0.8 * point(c)});
+  contents([&](const std::string& n, int material, std::vector<Vec3> pts) { face(n, material, std::move(pts)); });
   Material wall, grey, lamp;
   wall.name = "wall";
   wall.reflectance = Rgb(0.7);
@@ -100,48 +98,38 @@ Scene sphere_room(int level) {
   grey.reflectance = Rgb(0.5);
   lamp.name = "lamp";
   lamp.emission = Rgb(10.0);
-  return build_scene(faces, {wall, grey, lamp}, "sphere_room");
+  return build_scene(faces, {wall, grey, lamp}, name);
 }
 
-// The same room with a k x k field of grey boxes standing on the floor
-// instead of the sphere (the scaling benchmark's box fields).
+// The room with an icosphere of 20 x 4^level triangles floating inside.
+Scene sphere_room(int level) {
+  return room("sphere_room", [level](const AddFace& face) {
+    const test::Icosphere sphere = test::icosphere(level);
+    auto point = [&](int k) {
+      const auto& p = sphere.positions[static_cast<size_t>(k)];
+      return Vec3(p[0], p[1], p[2]);
+    };
+    const Vec3 centre(2.0, 1.2, 2.0);
+    for (const auto& [a, b, c] : sphere.triangles)
+      face("sphere", 1, {centre + 0.8 * point(a), centre + 0.8 * point(b), centre + 0.8 * point(c)});
+  });
+}
+
+// The room with a k x k field of boxes standing on the floor (the scaling
+// benchmark's box fields).
 Scene boxes_room(int k) {
-  std::vector<RawFace> faces;
-  auto face = [&](const std::string& name, int material, std::vector<Vec3> pts, std::vector<std::vector<Vec3>> holes = {}) {
-    RawFace f;
-    f.name = name;
-    f.material = material;
-    f.points = std::move(pts);
-    f.holes = std::move(holes);
-    faces.push_back(std::move(f));
-  };
-  const double X = 4, Y = 3, Z = 4;
-  face("floor", 0, {{0, 0, 0}, {0, 0, Z}, {X, 0, Z}, {X, 0, 0}});
-  face("ceiling", 0, {{0, Y, 0}, {X, Y, 0}, {X, Y, Z}, {0, Y, Z}},
-       {{{1.5, Y, 1.5}, {1.5, Y, 2.5}, {2.5, Y, 2.5}, {2.5, Y, 1.5}}});
-  face("light", 2, {{1.5, Y, 1.5}, {2.5, Y, 1.5}, {2.5, Y, 2.5}, {1.5, Y, 2.5}});
-  face("walls", 0, {{0, 0, 0}, {X, 0, 0}, {X, Y, 0}, {0, Y, 0}});
-  face("walls", 0, {{0, 0, Z}, {0, Y, Z}, {X, Y, Z}, {X, 0, Z}});
-  face("walls", 0, {{0, 0, 0}, {0, Y, 0}, {0, Y, Z}, {0, 0, Z}});
-  face("walls", 0, {{X, 0, 0}, {X, 0, Z}, {X, Y, Z}, {X, Y, 0}});
-  const double margin = 0.5, cell = (X - 2.0 * margin) / k, size = 0.5 * cell, h = 0.6 * cell;
-  for (int i = 0; i < k; ++i)
-    for (int j = 0; j < k; ++j) {
-      const double x0 = margin + (i + 0.25) * cell, z0 = margin + (j + 0.25) * cell, x1 = x0 + size, z1 = z0 + size;
-      face("boxes", 1, {{x0, h, z0}, {x0, h, z1}, {x1, h, z1}, {x1, h, z0}});
-      face("boxes", 1, {{x0, 0, z0}, {x1, 0, z0}, {x1, h, z0}, {x0, h, z0}});
-      face("boxes", 1, {{x0, 0, z1}, {x0, h, z1}, {x1, h, z1}, {x1, 0, z1}});
-      face("boxes", 1, {{x0, 0, z0}, {x0, h, z0}, {x0, h, z1}, {x0, 0, z1}});
-      face("boxes", 1, {{x1, 0, z0}, {x1, 0, z1}, {x1, h, z1}, {x1, h, z0}});
-    }
-  Material wall, grey, lamp;
-  wall.name = "wall";
-  wall.reflectance = Rgb(0.7);
-  grey.name = "grey";
-  grey.reflectance = Rgb(0.5);
-  lamp.name = "lamp";
-  lamp.emission = Rgb(10.0);
-  return build_scene(faces, {wall, grey, lamp}, "boxes_room");
+  return room("boxes_room", [k](const AddFace& face) {
+    const double margin = 0.5, cell = (4.0 - 2.0 * margin) / k, size = 0.5 * cell, h = 0.6 * cell;
+    for (int i = 0; i < k; ++i)
+      for (int j = 0; j < k; ++j) {
+        const double x0 = margin + (i + 0.25) * cell, z0 = margin + (j + 0.25) * cell, x1 = x0 + size, z1 = z0 + size;
+        face("boxes", 1, {{x0, h, z0}, {x0, h, z1}, {x1, h, z1}, {x1, h, z0}});
+        face("boxes", 1, {{x0, 0, z0}, {x1, 0, z0}, {x1, h, z0}, {x0, h, z0}});
+        face("boxes", 1, {{x0, 0, z1}, {x0, h, z1}, {x1, h, z1}, {x1, 0, z1}});
+        face("boxes", 1, {{x0, 0, z0}, {x0, h, z0}, {x0, h, z1}, {x0, 0, z1}});
+        face("boxes", 1, {{x1, 0, z0}, {x1, 0, z1}, {x1, h, z1}, {x1, h, z0}});
+      }
+  });
 }
 
 // Area-weighted mean radiosity (first channel) per patch name.
