@@ -113,7 +113,7 @@ ClusterTree ClusterTree::shape(const std::vector<Triangle>& roots, const std::ve
       std::vector<size_t> members;
     };
     std::vector<Made> made;
-    std::unordered_map<std::array<Cell, 3>, size_t, CellsHash> index;
+    std::unordered_map<std::array<Cell, 3>, size_t, CellsHash> made_at;
     std::vector<size_t> degenerate;
     for (size_t i = 0; i < frontier.size(); ++i) {
       std::array<Cell, 3>& c = frontier[i].cells;
@@ -123,7 +123,7 @@ ClusterTree ClusterTree::shape(const std::vector<Triangle>& roots, const std::ve
         degenerate.push_back(i);
         continue;
       }
-      const auto [it, fresh] = index.try_emplace(c, made.size());
+      const auto [it, fresh] = made_at.try_emplace(c, made.size());
       if (fresh) made.push_back({c, {}});
       made[it->second].members.push_back(i);
     }

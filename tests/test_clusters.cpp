@@ -146,6 +146,17 @@ std::map<std::string, double> object_means(const Scene& s, const HierarchicalSol
   return out;
 }
 
+// One round of linking and solving with clusters `mode` (min_area 0: the
+// solver's default).
+HierarchicalOptions one_round(ClusterMode mode, double epsilon, double min_area) {
+  HierarchicalOptions ho;
+  ho.clusters = mode;
+  ho.epsilon = epsilon;
+  ho.min_area = min_area;
+  ho.max_rounds = 1;
+  return ho;
+}
+
 Mesh initial_mesh(const Scene& s) {
   MeshingOptions o;
   o.max_edge = s.diagonal() / 5.0;  // the hierarchical method's own
@@ -156,11 +167,8 @@ Mesh initial_mesh(const Scene& s) {
 TEST(Clusters, FewerLinksSameObjectMeansAndEnergyInAClosedRoom) {
   const Scene s = sphere_room(2);  // 320 sphere triangles
   const Mesh m = initial_mesh(s);
-  HierarchicalOptions off;
-  off.clusters = ClusterMode::off;
-  off.epsilon = 0.01;
-  off.min_area = 0.02;  // the walls' leaves stay coarse: the roots are what is compared
-  off.max_rounds = 1;
+  // min_area 0.02: the walls' leaves stay coarse, the roots are what is compared
+  const HierarchicalOptions off = one_round(ClusterMode::off, 0.01, 0.02);
   const HierarchicalSolution a = solve_hierarchical(s, m, {}, off);
   EXPECT_EQ(a.stats.clusters, 0);
   const auto ma = object_means(s, a);
@@ -196,11 +204,7 @@ TEST(Clusters, BoxesOnTheFloorAreNotLitAsTheFloor) {
   // either way). Object means within 1.5% of `off`.
   const Scene s = boxes_room(6);
   const Mesh m = initial_mesh(s);
-  HierarchicalOptions off;
-  off.clusters = ClusterMode::off;
-  off.epsilon = 0.001;
-  off.min_area = 0.005;
-  off.max_rounds = 1;
+  const HierarchicalOptions off = one_round(ClusterMode::off, 0.001, 0.005);
   const auto reference = object_means(s, solve_hierarchical(s, m, {}, off));
   for (ClusterMode mode : {ClusterMode::volume, ClusterMode::shape}) {
     HierarchicalOptions ho = off;
@@ -244,10 +248,7 @@ TEST(Clusters, FurnaceStaysExact) {
   const Scene s = build_scene(faces, {m}, "inside_sphere");
   const Mesh mesh = initial_mesh(s);
   for (ClusterMode mode : {ClusterMode::volume, ClusterMode::shape}) {
-    HierarchicalOptions ho;
-    ho.clusters = mode;
-    ho.epsilon = 0.01;
-    ho.max_rounds = 1;
+    const HierarchicalOptions ho = one_round(mode, 0.01, 0.0);
     SolveOptions so;
     so.tolerance = 1e-10;
     const HierarchicalSolution h = solve_hierarchical(s, mesh, so, ho);
@@ -271,11 +272,7 @@ TEST(Clusters, OneAndTwoThreadsGiveIdenticalResults) {
   const Scene s = sphere_room(2);
   const Mesh m = initial_mesh(s);
   for (ClusterMode mode : {ClusterMode::volume, ClusterMode::shape}) {
-    HierarchicalOptions ho;
-    ho.clusters = mode;
-    ho.epsilon = 0.01;
-    ho.min_area = 0.02;
-    ho.max_rounds = 1;
+    const HierarchicalOptions ho = one_round(mode, 0.01, 0.02);
     SolveOptions one, two;
     one.threads = 1;
     two.threads = 2;
