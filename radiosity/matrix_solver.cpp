@@ -251,7 +251,7 @@ Solution solve_with_matrix(const Scene& scene, const Mesh& mesh, const ElementSe
   for (long long i = 0; i < n; ++i) {
     const size_t u = static_cast<size_t>(i);
     for (int c = 0; c < 3; ++c) sol.element[u][c] = B[static_cast<size_t>(c)][u];
-    balance.add(el.triangle[u].area, rho[u], emit[u], sol.element[u], H[u], row_sum[u]);
+    balance.add(el.triangle[u].area, rho[u], emit[u], sol.element[u], H[u], row_sum[u], row_sum[u]);
   }
   balance.finish(st);
   for (const Rgb& b : sol.element)

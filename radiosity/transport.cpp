@@ -104,10 +104,10 @@ double VisibilityEstimator::visible_fraction(const Triangle& a, int pa, uint64_t
 }
 
 void BalanceAccumulator::add(double area, const Rgb& rho, const Rgb& emission, const Rgb& b, const Rgb& h,
-                             double row_sum) {
+                             double row_sum, double sent_row) {
   emitted_ += emission * area;
   absorbed_ += (Rgb(1.0) - rho) * h * area;
-  escaped_ += b * area * (1.0 - row_sum);
+  escaped_ += b * area * (1.0 - sent_row);
   worst_ = glm::max(worst_, glm::abs(emission + rho * h - b));
   contraction_ = glm::max(contraction_, rho * row_sum);
   largest_ = glm::max(largest_, glm::abs(b));

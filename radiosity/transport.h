@@ -89,17 +89,19 @@ private:
 };
 
 // Energy balance and residual of a solve, element by element: emitted
-// E a = absorbed (1 - rho) H a + escaped B a (1 - row sum), and the residual
-// max |E + rho H - B| / max |B| per channel, where H is the gathered
-// irradiance and the row sum the element's total form factor (1 in a
-// closed scene). Fills the power_* and residual fields of `stats`, and
+// E a = absorbed (1 - rho) H a + escaped B a (1 - sent row), and the
+// residual max |E + rho H - B| / max |B| per channel, where H is the
+// gathered irradiance, the row sum the element's total form factor (1 in a
+// closed scene) and the sent row the fraction of B a the solve carries to
+// other elements (the row sum again where form factors are reciprocal, as
+// in the matrix method). Fills the power_* and residual fields of `stats`, and
 // error_bound: the residual over 1 - max(rho x row sum), which bounds the
 // error of B relative to max |B| (the Neumann series of rho F), or -1 when
 // rho F has no norm below 1 and so gives no bound.
 class BalanceAccumulator {
 public:
   void add(double area, const Rgb& reflectance, const Rgb& emission, const Rgb& radiosity, const Rgb& gathered,
-           double row_sum);
+           double row_sum, double sent_row);
   void finish(SolveStats& stats) const;
 
 private:
