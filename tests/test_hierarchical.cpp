@@ -83,7 +83,9 @@ TEST(Hierarchical, CornellBoxAgreesWithTheMatrixSolveAndBalancesEnergy) {
     const double scale = std::max(mm[p].x, 0.05 * mm[0].x);
     EXPECT_NEAR(mh[p].x, mm[p].x, 0.05 * scale) << s.patches[p].name;
   }
-  EXPECT_LT(std::abs(relative_imbalance(h.solution.stats)), 0.01);
+  // Every link takes what its receivers gather out of its sending leaves'
+  // radiosity: the balance closes to the sweeps' tolerance.
+  EXPECT_LT(std::abs(relative_imbalance(h.solution.stats)), 1e-4);
   EXPECT_GT(h.stats.zero_area_triangles, 0);
 }
 
