@@ -116,11 +116,13 @@ std::string write_boxes_room(const std::string& dir, int k) {
     for (int j = 0; j < k; ++j) {
       const double x0 = margin + (i + 0.25) * cell, z0 = margin + (j + 0.25) * cell;
       const double x1 = x0 + size, z1 = z0 + size, y = height;
+      // Every face facing out (the sides once faced in: light met their
+      // backs and was lost, a fifth of the power).
       w.quad({x0, y, z0}, {x0, y, z1}, {x1, y, z1}, {x1, y, z0});  // top
-      w.quad({x0, 0, z0}, {x1, 0, z0}, {x1, y, z0}, {x0, y, z0});  // -z
-      w.quad({x0, 0, z1}, {x0, y, z1}, {x1, y, z1}, {x1, 0, z1});  // +z
-      w.quad({x0, 0, z0}, {x0, y, z0}, {x0, y, z1}, {x0, 0, z1});  // -x
-      w.quad({x1, 0, z0}, {x1, 0, z1}, {x1, y, z1}, {x1, y, z0});  // +x
+      w.quad({x0, 0, z0}, {x0, y, z0}, {x1, y, z0}, {x1, 0, z0});  // -z
+      w.quad({x0, 0, z1}, {x1, 0, z1}, {x1, y, z1}, {x0, y, z1});  // +z
+      w.quad({x0, 0, z0}, {x0, 0, z1}, {x0, y, z1}, {x0, y, z0});  // -x
+      w.quad({x1, 0, z0}, {x1, y, z0}, {x1, y, z1}, {x1, 0, z1});  // +x
     }
   return w.write(dir, "boxes_" + std::to_string(k));
 }
