@@ -575,8 +575,9 @@ private:
     const Vec3 c = t.centroid();
     for (const auto& [p, l] : path) {
       const Triangle& r = tri_[static_cast<size_t>(p)];
-      const double w = t.area * point_polygon_form_factor(c, t.normal, r.v.data(), 3, r.normal) * l->visible;
-      if (w > 0.0) sent.push_back({l->id, w});
+      const float w = static_cast<float>(t.area * point_polygon_form_factor(c, t.normal, r.v.data(), 3, r.normal) *
+                                         l->visible);
+      if (w > 0.0f) sent.push_back({l->id, w});
     }
   }
 
@@ -1322,7 +1323,9 @@ private:
   std::vector<double> F_sum_;     // per leaf: its exact form factors (element sources)
   std::vector<double> F_approx_;  // per leaf: its form factors to big clusters' groups
   std::vector<std::vector<std::pair<int, double>>> terms_;  // per leaf: (link id or group code, F x visibility at the leaf)
-  std::vector<std::vector<std::pair<int, double>>> sent_;   // per leaf: (link id, A F(leaf -> receiver) x visibility)
+  // Per node: (link id, A F(node -> receiver) x visibility), in float: it
+  // only shares a link's transport out, and its sums are taken in double.
+  std::vector<std::vector<std::pair<int, float>>> sent_;
   std::vector<char> sent_dirty_;          // per node: element links from it changed since the last leaf_terms
   int next_id_ = 0;                       // element links numbered so far
   std::vector<int> free_ids_;             // numbers of removed links, to use again
