@@ -43,7 +43,9 @@ struct SolveStats {
   int extrapolations = 0;  // Aitken steps of the iteration (SweepMonitor)
   double seconds_form_factors = 0.0;  // form factors (hierarchical: linking)
   double seconds_solve = 0.0;
-  // Energy balance (per channel): emitted = absorbed + escaped.
+  // Energy balance (per channel): emitted = absorbed + escaped, where
+  // escaped is what each element radiates but the solve carries to no other
+  // element (BalanceAccumulator): in a closed scene, the operator's leak.
   Rgb power_emitted{0.0};
   Rgb power_absorbed{0.0};
   Rgb power_escaped{0.0};
