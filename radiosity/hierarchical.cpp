@@ -514,14 +514,20 @@ private:
     }
     // A link received but sent by no piece (all of them see the receiver
     // from behind at their centroids: where the receiver's plane cuts the
-    // source) carries its source's plain mean. On the Cornell box 588 of
-    // 494,000 links, 2e-4 of the transport.
+    // source) carries its source's plain mean: the source node itself sends,
+    // weighted by what is received (area x F, the pieces' unit, should a
+    // piece later send too). On the Cornell box 588 of 494,000 links, 2e-4
+    // of the transport.
     for (size_t p = 0; p < n; ++p)
-      for (const Link& l : links_[p])
-        if (l.id >= 0 && received_[static_cast<size_t>(l.id)] > 0.0 && !(inv_sent_[static_cast<size_t>(l.id)] > 0.0)) {
-          sent_[static_cast<size_t>(l.source)].push_back({l.id, 1.0f});
-          inv_sent_[static_cast<size_t>(l.id)] = 1.0;
+      for (const Link& l : links_[p]) {
+        if (l.id < 0) continue;
+        const size_t id = static_cast<size_t>(l.id);
+        if (received_[id] > 0.0 && !(inv_sent_[id] > 0.0)) {
+          const float w = static_cast<float>(received_[id]);
+          sent_[static_cast<size_t>(l.source)].push_back({l.id, w});
+          inv_sent_[id] = w;
         }
+      }
     for (size_t id = 0; id < ids; ++id) inv_sent_[id] = inv_sent_[id] > 0.0 ? 1.0 / inv_sent_[id] : 0.0;
     cluster_terms();
     scale_rows();
