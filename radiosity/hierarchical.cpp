@@ -447,14 +447,16 @@ private:
   //
   // Visibility: a link's own visible fraction, except where a leaf gathers
   // over an ancestor's partly visible link: then the leaf casts its own
-  // rays to the source (--rays of them, its own random stream). One
+  // rays to the source (a quarter of --rays, at least one, stratified; its
+  // own random stream: unbiased for the leaf, and its many links average
+  // the noise; 16 rays gave the same Cornell errors, and on the 8 x 8 box
+  // field 1.6x the run). One
   // fraction for a whole ancestor is the mean over the ancestor, and the
   // leaves next to an occluder see less than the mean: on the Cornell box
-  // the floor within 15 mm of the short block came out 7% too bright (39%
-  // in its umbra, rows up to 1.04), and the block's faces that look at it
-  // 1.2-1.4% too bright. With the leaves' own fractions, 1.8% and within
-  // 0.5%, for 8x the rays (most of them cheap, short and coherent) and
-  // about 1.3x the solve.
+  // the floor within 15 mm of a block came out 6% brighter than the field
+  // gathered there (39% in the short block's umbra, rows up to 1.04), and
+  // the block faces that look at it 1.2-1.4% too bright. With the leaves'
+  // own fractions, about 1% (tested) and within 0.5%.
   //
   // The sending side in pieces (sender_terms): an element link does not
   // carry its source node's mean radiosity but the mean of the source's
@@ -586,7 +588,8 @@ private:
       const double v = k >= own && l->visible < 1.0
                            ? visibility_.visible_fraction(t, node_patch(static_cast<int>(x)), static_cast<uint64_t>(x),
                                                           tri_[static_cast<size_t>(l->source)], node_patch(l->source),
-                                                          static_cast<uint64_t>(l->source), leaf_rays_[x])
+                                                          static_cast<uint64_t>(l->source), leaf_rays_[x],
+                                                          std::max(1, visibility_.side() / 2))
                            : l->visible;
       const double f = form_factor(pts, tri_[static_cast<size_t>(l->source)]) * v;
       if (f <= 0.0) continue;

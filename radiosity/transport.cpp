@@ -69,8 +69,9 @@ bool VisibilityEstimator::facing(int p, int q) const { return impl_->occlusion.f
 double VisibilityEstimator::distance_to_patch(int p, const Vec3& x) const { return impl_->occlusion.distance(p, x); }
 
 double VisibilityEstimator::visible_fraction(const Triangle& a, int pa, uint64_t id_a, const Triangle& b, int pb,
-                                             uint64_t id_b, RayCount& count) const {
-  const int rays = side_ * side_;
+                                             uint64_t id_b, RayCount& count, int side) const {
+  if (side <= 0) side = side_;
+  const int rays = side * side;
   if (!impl_->embree || !impl_->occlusion.may_occlude(pa, pb, a, b)) {
     count.skipped += rays;
     ++count.unoccludable;
@@ -91,11 +92,11 @@ double VisibilityEstimator::visible_fraction(const Triangle& a, int pa, uint64_t
     const int s = k, t = perm[static_cast<size_t>(k)];
     // Each point's second coordinate is drawn first, in an order written out
     // (the order of evaluating function arguments is unspecified).
-    const double xv = ((s / side_) + rng.uniform()) / side_;
-    const double xu = ((s % side_) + rng.uniform()) / side_;
+    const double xv = ((s / side) + rng.uniform()) / side;
+    const double xu = ((s % side) + rng.uniform()) / side;
     const Vec3 x = triangle_point(ti.v[0], ti.v[1], ti.v[2], xu, xv);
-    const double yv = ((t / side_) + rng.uniform()) / side_;
-    const double yu = ((t % side_) + rng.uniform()) / side_;
+    const double yv = ((t / side) + rng.uniform()) / side;
+    const double yu = ((t % side) + rng.uniform()) / side;
     const Vec3 y = triangle_point(tj.v[0], tj.v[1], tj.v[2], yu, yv);
     if (impl_->embree->visible(x, y, pi, pj)) ++open;
   }

@@ -64,9 +64,11 @@ public:
 
   // a, b: the two elements' triangles (a point is a triangle with three equal
   // corners), pa, pb their patches, id_a, id_b their ids for the stream.
-  // Thread-safe; counts the rays in `count`.
+  // Thread-safe; counts the rays in `count`. side x side rays (stratified
+  // on both triangles); 0: the estimator's own count.
   double visible_fraction(const Triangle& a, int pa, uint64_t id_a, const Triangle& b, int pb, uint64_t id_b,
-                          RayCount& count) const;
+                          RayCount& count, int side = 0) const;
+  int side() const { return side_; }
 
   // The open segment (x, y) is clear of every patch but pa and pb (always
   // in a convex enclosure). Thread-safe.
