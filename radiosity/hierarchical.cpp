@@ -123,6 +123,9 @@ public:
       return false;
     }
     previous_ = B_;
+    // The first round's leaf terms were made before any reflected radiosity
+    // was known, which decides where a leaf casts its own rays: made anew.
+    if (st.rounds == 1) std::fill(dirty_.begin(), dirty_.end(), 1);
     const auto t2 = std::chrono::steady_clock::now();
     report("refine", 0.0);
     const long long refined = refine_links();
@@ -252,6 +255,7 @@ private:
     grow();
   }
 
+  static constexpr double kLeafRaysBound = 0.1;
   bool splittable(int n) const { return tri_[static_cast<size_t>(n)].area > 4.0 * min_area_; }
 
   // F(p -> q) without occlusion, from points on p graded toward q.
@@ -446,11 +450,15 @@ private:
   // rounding, as in the matrix method.
   //
   // Visibility: a link's own visible fraction, except where a leaf gathers
-  // over an ancestor's partly visible link: then the leaf casts its own
-  // rays to the source (a quarter of --rays, at least one, stratified; its
-  // own random stream: unbiased for the leaf, and its many links average
-  // the noise; 16 rays gave the same Cornell errors, and on the 8 x 8 box
-  // field 1.6x the run). One
+  // over an ancestor's partly visible link that could move it by more than
+  // kLeafRaysBound x the refinement threshold (rho_leaf F B_source, the
+  // most the link's fraction can be off by, against epsilon x the largest
+  // reflected radiosity): then the leaf casts its own rays to the source (a
+  // quarter of --rays, at least one, stratified; its own random stream:
+  // unbiased for the leaf, and its many links average the noise; 16 rays
+  // gave the same Cornell errors, and on the 8 x 8 box field 1.6x the run;
+  // without the bound, the same errors and 1.2x the run on a sphere room of
+  // 5,127 faces; a bound of 1 lost the fix). One
   // fraction for a whole ancestor is the mean over the ancestor, and the
   // leaves next to an occluder see less than the mean: on the Cornell box
   // the floor within 15 mm of a block came out 6% brighter than the field
@@ -577,6 +585,7 @@ private:
         near = std::min(near, distance_to_triangle(c, tri_[static_cast<size_t>(l->source)]) - t.radius);
     near = std::max(near, 0.0);
     const ReceiverPoints pts = receiver_points(t, [near](const Vec3&) { return near; }, opt_.quadrature);
+    const double rho = max3(rho_[x]);
     for (size_t k = 0; k < path.size(); ++k) {
       const Link* l = path[k];
       if (l->visible <= 0.0) continue;  // hidden: kept as a link, never gathered
@@ -584,14 +593,18 @@ private:
         ct_.form_factors(cluster_of(l->source), c, t.normal, l->visible, terms_[x], F_approx_[x], group_visible(*l));
         continue;
       }
-      // An ancestor's partly visible link: the leaf's own visible fraction.
-      const double v = k >= own && l->visible < 1.0
+      const double f0 = form_factor(pts, tri_[static_cast<size_t>(l->source)]);
+      // An ancestor's partly visible link that may matter here: the leaf's
+      // own visible fraction.
+      const bool own_rays = k >= own && l->visible < 1.0 &&
+                            rho * f0 * max3(B_[static_cast<size_t>(l->source)]) > kLeafRaysBound * hopt_.epsilon * scale_;
+      const double v = own_rays
                            ? visibility_.visible_fraction(t, node_patch(static_cast<int>(x)), static_cast<uint64_t>(x),
                                                           tri_[static_cast<size_t>(l->source)], node_patch(l->source),
                                                           static_cast<uint64_t>(l->source), leaf_rays_[x],
                                                           std::max(1, visibility_.side() / 2))
                            : l->visible;
-      const double f = form_factor(pts, tri_[static_cast<size_t>(l->source)]) * v;
+      const double f = f0 * v;
       if (f <= 0.0) continue;
       terms_[x].push_back({l->id, f});
       F_sum_[x] += f;
