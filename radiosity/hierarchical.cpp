@@ -268,7 +268,6 @@ private:
     grow();
   }
 
-  static constexpr double kLeafRaysBound = 0.1;
   bool splittable(int n) const { return tri_[static_cast<size_t>(n)].area > 4.0 * min_area_; }
 
   // F(p -> q) without occlusion, from points on p graded toward q.
@@ -576,6 +575,7 @@ private:
     for (const auto& t : gterms_) out_.stats.leaf_terms += static_cast<long long>(t.size());
   }
 
+  static constexpr double kLeafRaysBound = 0.1;  // see the comment above leaf_terms
   void gather_terms(size_t x) {
     const ElementTree& tree = out_.tree;
     terms_[x].clear();
