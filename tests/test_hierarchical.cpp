@@ -7,6 +7,7 @@
 #include "meshing/scene.h"
 #include "meshing/mesh.h"
 #include "radiosity/field.h"
+#include "radiosity/form_factor.h"
 #include "radiosity/hierarchical.h"
 #include "radiosity/solve.h"
 
@@ -117,7 +118,7 @@ TEST(Hierarchical, FloorAtTheBlocksFeetGathersWhatItsOwnRaysSee) {
   ASSERT_EQ(feet.size(), 2u);
   for (auto& [name, f] : feet) {
     ASSERT_EQ(f.size(), 4u) << name;
-    const Vec3 c = (f[0] + f[1] + f[2] + f[3]) / 4.0;  // corners in order around the centre
+    const Vec3 c = (f[0] + f[1] + f[2] + f[3]) / 4.0;  // corners in order around the centre (an outline)
     std::sort(f.begin(), f.end(), [&](const Vec3& a, const Vec3& b) {
       return std::atan2(a.z - c.z, a.x - c.x) < std::atan2(b.z - c.z, b.x - c.x);
     });
@@ -128,16 +129,9 @@ TEST(Hierarchical, FloorAtTheBlocksFeetGathersWhatItsOwnRaysSee) {
       const auto& tri = h.mesh.triangles[static_cast<size_t>(t)];
       const Vec3 x = (h.mesh.positions[static_cast<size_t>(tri[0])] + h.mesh.positions[static_cast<size_t>(tri[1])] +
                       h.mesh.positions[static_cast<size_t>(tri[2])]) / 3.0;
-      double d = 1e300;
-      bool outside = false;
-      for (size_t k = 0; k < 4; ++k) {
-        const Vec3 a = f[k], b = f[(k + 1) % 4];
-        const Vec3 ab = b - a;
-        outside = outside || (ab.x * (x.z - a.z) - ab.z * (x.x - a.x)) < 0.0;  // right of a counter-clockwise edge
-        const double u = std::clamp(glm::dot(x - a, ab) / glm::dot(ab, ab), 0.0, 1.0);
-        d = std::min(d, glm::length(x - (a + u * ab)));
-      }
-      if (!outside || d > 15.0) continue;
+      // In the floor's plane: 0 under the block, the distance to its outline outside.
+      const double d = distance_to_polygon(x, f, Vec3(0.0, 1.0, 0.0));
+      if (!(d > 0.0) || d > 15.0) continue;
       const double a = h.mesh.area(t);
       element += a * h.solution.element[static_cast<size_t>(t)].x;
       gathered += a * field.radiosity(x, floor, static_cast<uint64_t>(t), report).x;
