@@ -30,8 +30,9 @@ struct DirectCounts {
 };
 
 // For a point x on a receiver, every emitter polygon is clipped against the
-// occluders as seen from x: each occluder triangle is clipped to the pyramid
-// from x over the emitter and to the slab between x and the emitter plane,
+// occluders as seen from x: each occluder (a whole patch where it is convex,
+// without holes and exactly planar, else each of its triangles) is clipped
+// to the pyramid from x over the emitter and to the slab between x and the emitter plane,
 // projected from x into the emitter's plane, and the union of these shadows
 // is subtracted from the emitter polygon (exact 2-D Boolean operations,
 // CGAL Epeck, in the emitter's plane). Lambert's contour formula applied to

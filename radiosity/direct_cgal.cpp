@@ -68,11 +68,15 @@ std::vector<Vec3> Emitter::lifted(const Polygon2& poly) const {
   return out;
 }
 
-struct OccluderTriangle {
-  int patch;
-  std::array<Point3, 3> v;
-  std::array<Vec3, 3> d;  // the same corners in double
-  Vec3 lo, hi;
+// A convex planar polygon that may cast a shadow: a whole patch where its
+// outline is convex, without holes and exactly planar, else one triangle of
+// it. One polygon per such patch gives half the shadows of its triangles and
+// none of the coinciding diagonals that the exact union must resolve.
+struct OccluderPolygon {
+  int patch = -1;
+  std::vector<Point3> v;
+  std::vector<Vec3> d;  // the same corners in double
+  Vec3 lo{0.0}, hi{0.0};
 };
 
 // Sutherland-Hodgman in exact arithmetic: keeps the part on the positive side
@@ -107,7 +111,7 @@ struct ConvexOccluder {
 struct DirectIllumination::Impl {
   const Scene& scene;
   std::vector<Emitter> emitters;
-  std::vector<OccluderTriangle> occluders;  // in patch order
+  std::vector<OccluderPolygon> occluders;  // in patch order
   std::vector<ConvexOccluder> convex;       // per patch
   explicit Impl(const Scene& s) : scene(s) {}
 
@@ -135,14 +139,14 @@ struct DirectIllumination::Impl {
       const Vec3 lo = glm::min(x, e.lo), hi = glm::max(x, e.hi);
       std::vector<Polygon2> shadows;
       for (const int index : *candidates) {
-        const OccluderTriangle& t = occluders[static_cast<size_t>(index)];
+        const OccluderPolygon& t = occluders[static_cast<size_t>(index)];
         if (t.patch == receiver || t.patch == e.patch) continue;
         if (glm::any(glm::lessThan(hi, t.lo)) || glm::any(glm::lessThan(t.hi, lo))) continue;
         // Nothing strictly in front of the emitter: cannot occlude it.
         if (std::none_of(t.v.begin(), t.v.end(),
                          [&](const Point3& p) { return e.plane.oriented_side(p) == CGAL::ON_POSITIVE_SIDE; }))
           continue;
-        std::vector<Point3> poly(t.v.begin(), t.v.end());
+        std::vector<Point3> poly = t.v;
         for (const EK::Plane_3& pl : planes) {
           poly = clip(poly, pl);
           if (poly.size() < 3) break;
@@ -219,7 +223,7 @@ struct DirectIllumination::Impl {
     // margin (a triangle that only touches the pyramid, as a wall meeting
     // the emitter's edge does, hides nothing). Axes: the pyramid's faces,
     // the triangle's plane, and the cross products of their edges.
-    auto apart = [&](const std::array<Vec3, 3>& t, const Vec3& axis) {
+    auto apart = [&](const std::vector<Vec3>& t, const Vec3& axis) {
       const double len = glm::length(axis);
       if (!(len > 1e-300)) return false;
       double hlo = INFINITY, hhi = -INFINITY, tlo = INFINITY, thi = -INFINITY;
@@ -235,11 +239,13 @@ struct DirectIllumination::Impl {
       }
       return hhi <= tlo + margin * len || thi <= hlo + margin * len;
     };
-    auto separated = [&](const std::array<Vec3, 3>& t) {
+    std::vector<Vec3> te;
+    auto separated = [&](const std::vector<Vec3>& t) {
       for (size_t i = 0; i < nb; ++i)
         if (apart(t, glm::cross(hull_edges[2 * i], hull_edges[2 * ((i + 1) % nb)]))) return true;
       if (apart(t, e.normal)) return true;
-      const std::array<Vec3, 3> te = {t[1] - t[0], t[2] - t[1], t[0] - t[2]};
+      te.clear();
+      for (size_t i = 0; i < t.size(); ++i) te.push_back(t[(i + 1) % t.size()] - t[i]);
       if (apart(t, glm::cross(te[0], te[1]))) return true;
       for (const Vec3& he : hull_edges)
         for (const Vec3& edge : te)
@@ -248,7 +254,7 @@ struct DirectIllumination::Impl {
     };
     const Vec3 lo = glm::min(x, e.lo) - Vec3(margin), hi = glm::max(x, e.hi) + Vec3(margin);
     for (const int index : e.front) {
-      const OccluderTriangle& t = occluders[static_cast<size_t>(index)];
+      const OccluderPolygon& t = occluders[static_cast<size_t>(index)];
       if (t.patch == receiver || t.patch == e.patch) continue;
       if (glm::any(glm::lessThan(hi, t.lo)) || glm::any(glm::lessThan(t.hi, lo))) continue;
       if (!separated(t.d)) out.push_back(index);
@@ -328,21 +334,6 @@ struct DirectIllumination::Impl {
 };
 
 DirectIllumination::DirectIllumination(const Scene& scene) : impl_(std::make_unique<Impl>(scene)) {
-  const Mesh coarse = triangulate_patches(scene);
-  for (int t = 0; t < coarse.triangle_count(); ++t) {
-    OccluderTriangle o;
-    o.patch = coarse.patch[static_cast<size_t>(t)];
-    const auto& tri = coarse.triangles[static_cast<size_t>(t)];
-    o.lo = o.hi = coarse.positions[static_cast<size_t>(tri[0])];
-    for (int k = 0; k < 3; ++k) {
-      const Vec3& p = coarse.positions[static_cast<size_t>(tri[static_cast<size_t>(k)])];
-      o.v[static_cast<size_t>(k)] = exact(p);
-      o.d[static_cast<size_t>(k)] = p;
-      o.lo = glm::min(o.lo, p);
-      o.hi = glm::max(o.hi, p);
-    }
-    impl_->occluders.push_back(o);
-  }
   impl_->convex.resize(scene.patches.size());
   for (size_t p = 0; p < scene.patches.size(); ++p) {
     const Patch& patch = scene.patches[p];
@@ -359,6 +350,45 @@ DirectIllumination::DirectIllumination(const Scene& scene) : impl_(std::make_uni
       turn += z;
     }
     if (convex && turn > 0.0) impl_->convex[p] = {std::move(outline), patch.normal};
+  }
+  auto add = [&](int patch, const std::vector<Vec3>& corners) {
+    OccluderPolygon o;
+    o.patch = patch;
+    o.d = corners;
+    o.lo = o.hi = corners[0];
+    for (const Vec3& c : corners) {
+      o.v.push_back(exact(c));
+      o.lo = glm::min(o.lo, c);
+      o.hi = glm::max(o.hi, c);
+    }
+    impl_->occluders.push_back(std::move(o));
+  };
+  // A convex outline strictly convex at every corner and exactly planar
+  // (checked in exact arithmetic) is one occluder; any other patch is its
+  // triangles.
+  auto whole = [](const std::vector<Vec3>& outline) {
+    if (outline.size() <= 3) return outline.size() == 3;
+    std::vector<Point3> q;
+    for (const Vec3& v : outline) q.push_back(exact(v));
+    for (size_t i = 0; i < q.size(); ++i)
+      if (CGAL::collinear(q[i], q[(i + 1) % q.size()], q[(i + 2) % q.size()])) return false;
+    for (size_t i = 3; i < q.size(); ++i)
+      if (!CGAL::coplanar(q[0], q[1], q[2], q[i])) return false;
+    return true;
+  };
+  std::vector<char> one(scene.patches.size(), 0), added(scene.patches.size(), 0);
+  for (size_t p = 0; p < scene.patches.size(); ++p) one[p] = whole(impl_->convex[p].outline);
+  const Mesh coarse = triangulate_patches(scene);
+  for (int t = 0; t < coarse.triangle_count(); ++t) {
+    const size_t p = static_cast<size_t>(coarse.patch[static_cast<size_t>(t)]);
+    if (one[p]) {
+      if (!added[p]) add(static_cast<int>(p), impl_->convex[p].outline);
+      added[p] = 1;
+      continue;
+    }
+    const auto& tri = coarse.triangles[static_cast<size_t>(t)];
+    add(static_cast<int>(p), {coarse.positions[static_cast<size_t>(tri[0])], coarse.positions[static_cast<size_t>(tri[1])],
+            coarse.positions[static_cast<size_t>(tri[2])]});
   }
   for (size_t p = 0; p < scene.patches.size(); ++p) {
     const Patch& patch = scene.patches[p];
@@ -407,7 +437,7 @@ DirectIllumination::DirectIllumination(const Scene& scene) : impl_(std::make_uni
     if (patch.holes.empty() && e.shape.outer_boundary().is_convex()) e.base = e.loops[0];
     for (const Vec3& b : e.base) e.base_centre += b / static_cast<double>(e.base.size());
     for (size_t t = 0; t < impl_->occluders.size(); ++t) {
-      const OccluderTriangle& o = impl_->occluders[t];
+      const OccluderPolygon& o = impl_->occluders[t];
       if (std::any_of(o.v.begin(), o.v.end(),
                       [&](const Point3& p) { return e.plane.oriented_side(p) == CGAL::ON_POSITIVE_SIDE; }))
         e.front.push_back(static_cast<int>(t));

@@ -165,9 +165,27 @@ ReceiverPoints receiver_points(const Triangle& receiver, const std::function<dou
 }
 
 double form_factor(const ReceiverPoints& r, const Triangle& source) {
+  const std::array<Vec3, 3>& v = source.v;
   double f = 0.0;
-  for (size_t q = 0; q < r.x.size(); ++q)
-    f += r.w[q] * point_polygon_form_factor(r.x[q], r.normal, source.v.data(), 3, source.normal);
+  for (size_t q = 0; q < r.x.size(); ++q) {
+    const Vec3& x = r.x[q];
+    if (glm::dot(x - v[0], source.normal) <= 0.0) continue;  // behind the source
+    const std::array<Vec3, 3> d = {v[0] - x, v[1] - x, v[2] - x};
+    if (glm::dot(r.normal, d[0]) >= 0.0 && glm::dot(r.normal, d[1]) >= 0.0 && glm::dot(r.normal, d[2]) >= 0.0) {
+      // The whole triangle in front of x's tangent plane (the common case):
+      // lambert_contour_sum's three edges in its order, without the clip,
+      // written out so that the three independent chains overlap.
+      const Vec3 c0 = glm::cross(d[0], d[1]), c1 = glm::cross(d[1], d[2]), c2 = glm::cross(d[2], d[0]);
+      const double s0 = glm::length(c0), s1 = glm::length(c1), s2 = glm::length(c2);
+      double sum = 0.0;
+      if (s0 > 0.0) sum += subtended_angle(s0, glm::dot(d[0], d[1])) * glm::dot(r.normal, c0) / s0;
+      if (s1 > 0.0) sum += subtended_angle(s1, glm::dot(d[1], d[2])) * glm::dot(r.normal, c1) / s1;
+      if (s2 > 0.0) sum += subtended_angle(s2, glm::dot(d[2], d[0])) * glm::dot(r.normal, c2) / s2;
+      f += r.w[q] * (std::abs(sum) / (2.0 * std::numbers::pi));
+    } else {
+      f += r.w[q] * point_polygon_form_factor(x, r.normal, v.data(), 3, source.normal);
+    }
+  }
   return f;
 }
 

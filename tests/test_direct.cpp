@@ -6,11 +6,14 @@
 #include "radiosity/direct.h"
 #include "radiosity/error_metric.h"
 
+#include "tests/edited_obj.h"
 #include "tests/test_util.h"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
+#include <filesystem>
 #include <numbers>
 
 using namespace radmesh;
@@ -107,4 +110,40 @@ TEST_F(BoxOnFloor, LinearInterpolantErrorFallsWithTheMesh) {
   const double full = error(0.5, DiscontinuityMode::full);
   EXPECT_LT(fine, coarse);
   EXPECT_LT(full, coarse);
+}
+
+TEST_F(BoxOnFloor, AQuadOccluderCastsTheShadowOfItsTwoTriangles) {
+  // A convex, exactly planar patch is clipped as one polygon; split into two
+  // triangle patches (the box's faces here) it is clipped as two. The union of the two triangles'
+  // shadows is the quad's shadow, so every visible form factor agrees to
+  // rounding: on a grid over the floor's penumbrae and umbra.
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() / "radmesh_test_direct_split";
+  const std::string split = test_files::write_edited_obj(kData + "/box_on_floor/box_on_floor", dir,
+                                                         [](const std::string& line, int) -> std::string {
+                                                           int a, b, c, d;
+                                                           if (std::sscanf(line.c_str(), "f %d %d %d %d", &a, &b, &c, &d) != 4 || a < 5 || a > 12)
+                                                             return line;
+                                                           return "f " + std::to_string(a) + " " + std::to_string(b) + " " +
+                                                                  std::to_string(c) + "\nf " + std::to_string(a) + " " +
+                                                                  std::to_string(c) + " " + std::to_string(d);
+                                                         });
+  const Scene t = read_obj_scene(split);
+  ASSERT_EQ(t.patches.size(), s.patches.size() + 5);  // the box's five faces, each two triangles
+  const DirectIllumination triangles(t);
+  const int t_floor = patch_named(t, "floor"), t_light = patch_named(t, "light");
+  ASSERT_GE(t_floor, 0);
+  ASSERT_GE(t_light, 0);
+  int penumbra = 0;
+  for (double px = -1.3; px <= 1.3; px += 0.1)
+    for (double pz = -1.25; pz <= 1.3; pz += 0.15) {
+      if (std::abs(px) < 0.5 && std::abs(pz) < 0.5) continue;  // under the box
+      const Vec3 x(px, 0.0, pz);
+      const double f = direct.visible_form_factor(x, up, floor, light);
+      const double free = direct.unoccluded_form_factor(x, up, light);
+      penumbra += f > 0.0 && f < free;
+      EXPECT_NEAR(triangles.visible_form_factor(x, up, t_floor, t_light), f, 1e-16 + 1e-13 * f) << px << " " << pz;
+    }
+  EXPECT_GT(penumbra, 20);  // the grid crosses the penumbrae
+  fs::remove_all(dir);
 }
