@@ -239,7 +239,13 @@ Rgb FieldEvaluator::indirect(const Vec3& x, int patch, uint64_t id, FieldReport&
   if (max3(rho) <= 0.0) return Rgb(0.0);
   const Vec3& n = receiver.normal;
   Rgb h(0.0);
-  std::vector<int> stack;
+  std::vector<int> stack, cut;
+  std::vector<const Triangle*> triangles;
+  std::vector<double> tri_f;
+  ReceiverPoints at_x;  // x alone, for form_factors
+  at_x.normal = n;
+  at_x.x = {x};
+  at_x.w = {1.0};
   for (size_t q = 0; q < m.sources.size(); ++q) {
     const SourceTree& s = m.sources[q];
     if (s.nodes.empty() || static_cast<int>(q) == patch || !m.occlusion.facing(patch, static_cast<int>(q))) continue;
@@ -249,41 +255,57 @@ Rgb FieldEvaluator::indirect(const Vec3& x, int patch, uint64_t id, FieldReport&
     const bool occludable = m.visibility && m.occlusion.may_occlude(patch, static_cast<int>(q));
     // One random stream per (point, source node or triangle).
     const uint64_t stream = pair_seed(id, q);
-    double weight = 0.0;
-    Rgb sum(0.0);
+    // The tree cut: nodes far enough to take whole (>= 0) and the
+    // triangles of the leaves opened (-1 - position in `order`), in the
+    // order of the walk; then the triangles' form factors in one pass.
+    cut.clear();
     stack.assign(1, 0);
     while (!stack.empty()) {
       const int k = stack.back();
       stack.pop_back();
       const SourceTree::Node& node = s.nodes[static_cast<size_t>(k)];
-      const Vec3 r = node.centre - x;
-      const double d = glm::length(r);
       if (node.left < 0) {
-        for (int i = node.begin; i < node.end; ++i) {
-          const int t = s.order[static_cast<size_t>(i)];
-          const Triangle& tri = s.triangle[static_cast<size_t>(t)];
-          const double f = point_polygon_form_factor(x, n, tri.v.data(), 3, s.normal);
-          ++report.gather_triangles;
-          if (f <= 0.0) continue;
-          weight += f;
-          sum += f * (occludable ? m.visible_reflected(x, n, patch, static_cast<int>(q), s, i, i + 1,
-                                                       pair_seed(stream, (uint64_t{1} << 32) + static_cast<uint64_t>(i)),
-                                                       report.rays_cast)
-                                 : s.reflected[static_cast<size_t>(t)]);
-        }
-      } else if (node.radius <= kOpening * d) {
-        const double cos_r = glm::dot(n, r) / d, cos_s = -glm::dot(s.normal, r) / d;
-        ++report.gather_nodes;
-        if (cos_r <= 0.0 || cos_s <= 0.0) continue;
-        const double f = node.area * cos_r * cos_s / (std::numbers::pi * d * d);
-        weight += f;
-        sum += f * (occludable ? m.visible_reflected(x, n, patch, static_cast<int>(q), s, node.begin, node.end,
-                                                     pair_seed(stream, static_cast<uint64_t>(k)), report.rays_cast)
-                               : node.reflected);
+        for (int i = node.begin; i < node.end; ++i) cut.push_back(-1 - i);
+      } else if (node.radius <= kOpening * glm::length(node.centre - x)) {
+        cut.push_back(k);
       } else {
         stack.push_back(node.left);
         stack.push_back(node.right);
       }
+    }
+    triangles.clear();
+    for (const int e : cut)
+      if (e < 0) triangles.push_back(&s.triangle[static_cast<size_t>(s.order[static_cast<size_t>(-1 - e)])]);
+    tri_f.resize(triangles.size());
+    form_factors(at_x, triangles.data(), triangles.size(), tri_f.data());
+    double weight = 0.0;
+    Rgb sum(0.0);
+    size_t next = 0;
+    for (const int e : cut) {
+      if (e < 0) {
+        const int i = -1 - e;
+        const int t = s.order[static_cast<size_t>(i)];
+        const double f = tri_f[next++];
+        ++report.gather_triangles;
+        if (f <= 0.0) continue;
+        weight += f;
+        sum += f * (occludable ? m.visible_reflected(x, n, patch, static_cast<int>(q), s, i, i + 1,
+                                                     pair_seed(stream, (uint64_t{1} << 32) + static_cast<uint64_t>(i)),
+                                                     report.rays_cast)
+                               : s.reflected[static_cast<size_t>(t)]);
+        continue;
+      }
+      const SourceTree::Node& node = s.nodes[static_cast<size_t>(e)];
+      const Vec3 r = node.centre - x;
+      const double d = glm::length(r);
+      const double cos_r = glm::dot(n, r) / d, cos_s = -glm::dot(s.normal, r) / d;
+      ++report.gather_nodes;
+      if (cos_r <= 0.0 || cos_s <= 0.0) continue;
+      const double f = node.area * cos_r * cos_s / (std::numbers::pi * d * d);
+      weight += f;
+      sum += f * (occludable ? m.visible_reflected(x, n, patch, static_cast<int>(q), s, node.begin, node.end,
+                                                   pair_seed(stream, static_cast<uint64_t>(e)), report.rays_cast)
+                             : node.reflected);
     }
     if (weight > 0.0) h += (fq / weight) * sum;
   }

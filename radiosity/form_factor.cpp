@@ -1,43 +1,19 @@
 #include "radiosity/form_factor.h"
 
+#include "radiosity/lambert_kernel.h"
+
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <limits>
 #include <numbers>
+#include <vector>
 
 namespace radmesh {
 
 namespace {
 
-// atan(k / 16), k = 0..16, for subtended_angle's argument reduction.
-const std::array<double, 17> kAtanTable = [] {
-  std::array<double, 17> t{};
-  for (size_t k = 0; k < t.size(); ++k) t[k] = std::atan(static_cast<double>(k) / 16.0);
-  return t;
-}();
-
-// atan2(s, d) for s >= 0 (the angle between two vectors from the length of
-// their cross product and their dot product), to within 2 ulp of libm's
-// (4.4e-16 relative over 4 M random pairs spanning six decades), at half its
-// cost: Lambert's sums spend a third of a hierarchical run in atan2. The
-// octant reduction leaves a in [0, 1]; atan(a) = atan(c) + atan(u) with c
-// the nearest sixteenth and u = (a - c) / (1 + a c), |u| <= 1/32, where five
-// terms of the Taylor series leave u^10 / 11 < 1e-16.
-double subtended_angle(double s, double d) {
-  const double ad = std::abs(d);
-  const bool steep = s > ad;
-  const double big = steep ? s : ad;
-  if (!(big > 0.0)) return 0.0;
-  const double a = (steep ? ad : s) / big;
-  const size_t k = static_cast<size_t>(a * 16.0 + 0.5);
-  const double c = static_cast<double>(k) / 16.0;
-  const double u = (a - c) / (1.0 + a * c);
-  const double u2 = u * u;
-  double r = kAtanTable[k] + u * (1.0 + u2 * (-1.0 / 3.0 + u2 * (1.0 / 5.0 + u2 * (-1.0 / 7.0 + u2 * (1.0 / 9.0)))));
-  if (steep) r = 0.5 * std::numbers::pi - r;
-  return d < 0.0 ? std::numbers::pi - r : r;
-}
+using detail::subtended_angle;
 
 }  // namespace
 
@@ -165,28 +141,58 @@ ReceiverPoints receiver_points(const Triangle& receiver, const std::function<dou
 }
 
 double form_factor(const ReceiverPoints& r, const Triangle& source) {
-  const std::array<Vec3, 3>& v = source.v;
+  const Triangle* one = &source;
   double f = 0.0;
-  for (size_t q = 0; q < r.x.size(); ++q) {
-    const Vec3& x = r.x[q];
-    if (glm::dot(x - v[0], source.normal) <= 0.0) continue;  // behind the source
-    const std::array<Vec3, 3> d = {v[0] - x, v[1] - x, v[2] - x};
-    if (glm::dot(r.normal, d[0]) >= 0.0 && glm::dot(r.normal, d[1]) >= 0.0 && glm::dot(r.normal, d[2]) >= 0.0) {
-      // The whole triangle in front of x's tangent plane (the common case):
-      // lambert_contour_sum's three edges in its order, without the clip,
-      // written out so that the three independent chains overlap.
-      const Vec3 c0 = glm::cross(d[0], d[1]), c1 = glm::cross(d[1], d[2]), c2 = glm::cross(d[2], d[0]);
-      const double s0 = glm::length(c0), s1 = glm::length(c1), s2 = glm::length(c2);
-      double sum = 0.0;
-      if (s0 > 0.0) sum += subtended_angle(s0, glm::dot(d[0], d[1])) * glm::dot(r.normal, c0) / s0;
-      if (s1 > 0.0) sum += subtended_angle(s1, glm::dot(d[1], d[2])) * glm::dot(r.normal, c1) / s1;
-      if (s2 > 0.0) sum += subtended_angle(s2, glm::dot(d[2], d[0])) * glm::dot(r.normal, c2) / s2;
-      f += r.w[q] * (std::abs(sum) / (2.0 * std::numbers::pi));
-    } else {
-      f += r.w[q] * point_polygon_form_factor(x, r.normal, v.data(), 3, source.normal);
+  form_factors(r, &one, 1, &f);
+  return f;
+}
+
+void form_factors(const ReceiverPoints& r, const Triangle* const* sources, size_t count, double* out) {
+  // The (point, source) pairs with the point in front of the source, as
+  // struct of arrays for the vectorized kernel; a pair whose triangle
+  // crosses the point's tangent plane takes the clipping formula instead.
+  struct Scratch {
+    std::array<std::vector<double>, 9> d;
+    std::vector<double> sum;
+    std::vector<int> source, point;
+    std::vector<char> clipped;
+  };
+  thread_local Scratch m;
+  for (auto& v : m.d) v.clear();
+  m.source.clear();
+  m.point.clear();
+  m.clipped.clear();
+  for (size_t j = 0; j < count; ++j) {
+    const Triangle& t = *sources[j];
+    out[j] = 0.0;
+    for (size_t q = 0; q < r.x.size(); ++q) {
+      const Vec3& x = r.x[q];
+      if (glm::dot(x - t.v[0], t.normal) <= 0.0) continue;  // behind the source: it emits from its front only
+      bool in_front = true;
+      for (size_t k = 0; k < 3; ++k) {
+        const Vec3 d = t.v[k] - x;
+        m.d[3 * k].push_back(d.x);
+        m.d[3 * k + 1].push_back(d.y);
+        m.d[3 * k + 2].push_back(d.z);
+        in_front = in_front && glm::dot(r.normal, d) >= 0.0;
+      }
+      m.source.push_back(static_cast<int>(j));
+      m.point.push_back(static_cast<int>(q));
+      m.clipped.push_back(in_front ? 0 : 1);
     }
   }
-  return f;
+  const size_t n = m.source.size();
+  m.sum.resize(n);
+  detail::lambert_triangle_sums(n, {m.d[0].data(), m.d[1].data(), m.d[2].data(), m.d[3].data(), m.d[4].data(),
+                                    m.d[5].data(), m.d[6].data(), m.d[7].data(), m.d[8].data()},
+                                r.normal.x, r.normal.y, r.normal.z, m.sum.data());
+  for (size_t i = 0; i < n; ++i) {
+    const Triangle& t = *sources[static_cast<size_t>(m.source[i])];
+    const size_t q = static_cast<size_t>(m.point[i]);
+    const double f = m.clipped[i] ? point_polygon_form_factor(r.x[q], r.normal, t.v.data(), 3, t.normal)
+                                  : std::abs(m.sum[i]) / (2.0 * std::numbers::pi);
+    out[static_cast<size_t>(m.source[i])] += r.w[q] * f;
+  }
 }
 
 double element_form_factor(const Triangle& receiver, const Triangle& source, const QuadratureOptions& options) {

@@ -68,6 +68,11 @@ ReceiverPoints receiver_points(const Triangle& receiver, const std::function<dou
 // Unoccluded F(receiver -> source) = sum_q w_q F(x_q -> source).
 double form_factor(const ReceiverPoints& receiver, const Triangle& source);
 
+// The same for many sources at the same points at once: out[j] =
+// form_factor(receiver, *sources[j]), j < count (all pairs in one
+// vectorized pass: the cheaper way when a receiver has many sources).
+void form_factors(const ReceiverPoints& receiver, const Triangle* const* sources, size_t count, double* out);
+
 // F(receiver -> source) for one pair, with the points graded toward `source`.
 double element_form_factor(const Triangle& receiver, const Triangle& source,
                            const QuadratureOptions& options = {});

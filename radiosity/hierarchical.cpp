@@ -599,6 +599,13 @@ private:
     near = std::max(near, 0.0);
     const ReceiverPoints pts = receiver_points(t, [near](const Vec3&) { return near; }, opt_.quadrature);
     const double rho = max3(rho_[x]);
+    // The element sources' unoccluded form factors, all in one pass.
+    std::vector<const Triangle*> sources;
+    for (const Link* l : path)
+      if (l->visible > 0.0 && l->source >= 0) sources.push_back(&tri_[static_cast<size_t>(l->source)]);
+    std::vector<double> unoccluded(sources.size());
+    form_factors(pts, sources.data(), sources.size(), unoccluded.data());
+    size_t next = 0;
     for (size_t k = 0; k < path.size(); ++k) {
       const Link* l = path[k];
       if (l->visible <= 0.0) continue;  // hidden: kept as a link, never gathered
@@ -606,7 +613,7 @@ private:
         ct_.form_factors(cluster_of(l->source), c, t.normal, l->visible, terms_[x], F_approx_[x], group_visible(*l));
         continue;
       }
-      const double f0 = form_factor(pts, tri_[static_cast<size_t>(l->source)]);
+      const double f0 = unoccluded[next++];
       // An ancestor's partly visible link that may matter here: the leaf's
       // own visible fraction.
       const bool own_rays = k >= own && l->visible < 1.0 &&
