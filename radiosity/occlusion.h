@@ -3,7 +3,11 @@
 // The patches that may lie in a shaft are found by a box tree over the
 // patches (O(log P + hits) per query, nothing stored per pair of patches);
 // a shaft with more than kMaxTests boxes in it is taken as occludable
-// without further tests (shadow rays are cheaper than the tests then).
+// without further tests (shadow rays are cheaper than the tests then: with
+// 64, the tests took 30% of a run on a sphere room of 5,127 faces). A
+// clear shaft's rays get through, so the cap moves time, and results only
+// where single-precision rays graze: Cornell patch means moved by 5e-4 at
+// most between 64 and 8.
 #pragma once
 
 #include "meshing/box_tree.h"
@@ -38,7 +42,7 @@ public:
   // Whether some patch may lie between elements a (of patch pa) and b (of pb).
   bool may_occlude(int pa, int pb, const Triangle& a, const Triangle& b) const;
 
-  static constexpr int kMaxTests = 64;
+  static constexpr int kMaxTests = 8;
   static constexpr size_t kCachedPatches = 4096;
 
 private:

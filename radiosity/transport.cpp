@@ -87,7 +87,7 @@ double VisibilityEstimator::visible_fraction(const Triangle& a, int pa, uint64_t
   std::iota(perm.begin(), perm.begin() + rays, 0);
   for (int k = rays - 1; k > 0; --k)
     std::swap(perm[static_cast<size_t>(k)], perm[static_cast<size_t>(rng.next() % static_cast<uint64_t>(k + 1))]);
-  int open = 0;
+  int open = 0, facing = 0, open_facing = 0;
   for (int k = 0; k < rays; ++k) {
     const int s = k, t = perm[static_cast<size_t>(k)];
     // Each point's second coordinate is drawn first, in an order written out
@@ -98,10 +98,18 @@ double VisibilityEstimator::visible_fraction(const Triangle& a, int pa, uint64_t
     const double yv = ((t / side) + rng.uniform()) / side;
     const double yu = ((t % side) + rng.uniform()) / side;
     const Vec3 y = triangle_point(tj.v[0], tj.v[1], tj.v[2], yu, yv);
-    if (impl_->embree->visible(x, y, pi, pj)) ++open;
+    const bool seen = impl_->embree->visible(x, y, pi, pj);
+    open += seen;
+    // Light passes between x and y only when each lies in front of the
+    // other's plane; a ray behind either one (an element straddling the
+    // other's plane) crosses what the exchange never does and says nothing.
+    if (glm::dot(x - tj.v[0], tj.normal) > 0.0 && glm::dot(y - ti.v[0], ti.normal) > 0.0) {
+      ++facing;
+      open_facing += seen;
+    }
   }
   count.cast += rays;
-  return static_cast<double>(open) / rays;
+  return facing > 0 ? static_cast<double>(open_facing) / facing : static_cast<double>(open) / rays;
 }
 
 void BalanceAccumulator::add(double area, const Rgb& rho, const Rgb& emission, const Rgb& b, const Rgb& h,

@@ -54,6 +54,11 @@ struct RayCount {
 // enclosure: no Embree scene is then built). One random stream per pair,
 // seeded from the pair's two ids in increasing order, so the answer does not
 // depend on the thread that asks nor on which of the two is the receiver.
+// Only rays between points that lie in front of each other's planes count
+// (light passes only there); a pair none of whose rays does takes the
+// fraction over all of them. So an element straddling the other's plane is
+// not darkened by what blocks its back half: counting every ray left the
+// Cornell box's element values 0.1-0.3% low against a brute-force gather.
 class VisibilityEstimator {
 public:
   // `rays` is rounded up to a perfect square (the strata).

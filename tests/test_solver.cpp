@@ -6,12 +6,15 @@
 #include "radiosity/error_metric.h"
 #include "radiosity/probe.h"
 #include "radiosity/solve.h"
+#include "radiosity/transport.h"
 
 #include <gtest/gtest.h>
 
 #include "test_util.h"
 
 #include <algorithm>
+#include <array>
+#include <filesystem>
 #include <functional>
 #include <cmath>
 #include <cstdio>
@@ -288,4 +291,41 @@ TEST(Nodal, LinearFitReproducesALinearFieldAtEveryVertexIncludingTheBoundary) {
   }
   EXPECT_LT(worst_fit, 1e-9);    // exact, corners and edges included
   EXPECT_GT(worst_mean, 1e-2);   // the mean is biased at the boundary
+}
+
+TEST(Visibility, RaysThatCannotCarryLightDoNotCount) {
+  // Receiver A: the square x, y in [-1, 1] at z = 0, facing +z. Source B:
+  // the square x in [-1, 1], z in [0.5, 1.5] at y = 0, facing up. A straddles
+  // B's plane: its lower half is behind B and exchanges nothing with it. A
+  // wall at z = 0.25 reaching from below up to y = 0.001 blocks every
+  // segment from A's lower half to B but (nearly) none from its upper half.
+  // Counting all rays would say half is hidden; only the upper half's count.
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() / "radmesh_test_visibility_facing";
+  fs::create_directories(dir);
+  {
+    std::ofstream(dir / "scene.mtl") << "newmtl grey\nKd 0.5 0.5 0.5\n";
+    std::ofstream obj(dir / "scene.obj");
+    obj << "mtllib scene.mtl\nusemtl grey\n"
+        << "v -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\n"           // A
+        << "v -1 0 0.5\nv -1 0 1.5\nv 1 0 1.5\nv 1 0 0.5\n"     // B
+        << "v -2 -2 0.25\nv 2 -2 0.25\nv 2 0.001 0.25\nv -2 0.001 0.25\n"  // the wall
+        << "o a\nf 1 2 3 4\no b\nf 5 6 7 8\no wall\nf 9 10 11 12\n";
+  }
+  const Scene s = read_obj_scene((dir / "scene.obj").string());
+  fs::remove_all(dir);
+  const int a = test::patch_named(s, "a"), b = test::patch_named(s, "b");
+  ASSERT_GE(a, 0);
+  ASSERT_GE(b, 0);
+  const VisibilityEstimator visibility(s, 64);
+  const Vec3 za(0, 0, 1), yb(0, 1, 0);
+  const std::array<Triangle, 2> as = {make_triangle(Vec3(-1, -1, 0), Vec3(1, -1, 0), Vec3(1, 1, 0), za),
+                                      make_triangle(Vec3(-1, -1, 0), Vec3(1, 1, 0), Vec3(-1, 1, 0), za)};
+  const Triangle tb = make_triangle(Vec3(-1, 0, 0.5), Vec3(-1, 0, 1.5), Vec3(1, 0, 1.5), yb);
+  for (size_t i = 0; i < as.size(); ++i) {
+    RayCount count;
+    const double v = visibility.visible_fraction(as[i], a, i, tb, b, 7, count);
+    EXPECT_EQ(count.cast, 64) << i;  // the wall is in the shaft: rays were cast
+    EXPECT_GT(v, 0.95) << i;
+  }
 }
