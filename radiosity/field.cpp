@@ -134,6 +134,7 @@ FieldMode resolve_field_mode(FieldMode requested, const Scene& scene, const Mesh
 
 struct FieldEvaluator::Impl {
   const Scene& scene;
+  double diagonal = 0.0;  // the scene's, once (Scene::diagonal visits every vertex)
   int rays_per_node = 1;  // options.rays / 4, at least 1
   DirectIllumination direct;
   Occlusion occlusion;
@@ -141,7 +142,7 @@ struct FieldEvaluator::Impl {
   std::vector<SourceTree> sources;  // per patch (empty tree: reflects nothing)
 
   Impl(const Scene& s, const SolveOptions& o)
-      : scene(s), rays_per_node(std::max(1, o.rays / 4)), direct(s), occlusion(s) {}
+      : scene(s), diagonal(s.diagonal()), rays_per_node(std::max(1, o.rays / 4)), direct(s), occlusion(s) {}
 
   // The mean of V(x, y) R(y) over area-uniform stratified points y of
   // triangles order[begin .. end) of source q, by shadow rays from x (on
@@ -215,7 +216,7 @@ FieldEvaluator::~FieldEvaluator() = default;
 Vec3 FieldEvaluator::evaluation_point(const Vec3& x, int patch, const Vec3& inward, FieldReport& report) const {
   const Impl& m = *impl_;
   if (inward == Vec3(0.0)) return x;
-  const double diagonal = m.scene.diagonal();
+  const double diagonal = m.diagonal;
   for (int q = 0; q < static_cast<int>(m.scene.patches.size()); ++q)
     if (q != patch && m.occlusion.distance(q, x) <= 1e-9 * diagonal) {
       ++report.on_other_surface;

@@ -56,7 +56,8 @@ public:
          const ProgressFn& progress)
       : scene_(scene), opt_(opt), hopt_(hopt), out_(out), progress_(progress), visibility_(scene, opt.rays) {
     limit_ = memory_limit_bytes(opt);
-    min_area_ = hopt.min_area > 0.0 ? hopt.min_area : 0.5 * std::pow(scene.diagonal() / 150.0, 2);
+    diagonal_ = scene.diagonal();
+    min_area_ = hopt.min_area > 0.0 ? hopt.min_area : 0.5 * std::pow(diagonal_ / 150.0, 2);
     out_.stats.min_area = min_area_;
     for (const Material& m : scene.materials) max_emission_ = std::max(max_emission_, max3(m.emission));
     scale_ = max_emission_;
@@ -1014,7 +1015,7 @@ private:
     const Vec3 a = std::abs(n.x) < 0.9 ? Vec3(1, 0, 0) : Vec3(0, 1, 0);
     const Vec3 u = glm::normalize(glm::cross(n, a)), v = glm::cross(n, u);
     const Visibility& rays = visibility_.rays();
-    const double reach = 4.0 * scene_.diagonal();
+    const double reach = 4.0 * diagonal_;
     const int patch = node_patch(static_cast<int>(leaf));
     SplitMix rng(pair_seed(static_cast<uint64_t>(leaf), 0xE17C105EULL));
     constexpr int side = 8;  // kEnclosureRays = side^2 strata
@@ -1378,6 +1379,7 @@ private:
   ProgressFn progress_;
   VisibilityEstimator visibility_;
   double min_area_ = 0.0, max_emission_ = 0.0;
+  double diagonal_ = 0.0;  // the scene's, once (Scene::diagonal visits every vertex)
   double limit_ = 0.0;          // memory limit, bytes
   // A link's memory: the Link in its receiver's list, with the vector's slack.
   static constexpr double kLinkBytes = 1.5 * sizeof(Link);

@@ -169,8 +169,8 @@ void check_options(const PixmapOptions& o) {
 // Whether point x of patch `patch` lies inside a closed object: every one of
 // 7 rays into its hemisphere (the normal and six at 60 degrees from it) hits
 // the back of a patch first.
-bool inside_object(const Scene& scene, const Visibility& vis, const Vec3& x, int patch) {
-  const double reach = 4.0 * scene.diagonal();
+// `reach`: longer than any ray inside the scene.
+bool inside_object(const Scene& scene, const Visibility& vis, const Vec3& x, int patch, double reach) {
   const Vec3 n = scene.patches[patch].normal;
   const Vec3 u = tangent_of(n), v = glm::cross(n, u);
   for (int r = 0; r < 7; ++r) {
@@ -237,9 +237,11 @@ PixmapLayout layout_of(const Scene& scene, const Mesh& coarse, const PixmapOptio
 
   // Triangles inside closed objects, by the ray test at their centroids.
   L.enclosed.assign(static_cast<size_t>(coarse.triangle_count()), 0);
-  if (vis)
+  if (vis) {
+    const double reach = 4.0 * scene.diagonal();
     for (int t = 0; t < coarse.triangle_count(); ++t)
-      L.enclosed[t] = inside_object(scene, *vis, coarse.centroid(t), coarse.patch[t]);
+      L.enclosed[t] = inside_object(scene, *vis, coarse.centroid(t), coarse.patch[t], reach);
+  }
   // Each pixmap's frame and grid.
   std::vector<std::vector<int>> triangles_of(L.pixmaps.size());
   // The contact lines inside each pixmap's patches (feature edges of the
