@@ -11,12 +11,6 @@
 
 namespace radmesh {
 
-namespace {
-
-using detail::subtended_angle;
-
-}  // namespace
-
 double lambert_contour_sum(const Vec3& x, const Vec3& n, const Vec3* pts, size_t count) {
   // Sutherland-Hodgman clipping to the half-space dot(n, p - x) >= 0, with
   // the clipped loop streamed into the contour sum instead of stored: no
@@ -27,10 +21,7 @@ double lambert_contour_sum(const Vec3& x, const Vec3& n, const Vec3* pts, size_t
   Vec3 first{0.0}, prev{0.0};
   auto edge = [&](const Vec3& a, const Vec3& b) {
     const Vec3 r0 = a - x, r1 = b - x;
-    const Vec3 c = glm::cross(r0, r1);
-    const double s = glm::length(c);
-    if (s <= 0.0) return;  // edge seen end-on: contributes nothing
-    sum += subtended_angle(s, glm::dot(r0, r1)) * glm::dot(n, c) / s;
+    sum += detail::lambert_edge(r0.x, r0.y, r0.z, r1.x, r1.y, r1.z, n.x, n.y, n.z);
   };
   auto emit = [&](const Vec3& p) {
     if (emitted == 0)

@@ -600,11 +600,14 @@ private:
     near = std::max(near, 0.0);
     const ReceiverPoints pts = receiver_points(t, [near](const Vec3&) { return near; }, opt_.quadrature);
     const double rho = max3(rho_[x]);
-    // The element sources' unoccluded form factors, all in one pass.
-    std::vector<const Triangle*> sources;
+    // The element sources' unoccluded form factors, all in one pass (the
+    // lists kept per thread: this runs once per leaf).
+    thread_local std::vector<const Triangle*> sources;
+    thread_local std::vector<double> unoccluded;
+    sources.clear();
     for (const Link* l : path)
       if (l->visible > 0.0 && l->source >= 0) sources.push_back(&tri_[static_cast<size_t>(l->source)]);
-    std::vector<double> unoccluded(sources.size());
+    unoccluded.resize(sources.size());
     form_factors(pts, sources.data(), sources.size(), unoccluded.data());
     size_t next = 0;
     for (size_t k = 0; k < path.size(); ++k) {

@@ -8,20 +8,6 @@
 
 namespace radmesh::detail {
 
-namespace {
-
-// One edge (p, q), both relative to the point: the angle times the
-// n-component of the unit normal of the edge's plane (0 for an edge seen
-// end-on).
-inline double edge(double px, double py, double pz, double qx, double qy, double qz, double nx, double ny, double nz) {
-  const double cx = py * qz - pz * qy, cy = pz * qx - px * qz, cz = px * qy - py * qx;
-  const double s = std::sqrt(cx * cx + cy * cy + cz * cz);
-  const double t = subtended_angle(s, px * qx + py * qy + pz * qz) * (nx * cx + ny * cy + nz * cz) / s;
-  return s > 0.0 ? t : 0.0;
-}
-
-}  // namespace
-
 __attribute__((target_clones("avx512f", "avx2", "default"))) void lambert_triangle_sums(size_t count,
                                                                                        const LambertItems& items,
                                                                                        double nx, double ny,
@@ -37,9 +23,9 @@ __attribute__((target_clones("avx512f", "avx2", "default"))) void lambert_triang
   const double* __restrict cz = items.cz;
   double* __restrict o = out;
   for (size_t i = 0; i < count; ++i)
-    o[i] = edge(ax[i], ay[i], az[i], bx[i], by[i], bz[i], nx, ny, nz) +
-           edge(bx[i], by[i], bz[i], cx[i], cy[i], cz[i], nx, ny, nz) +
-           edge(cx[i], cy[i], cz[i], ax[i], ay[i], az[i], nx, ny, nz);
+    o[i] = lambert_edge(ax[i], ay[i], az[i], bx[i], by[i], bz[i], nx, ny, nz) +
+           lambert_edge(bx[i], by[i], bz[i], cx[i], cy[i], cz[i], nx, ny, nz) +
+           lambert_edge(cx[i], cy[i], cz[i], ax[i], ay[i], az[i], nx, ny, nz);
 }
 
 }  // namespace radmesh::detail

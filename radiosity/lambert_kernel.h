@@ -70,4 +70,16 @@ inline double subtended_angle(double s, double d) {
   return big > 0.0 ? r : 0.0;
 }
 
+// One edge (p, q) of a contour, both relative to the point: the angle the
+// edge subtends times the n-component of the unit normal of the plane
+// through the point and the edge (0 for an edge seen end-on). The kernel
+// and the scalar contour sum (form_factor.cpp) share it.
+inline double lambert_edge(double px, double py, double pz, double qx, double qy, double qz, double nx, double ny,
+                           double nz) {
+  const double cx = py * qz - pz * qy, cy = pz * qx - px * qz, cz = px * qy - py * qx;
+  const double s = std::sqrt(cx * cx + cy * cy + cz * cz);
+  const double t = subtended_angle(s, px * qx + py * qy + pz * qz) * (nx * cx + ny * cy + nz * cz) / s;
+  return s > 0.0 ? t : 0.0;
+}
+
 }  // namespace radmesh::detail
