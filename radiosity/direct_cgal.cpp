@@ -45,6 +45,9 @@ struct Emitter {
   Vec3 base_centre{0.0};
   std::vector<int> front;               // occluders with a corner strictly in front of the plane
   std::vector<std::vector<Vec3>> loops;  // outline, then holes (scene coordinates)
+  Vec3 origin{0.0};                      // a point of the plane (double): n . y = n . origin
+  int iu = 1, iv = 2;                    // the scene axes of the 2-D map's u and v
+  double umin = 0.0, umax = 0.0, vmin = 0.0, vmax = 0.0;  // the padded box of the 2-D map
 
   EK::Point_2 to2(const Point3& p) const {
     if (drop == 0) return EK::Point_2(p.y(), p.z());
@@ -63,8 +66,17 @@ struct Emitter {
 };
 
 std::vector<Vec3> Emitter::lifted(const Polygon2& poly) const {
+  // In double from the rounded 2-D corners, the same whatever CGAL has
+  // evaluated exactly before (the emitter is shared between threads).
   std::vector<Vec3> out;
-  for (auto v = poly.vertices_begin(); v != poly.vertices_end(); ++v) out.push_back(rounded(lift(*v)));
+  const int iw = drop;
+  for (auto v = poly.vertices_begin(); v != poly.vertices_end(); ++v) {
+    Vec3 y(0.0);
+    y[iu] = CGAL::to_double(v->x());
+    y[iv] = CGAL::to_double(v->y());
+    y[iw] = origin[iw] + (normal[iu] * (origin[iu] - y[iu]) + normal[iv] * (origin[iv] - y[iv])) / normal[iw];
+    out.push_back(y);
+  }
   return out;
 }
 
@@ -78,6 +90,17 @@ struct OccluderPolygon {
   std::vector<Vec3> d;  // the same corners in double
   Vec3 lo{0.0}, hi{0.0};
 };
+
+// Drops repeated corners (consecutive, and the last equal to the first);
+// false when what is left encloses no area.
+bool has_area(Polygon2& poly) {
+  Polygon2 out;
+  for (auto v = poly.vertices_begin(); v != poly.vertices_end(); ++v)
+    if (out.is_empty() || out.vertices_end()[-1] != *v) out.push_back(*v);
+  while (out.size() > 1 && out.vertices_end()[-1] == out.vertices_begin()[0]) out.erase(out.vertices_end() - 1);
+  poly = std::move(out);
+  return poly.size() >= 3 && poly.area() != 0;
+}
 
 // Sutherland-Hodgman in exact arithmetic: keeps the part on the positive side
 // of `plane` (boundary included).
@@ -115,27 +138,121 @@ struct DirectIllumination::Impl {
   std::vector<ConvexOccluder> convex;       // per patch
   explicit Impl(const Scene& s) : scene(s) {}
 
+  // The part of occluder t that lies in the pyramid from x over the
+  // emitter's padded box and in the slab between the emitter's plane and
+  // x's parallel plane, projected from x onto the emitter's 2-D map, in
+  // exact arithmetic; empty when it hides nothing of measure.
+  static Polygon2 exact_shadow(const OccluderPolygon& t, const Point3& X, const Emitter& e,
+                               std::vector<EK::Plane_3>& planes) {
+    if (planes.empty()) {
+      const Point3 inside = CGAL::centroid(e.corners[0], e.corners[1], e.corners[2], e.corners[3]);
+      for (int i = 0; i < 4; ++i) {
+        EK::Plane_3 side(X, e.corners[static_cast<size_t>(i)], e.corners[static_cast<size_t>((i + 1) % 4)]);
+        if (side.oriented_side(inside) == CGAL::ON_NEGATIVE_SIDE) side = side.opposite();
+        planes.push_back(side);
+      }
+      planes.push_back(e.plane);
+      planes.push_back(EK::Plane_3(X, e.plane.orthogonal_vector()).opposite());  // x's parallel plane
+    }
+    std::vector<Point3> poly = t.v;
+    for (const EK::Plane_3& pl : planes) {
+      poly = clip(poly, pl);
+      if (poly.size() < 3) return {};
+    }
+    // A vertex on x's parallel plane is x itself (the pyramid's apex): x
+    // lies on this occluder, which then hides nothing of measure.
+    for (const Point3& p : poly)
+      if (planes.back().has_on(p)) return {};
+    Polygon2 shadow;
+    for (const Point3& p : poly) {
+      const auto hit = CGAL::intersection(EK::Line_3(X, p), e.plane);
+      const Point3* q = hit ? boost::get<Point3>(&*hit) : nullptr;
+      if (!q) return {};
+      shadow.push_back(e.to2(*q));
+    }
+    return has_area(shadow) && shadow.is_simple() ? shadow : Polygon2{};
+  }
+
+  // The same shadow, computed in double where that is well conditioned:
+  // the central projection from x onto the emitter's plane in homogeneous
+  // coordinates, p -> (A, B, W) = (s (p - x)_u, s (p - x)_v, n . (x - p)),
+  // with s = n . (x - origin) the height of x over the plane and image
+  // (x_u + A / W, x_v + B / W). These are linear in p, so the pyramid and
+  // the slab are half-planes in (A, B, W), and the polygon is clipped
+  // there. Corners come out rounded to double: a corner two occluders share
+  // (the edge between a box's faces) is computed alike for both, so CGAL
+  // need not resolve their equality in exact arithmetic, which is what made
+  // the union slow. The exact path is taken where a clipped corner comes
+  // within 1e-4 s of x's parallel plane (it is then near x, and the
+  // division loses digits) or the rounded shadow is not simple.
+  static Polygon2 shadow(const OccluderPolygon& t, const Vec3& x, const Point3& X, double s, const Emitter& e,
+                         std::vector<EK::Plane_3>& planes) {
+    // x in the occluder's plane: seen edge on, it hides nothing of measure.
+    if (CGAL::orientation(t.v[0], t.v[1], t.v[2], X) == CGAL::COPLANAR && !CGAL::collinear(t.v[0], t.v[1], t.v[2]))
+      return {};
+    if (!(s > 0.0)) return exact_shadow(t, X, e, planes);  // x within rounding of the emitter's plane
+    struct H {
+      double a, b, w;
+    };
+    std::vector<H> poly, next;
+    for (const Vec3& p : t.d) {
+      const Vec3 d = p - x;
+      poly.push_back({s * d[e.iu], s * d[e.iv], -glm::dot(e.normal, d)});
+    }
+    const double xu = x[e.iu], xv = x[e.iv];
+    // The half-planes kept: x's side of its parallel plane, the emitter's
+    // front, and the four sides of the box.
+    auto keep = [&](int k, const H& h) {
+      switch (k) {
+        case 0: return h.w;
+        case 1: return s - h.w;
+        case 2: return h.a + (xu - e.umin) * h.w;
+        case 3: return (e.umax - xu) * h.w - h.a;
+        case 4: return h.b + (xv - e.vmin) * h.w;
+        default: return (e.vmax - xv) * h.w - h.b;
+      }
+    };
+    for (int k = 0; k < 6; ++k) {
+      // Sutherland-Hodgman; an edge is cut from its end inside, so an edge
+      // shared by two occluders is cut at the same point in both.
+      next.clear();
+      const size_t m = poly.size();
+      for (size_t i = 0; i < m; ++i) {
+        const H& a = poly[i];
+        const H& b = poly[(i + 1) % m];
+        const double ga = keep(k, a), gb = keep(k, b);
+        if (ga >= 0.0) next.push_back(a);
+        if ((ga > 0.0 && gb < 0.0) || (ga < 0.0 && gb > 0.0)) {
+          const H& in = ga > 0.0 ? a : b;
+          const H& out = ga > 0.0 ? b : a;
+          const double gi = std::max(ga, gb), go = std::min(ga, gb);
+          const double u = gi / (gi - go);
+          next.push_back({in.a + u * (out.a - in.a), in.b + u * (out.b - in.b), in.w + u * (out.w - in.w)});
+        }
+      }
+      poly.swap(next);
+      if (poly.size() < 3) return {};
+    }
+    Polygon2 out;
+    for (const H& h : poly) {
+      if (!(h.w >= 1e-4 * s)) return exact_shadow(t, X, e, planes);
+      out.push_back(EK::Point_2(xu + h.a / h.w, xv + h.b / h.w));
+    }
+    if (!has_area(out)) return {};  // seen edge on: a sliver as thin as the rounding
+    if (!out.is_simple()) return exact_shadow(t, X, e, planes);
+    return out;
+  }
+
   // The exact visible part; `candidates` (indices into `occluders`) are the
-  // triangles that may hide some of it, null for none.
+  // occluders that may hide some of it, null for none.
   double visible(const Vec3& x, const Vec3& n, int receiver, const Emitter& e,
                  const std::vector<int>* candidates) const {
     const Point3 X = exact(x);
     if (e.plane.oriented_side(X) != CGAL::ON_POSITIVE_SIDE) return 0.0;
     PolygonSet2 lit(e.shape);
     if (candidates) {
-      // The pyramid from x over the emitter's box, and the slab between the
-      // emitter plane and x's parallel plane.
-      std::vector<EK::Plane_3> planes;
-      const Point3 inside = CGAL::centroid(e.corners[0], e.corners[1], e.corners[2], e.corners[3]);
-      for (int i = 0; i < 4; ++i) {
-        EK::Plane_3 side(X, e.corners[static_cast<size_t>(i)], e.corners[static_cast<size_t>((i + 1) % 4)]);
-        if (side.is_degenerate()) return 0.0;  // x in the emitter's plane
-        if (side.oriented_side(inside) == CGAL::ON_NEGATIVE_SIDE) side = side.opposite();
-        planes.push_back(side);
-      }
-      planes.push_back(e.plane);
-      const EK::Plane_3 level(X, e.plane.orthogonal_vector());  // x's parallel plane; keep the emitter side
-      planes.push_back(level.opposite());
+      const double s = glm::dot(e.normal, x - e.origin);
+      std::vector<EK::Plane_3> planes;  // the exact path's pyramid and slab, made when first needed
       const Vec3 lo = glm::min(x, e.lo), hi = glm::max(x, e.hi);
       std::vector<Polygon2> shadows;
       for (const int index : *candidates) {
@@ -146,34 +263,10 @@ struct DirectIllumination::Impl {
         if (std::none_of(t.v.begin(), t.v.end(),
                          [&](const Point3& p) { return e.plane.oriented_side(p) == CGAL::ON_POSITIVE_SIDE; }))
           continue;
-        std::vector<Point3> poly = t.v;
-        for (const EK::Plane_3& pl : planes) {
-          poly = clip(poly, pl);
-          if (poly.size() < 3) break;
-        }
-        if (poly.size() < 3) continue;
-        // A vertex on x's parallel plane is x itself (the pyramid's apex):
-        // x lies on this occluder, which then hides nothing of measure.
-        bool at_apex = false;
-        for (const Point3& p : poly) at_apex = at_apex || level.has_on(p);
-        if (at_apex) continue;
-        Polygon2 shadow;
-        for (const Point3& p : poly) {
-          const auto hit = CGAL::intersection(EK::Line_3(X, p), e.plane);
-          const Point3* q = hit ? boost::get<Point3>(&*hit) : nullptr;
-          if (!q) {
-            shadow.clear();
-            break;
-          }
-          const EK::Point_2 q2 = e.to2(*q);
-          if (shadow.is_empty() || shadow.vertices_end()[-1] != q2) shadow.push_back(q2);
-        }
-        while (shadow.size() > 1 && shadow.vertices_end()[-1] == shadow.vertices_begin()[0])
-          shadow.erase(shadow.vertices_end() - 1);
-        if (shadow.size() < 3 || shadow.area() == 0) continue;
-        if (shadow.orientation() == CGAL::CLOCKWISE) shadow.reverse_orientation();
-        if (!shadow.is_simple()) continue;  // cannot happen for a convex piece; be safe
-        shadows.push_back(std::move(shadow));
+        Polygon2 dark = shadow(t, x, X, s, e, planes);
+        if (dark.is_empty()) continue;
+        if (dark.orientation() == CGAL::CLOCKWISE) dark.reverse_orientation();
+        shadows.push_back(std::move(dark));
       }
       if (!shadows.empty()) {
         PolygonSet2 dark;
@@ -400,12 +493,19 @@ DirectIllumination::DirectIllumination(const Scene& scene) : impl_(std::make_uni
     e.emission = m.emission;
     const std::vector<Vec3> outer = scene.loop_points(patch.outer);
     e.plane = EK::Plane_3(exact(outer[0]), EK::Vector_3(patch.normal.x, patch.normal.y, patch.normal.z));
+    e.origin = outer[0];
     const Vec3 an = glm::abs(patch.normal);
     e.drop = an.x >= an.y && an.x >= an.z ? 0 : (an.y >= an.z ? 1 : 2);
-    // Vertices are projected onto the (double) plane exactly, so the shape lies in it.
+    e.iu = (e.drop + 1) % 3;
+    e.iv = (e.drop + 2) % 3;
+    // Vertices are projected onto the (double) plane, then rounded: the 2-D
+    // map's corners are plain numbers, shared by every thread.
     auto polygon = [&](const std::vector<int>& loop) {
       Polygon2 poly;
-      for (int v : loop) poly.push_back(e.to2(e.plane.projection(exact(scene.vertices[static_cast<size_t>(v)]))));
+      for (int v : loop) {
+        const EK::Point_2 q = e.to2(e.plane.projection(exact(scene.vertices[static_cast<size_t>(v)])));
+        poly.push_back(EK::Point_2(CGAL::to_double(q.x()), CGAL::to_double(q.y())));
+      }
       if (poly.orientation() == CGAL::CLOCKWISE) poly.reverse_orientation();
       return poly;
     };
@@ -425,7 +525,17 @@ DirectIllumination::DirectIllumination(const Scene& scene) : impl_(std::make_uni
                                {box.xmax() + pad, box.ymin() - pad},
                                {box.xmax() + pad, box.ymax() + pad},
                                {box.xmin() - pad, box.ymax() + pad}};
+    e.umin = box.xmin() - pad;
+    e.umax = box.xmax() + pad;
+    e.vmin = box.ymin() - pad;
+    e.vmax = box.ymax() + pad;
     for (int i = 0; i < 4; ++i) e.corners[static_cast<size_t>(i)] = e.lift(c2[i]);
+    // Evaluated exactly now, while one thread holds them: CGAL tightens an
+    // object's interval when it first evaluates it exactly, so a shared
+    // object evaluated later, by whichever thread first needs it, could
+    // round differently from one run to the next.
+    CGAL::exact(e.plane);
+    for (const Point3& q : e.corners) CGAL::exact(q);
     for (const Point3& q : e.corners) e.base.push_back(rounded(q));
     e.lo = e.hi = e.base[0];
     for (const Vec3& d : e.base) {
