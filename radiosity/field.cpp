@@ -38,15 +38,16 @@ struct SourceTree {
     double radius = 0.0;
     double area = 0.0;
     Rgb reflected{0.0};  // area-weighted mean of B - E
-    int begin = 0, end = 0;  // range in `order`
+    int begin = 0, end = 0;  // range of triangles (in node order once built)
     int left = -1, right = -1;
+    std::array<Vec3, 4> rect{};  // a rectangle in the patch's plane around its triangles (the shaft test's)
   };
   Vec3 normal{0.0};
   std::vector<std::vector<Vec3>> loops;  // outline, then holes
-  std::vector<Triangle> triangle;        // the patch's triangles of positive area
+  std::vector<Triangle> triangle;        // the patch's triangles of positive area, in node order once built
   std::vector<Rgb> reflected;            // per triangle: B - E
-  std::vector<int> order;                // triangle indices, in node order
-  std::vector<double> cumulative;        // area of order[0 .. i), size + 1
+  std::vector<int> order;                // while building: triangle indices, in node order
+  std::vector<double> cumulative;        // area of triangles [0 .. i), size + 1
   std::vector<Node> nodes;               // nodes[0] is the root
 
   int build(int begin, int end) {
@@ -64,6 +65,21 @@ struct SourceTree {
     }
     n.centre /= n.area;
     n.reflected /= n.area;
+    {
+      const Vec3 u = glm::normalize(std::abs(normal.x) < 0.9 ? glm::cross(normal, Vec3(1, 0, 0)) : glm::cross(normal, Vec3(0, 1, 0)));
+      const Vec3 w = glm::cross(normal, u);
+      double ulo = INFINITY, uhi = -INFINITY, wlo = INFINITY, whi = -INFINITY;
+      for (int i = begin; i < end; ++i)
+        for (const Vec3& v : triangle[static_cast<size_t>(order[static_cast<size_t>(i)])].v) {
+          const Vec3 d = v - n.centre;
+          ulo = std::min(ulo, glm::dot(d, u));
+          uhi = std::max(uhi, glm::dot(d, u));
+          wlo = std::min(wlo, glm::dot(d, w));
+          whi = std::max(whi, glm::dot(d, w));
+        }
+      n.rect = {n.centre + ulo * u + wlo * w, n.centre + uhi * u + wlo * w, n.centre + uhi * u + whi * w,
+                n.centre + ulo * u + whi * w};
+    }
     for (int i = begin; i < end; ++i)
       for (const Vec3& v : triangle[static_cast<size_t>(order[static_cast<size_t>(i)])].v)
         n.radius = std::max(n.radius, glm::length(v - n.centre));
@@ -84,15 +100,15 @@ struct SourceTree {
     return id;
   }
 
-  // A point of triangles order[begin .. end), area-uniform for u in [0, 1),
-  // and its triangle.
+  // A point of triangles [begin .. end), area-uniform for u in [0, 1), and
+  // its triangle.
   Vec3 sample(int begin, int end, double u, double a, double b, int& triangle_index) const {
     const double target = cumulative[static_cast<size_t>(begin)] +
                           u * (cumulative[static_cast<size_t>(end)] - cumulative[static_cast<size_t>(begin)]);
     auto it = std::upper_bound(cumulative.begin() + begin + 1, cumulative.begin() + end, target);
     const size_t i = static_cast<size_t>(it - cumulative.begin() - 1);
-    triangle_index = order[i];
-    const Triangle& t = triangle[static_cast<size_t>(order[i])];
+    triangle_index = static_cast<int>(i);
+    const Triangle& t = triangle[i];
     return triangle_point(t.v[0], t.v[1], t.v[2], a, b);
   }
 };
@@ -145,13 +161,17 @@ struct FieldEvaluator::Impl {
       : scene(s), diagonal(s.diagonal()), rays_per_node(std::max(1, o.rays / 4)), direct(s), occlusion(s) {}
 
   // The mean of V(x, y) R(y) over area-uniform stratified points y of
-  // triangles order[begin .. end) of source q, by shadow rays from x (on
+  // triangles [begin .. end) of source q, by shadow rays from x (on
   // patch p). Visibility and the reflected radiosity are sampled together:
   // where the hidden part of a source is also its dark part (the floor at a
   // block's foot seen from the ceiling), the mean visibility times the mean
-  // radiosity would come out low.
+  // radiosity would come out low. Where the shaft from x to the triangles
+  // is clear (`cast` false), the same points are taken without rays: the
+  // kernel-weighted mean of R over a node is not its area mean (a wall's
+  // bright top, near the ceiling, weighs more seen from the ceiling, whose
+  // patches came out 0.5-0.9% low on the Cornell box with the area mean).
   Rgb visible_reflected(const Vec3& x, const Vec3& n, int p, int q, const SourceTree& tree, int begin, int end,
-                        uint64_t seed, long long& rays) const {
+                        uint64_t seed, bool cast, long long& rays) const {
     SplitMix rng(seed);
     const int k = rays_per_node;
     Rgb sum(0.0);
@@ -165,9 +185,9 @@ struct FieldEvaluator::Impl {
       const Vec3 r = y - x;
       const double w = std::max(0.0, glm::dot(n, r)) * std::max(0.0, -glm::dot(tree.normal, r)) / std::pow(glm::dot(r, r), 2);
       weight += w;
-      if (w > 0.0 && visibility->visible(x, y, p, q)) sum += w * tree.reflected[static_cast<size_t>(t)];
+      if (w > 0.0 && (!cast || visibility->visible(x, y, p, q))) sum += w * tree.reflected[static_cast<size_t>(t)];
     }
-    rays += k;
+    if (cast) rays += k;
     return weight > 0.0 ? sum / weight : Rgb(0.0);
   }
 };
@@ -205,9 +225,19 @@ FieldEvaluator::FieldEvaluator(const Scene& scene, const Mesh& mesh, const std::
     s.order.resize(s.triangle.size());
     for (size_t i = 0; i < s.order.size(); ++i) s.order[i] = static_cast<int>(i);
     s.build(0, static_cast<int>(s.order.size()));
-    s.cumulative.assign(s.order.size() + 1, 0.0);
-    for (size_t i = 0; i < s.order.size(); ++i)
-      s.cumulative[i + 1] = s.cumulative[i] + s.triangle[static_cast<size_t>(s.order[i])].area;
+    // The triangles in node order: a node's are contiguous in memory (the
+    // gather's samples and form factors read them node by node).
+    std::vector<Triangle> triangle;
+    std::vector<Rgb> reflected;
+    for (const int t : s.order) {
+      triangle.push_back(s.triangle[static_cast<size_t>(t)]);
+      reflected.push_back(s.reflected[static_cast<size_t>(t)]);
+    }
+    s.triangle.swap(triangle);
+    s.reflected.swap(reflected);
+    s.order = {};
+    s.cumulative.assign(s.triangle.size() + 1, 0.0);
+    for (size_t i = 0; i < s.triangle.size(); ++i) s.cumulative[i + 1] = s.cumulative[i] + s.triangle[i].area;
   }
 }
 
@@ -257,7 +287,7 @@ Rgb FieldEvaluator::indirect(const Vec3& x, int patch, uint64_t id, FieldReport&
     // One random stream per (point, source node or triangle).
     const uint64_t stream = pair_seed(id, q);
     // The tree cut: nodes far enough to take whole (>= 0) and the
-    // triangles of the leaves opened (-1 - position in `order`), in the
+    // triangles of the leaves opened (-1 - triangle), in the
     // order of the walk; then the triangles' form factors in one pass.
     cut.clear();
     stack.assign(1, 0);
@@ -276,7 +306,7 @@ Rgb FieldEvaluator::indirect(const Vec3& x, int patch, uint64_t id, FieldReport&
     }
     triangles.clear();
     for (const int e : cut)
-      if (e < 0) triangles.push_back(&s.triangle[static_cast<size_t>(s.order[static_cast<size_t>(-1 - e)])]);
+      if (e < 0) triangles.push_back(&s.triangle[static_cast<size_t>(-1 - e)]);
     tri_f.resize(triangles.size());
     form_factors(at_x, triangles.data(), triangles.size(), tri_f.data());
     double weight = 0.0;
@@ -285,15 +315,16 @@ Rgb FieldEvaluator::indirect(const Vec3& x, int patch, uint64_t id, FieldReport&
     for (const int e : cut) {
       if (e < 0) {
         const int i = -1 - e;
-        const int t = s.order[static_cast<size_t>(i)];
         const double f = tri_f[next++];
         ++report.gather_triangles;
         if (f <= 0.0) continue;
         weight += f;
-        sum += f * (occludable ? m.visible_reflected(x, n, patch, static_cast<int>(q), s, i, i + 1,
-                                                     pair_seed(stream, (uint64_t{1} << 32) + static_cast<uint64_t>(i)),
-                                                     report.rays_cast)
-                               : s.reflected[static_cast<size_t>(t)]);
+        sum += f * (occludable ? m.visible_reflected(
+                                     x, n, patch, static_cast<int>(q), s, i, i + 1,
+                                     pair_seed(stream, (uint64_t{1} << 32) + static_cast<uint64_t>(i)),
+                                     m.occlusion.may_occlude(patch, x, n, static_cast<int>(q), s.triangle[static_cast<size_t>(i)]),
+                                     report.rays_cast)
+                               : s.reflected[static_cast<size_t>(i)]);
         continue;
       }
       const SourceTree::Node& node = s.nodes[static_cast<size_t>(e)];
@@ -305,7 +336,9 @@ Rgb FieldEvaluator::indirect(const Vec3& x, int patch, uint64_t id, FieldReport&
       const double f = node.area * cos_r * cos_s / (std::numbers::pi * d * d);
       weight += f;
       sum += f * (occludable ? m.visible_reflected(x, n, patch, static_cast<int>(q), s, node.begin, node.end,
-                                                   pair_seed(stream, static_cast<uint64_t>(e)), report.rays_cast)
+                                                   pair_seed(stream, static_cast<uint64_t>(e)),
+                                                   m.occlusion.may_occlude(patch, x, n, static_cast<int>(q), node.rect, s.normal),
+                                                   report.rays_cast)
                              : node.reflected);
     }
     if (weight > 0.0) h += (fq / weight) * sum;

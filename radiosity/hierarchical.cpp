@@ -654,12 +654,21 @@ private:
           path.push_back(out[static_cast<size_t>(k)]);
     if (path.empty()) return;
     const Triangle& t = tri_[y];
-    const Vec3 c = t.centroid();
-    for (const auto& [p, l] : path) {
-      const Triangle& r = tri_[static_cast<size_t>(p)];
-      const float w = static_cast<float>(t.area * point_polygon_form_factor(c, t.normal, r.v.data(), 3, r.normal) *
-                                         l->visible);
-      if (w > 0.0f) sent.push_back({l->id, w});
+    // The point form factors from y's centroid to all the receivers in one
+    // pass (the lists kept per thread: this runs once per node).
+    thread_local ReceiverPoints at_c;
+    thread_local std::vector<const Triangle*> receivers;
+    thread_local std::vector<double> f;
+    at_c.normal = t.normal;
+    at_c.x.assign(1, t.centroid());
+    at_c.w.assign(1, 1.0);
+    receivers.clear();
+    for (const auto& pl : path) receivers.push_back(&tri_[static_cast<size_t>(pl.first)]);
+    f.resize(receivers.size());
+    form_factors(at_c, receivers.data(), receivers.size(), f.data());
+    for (size_t k = 0; k < path.size(); ++k) {
+      const float w = static_cast<float>(t.area * f[k] * path[k].second->visible);
+      if (w > 0.0f) sent.push_back({path[k].second->id, w});
     }
   }
 

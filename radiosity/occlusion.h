@@ -14,6 +14,7 @@
 #include "meshing/scene.h"
 #include "radiosity/form_factor.h"
 
+#include <array>
 #include <atomic>
 #include <memory>
 #include <vector>
@@ -41,6 +42,11 @@ public:
 
   // Whether some patch may lie between elements a (of patch pa) and b (of pb).
   bool may_occlude(int pa, int pb, const Triangle& a, const Triangle& b) const;
+
+  // Whether some patch may lie between the point x (on patch px, normal nx)
+  // and the convex planar polygon b (of patch pb, normal nb).
+  bool may_occlude(int px, const Vec3& x, const Vec3& nx, int pb, const std::array<Vec3, 4>& b, const Vec3& nb) const;
+  bool may_occlude(int px, const Vec3& x, const Vec3& nx, int pb, const Triangle& b) const;
 
   static constexpr int kMaxTests = 8;
   static constexpr size_t kCachedPatches = 4096;
