@@ -4,11 +4,13 @@
 
 #include "meshing/errors.h"
 #include "radiosity/form_factor.h"
+#include "radiosity/gather_node.h"
 #include "radiosity/occlusion.h"
 #include "radiosity/sampling.h"
 #include "radiosity/transport.h"
 #include "radiosity/visibility.h"
 
+#include <glm/matrix.hpp>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -33,14 +35,9 @@ double patch_form_factor(const Vec3& x, const Vec3& n, const std::vector<std::ve
 
 // A source patch's tree over its triangles.
 struct SourceTree {
-  struct Node {
-    Vec3 centre{0.0};  // area centroid
-    double radius = 0.0;
-    double area = 0.0;
-    Rgb reflected{0.0};  // area-weighted mean of B - E
+  struct Node : detail::GatherNode {
     int begin = 0, end = 0;  // range of triangles (in node order once built)
     int left = -1, right = -1;
-    std::array<Vec3, 4> rect{};  // a rectangle in the patch's plane around its triangles (the shaft test's)
   };
   Vec3 normal{0.0};
   std::vector<std::vector<Vec3>> loops;  // outline, then holes
@@ -51,38 +48,20 @@ struct SourceTree {
   std::vector<Node> nodes;               // nodes[0] is the root
 
   int build(int begin, int end) {
-    Node n;
-    n.begin = begin;
-    n.end = end;
+    std::vector<const Triangle*> t;
+    std::vector<Rgb> refl;
     Vec3 lo(INFINITY), hi(-INFINITY);
     for (int i = begin; i < end; ++i) {
-      const Triangle& t = triangle[static_cast<size_t>(order[static_cast<size_t>(i)])];
-      n.area += t.area;
-      n.centre += t.area * t.centroid();
-      n.reflected += t.area * reflected[static_cast<size_t>(order[static_cast<size_t>(i)])];
-      lo = glm::min(lo, t.centroid());
-      hi = glm::max(hi, t.centroid());
+      const size_t k = static_cast<size_t>(order[static_cast<size_t>(i)]);
+      t.push_back(&triangle[k]);
+      refl.push_back(reflected[k]);
+      lo = glm::min(lo, triangle[k].centroid());
+      hi = glm::max(hi, triangle[k].centroid());
     }
-    n.centre /= n.area;
-    n.reflected /= n.area;
-    {
-      const Vec3 u = glm::normalize(std::abs(normal.x) < 0.9 ? glm::cross(normal, Vec3(1, 0, 0)) : glm::cross(normal, Vec3(0, 1, 0)));
-      const Vec3 w = glm::cross(normal, u);
-      double ulo = INFINITY, uhi = -INFINITY, wlo = INFINITY, whi = -INFINITY;
-      for (int i = begin; i < end; ++i)
-        for (const Vec3& v : triangle[static_cast<size_t>(order[static_cast<size_t>(i)])].v) {
-          const Vec3 d = v - n.centre;
-          ulo = std::min(ulo, glm::dot(d, u));
-          uhi = std::max(uhi, glm::dot(d, u));
-          wlo = std::min(wlo, glm::dot(d, w));
-          whi = std::max(whi, glm::dot(d, w));
-        }
-      n.rect = {n.centre + ulo * u + wlo * w, n.centre + uhi * u + wlo * w, n.centre + uhi * u + whi * w,
-                n.centre + ulo * u + whi * w};
-    }
-    for (int i = begin; i < end; ++i)
-      for (const Vec3& v : triangle[static_cast<size_t>(order[static_cast<size_t>(i)])].v)
-        n.radius = std::max(n.radius, glm::length(v - n.centre));
+    Node n;
+    static_cast<detail::GatherNode&>(n) = detail::gather_node(t, refl, normal);
+    n.begin = begin;
+    n.end = end;
     const int id = static_cast<int>(nodes.size());
     nodes.push_back(n);
     if (end - begin > 2) {
@@ -165,11 +144,9 @@ struct FieldEvaluator::Impl {
   // patch p). Visibility and the reflected radiosity are sampled together:
   // where the hidden part of a source is also its dark part (the floor at a
   // block's foot seen from the ceiling), the mean visibility times the mean
-  // radiosity would come out low. Where the shaft from x to the triangles
-  // is clear (`cast` false), the same points are taken without rays: the
-  // kernel-weighted mean of R over a node is not its area mean (a wall's
-  // bright top, near the ceiling, weighs more seen from the ceiling, whose
-  // patches came out 0.5-0.9% low on the Cornell box with the area mean).
+  // radiosity would come out low. With `cast` false the same points are
+  // taken without rays (the kernel-weighted mean of R where the shaft is
+  // clear but the node straddles x's tangent plane).
   Rgb visible_reflected(const Vec3& x, const Vec3& n, int p, int q, const SourceTree& tree, int begin, int end,
                         uint64_t seed, bool cast, long long& rays) const {
     SplitMix rng(seed);
@@ -263,6 +240,66 @@ Rgb FieldEvaluator::direct(const Vec3& x, int patch, FieldReport& report) const 
   return impl_->direct.reflected(x, patch, &report.direct);
 }
 
+namespace detail {
+
+GatherNode gather_node(const std::vector<const Triangle*>& t, const std::vector<Rgb>& r, const Vec3& normal) {
+  GatherNode n;
+  for (size_t k = 0; k < t.size(); ++k) {
+    n.area += t[k]->area;
+    n.centre += t[k]->area * t[k]->centroid();
+    n.reflected += t[k]->area * r[k];
+  }
+  n.centre /= n.area;
+  n.reflected /= n.area;
+  const Vec3 u = glm::normalize(glm::cross(normal, std::abs(normal.x) < 0.9 ? Vec3(1, 0, 0) : Vec3(0, 1, 0)));
+  const Vec3 w = glm::cross(normal, u);
+  double ulo = INFINITY, uhi = -INFINITY, wlo = INFINITY, whi = -INFINITY;
+  for (size_t k = 0; k < t.size(); ++k) {
+    // A triangle's second moment about c: A/12 (sum d_i d_i^T + S S^T),
+    // d_i = v_i - c, S = sum d_i.
+    Vec3 sum(0.0);
+    glm::dmat3 m(0.0);
+    for (const Vec3& v : t[k]->v) {
+      const Vec3 d = v - n.centre;
+      m += glm::outerProduct(d, d);
+      sum += d;
+      n.radius = std::max(n.radius, glm::length(d));
+      ulo = std::min(ulo, glm::dot(d, u));
+      uhi = std::max(uhi, glm::dot(d, u));
+      wlo = std::min(wlo, glm::dot(d, w));
+      whi = std::max(whi, glm::dot(d, w));
+    }
+    n.second += (t[k]->area / 12.0) * (m + glm::outerProduct(sum, sum));
+    const Vec3 g = t[k]->area * (t[k]->centroid() - n.centre);
+    for (int c = 0; c < 3; ++c) n.moment[static_cast<size_t>(c)] += r[k][c] * g;
+  }
+  n.rect = {n.centre + ulo * u + wlo * w, n.centre + uhi * u + wlo * w, n.centre + uhi * u + whi * w,
+            n.centre + ulo * u + whi * w};
+  return n;
+}
+
+NodeTerm node_term(const GatherNode& node, const Vec3& x, const Vec3& n, const Vec3& m) {
+  NodeTerm t;
+  const Vec3 r = node.centre - x;
+  const double a = glm::dot(n, r), b = -glm::dot(m, r), s = glm::dot(r, r);
+  if (!(a > 0.0) || !(b > 0.0)) return t;
+  t.f = a * b * node.area / (std::numbers::pi * s * s);
+  t.smooth = std::all_of(node.rect.begin(), node.rect.end(), [&](const Vec3& c) { return glm::dot(n, c - x) > 0.0; });
+  if (!t.smooth) return t;
+  const Vec3 i2r = node.second * r;
+  const double trace = node.second[0][0] + node.second[1][1] + node.second[2][2];
+  const double s3 = s * s * s;
+  const double curvature =
+      (-8.0 * b * glm::dot(n, i2r) / s3 + 24.0 * a * b * glm::dot(r, i2r) / (s3 * s) - 4.0 * a * b * trace / s3) /
+      std::numbers::pi;
+  if (t.f + 0.5 * curvature > 0.0) t.f += 0.5 * curvature;  // else the expansion fails there: the point value stands
+  const Vec3 grad = (b * n - a * m - (4.0 * a * b / s) * r) / (std::numbers::pi * s * s);
+  for (int c = 0; c < 3; ++c) t.first[c] = glm::dot(grad, node.moment[static_cast<size_t>(c)]);
+  return t;
+}
+
+}  // namespace detail
+
 Rgb FieldEvaluator::indirect(const Vec3& x, int patch, uint64_t id, FieldReport& report) const {
   const Impl& m = *impl_;
   const Patch& receiver = m.scene.patches[static_cast<size_t>(patch)];
@@ -319,27 +356,25 @@ Rgb FieldEvaluator::indirect(const Vec3& x, int patch, uint64_t id, FieldReport&
         ++report.gather_triangles;
         if (f <= 0.0) continue;
         weight += f;
-        sum += f * (occludable ? m.visible_reflected(
-                                     x, n, patch, static_cast<int>(q), s, i, i + 1,
-                                     pair_seed(stream, (uint64_t{1} << 32) + static_cast<uint64_t>(i)),
-                                     m.occlusion.may_occlude(patch, x, n, static_cast<int>(q), s.triangle[static_cast<size_t>(i)]),
-                                     report.rays_cast)
-                               : s.reflected[static_cast<size_t>(i)]);
+        const bool shaded =
+            occludable && m.occlusion.may_occlude(patch, x, n, static_cast<int>(q), s.triangle[static_cast<size_t>(i)]);
+        sum += f * (shaded ? m.visible_reflected(x, n, patch, static_cast<int>(q), s, i, i + 1,
+                                                 pair_seed(stream, (uint64_t{1} << 32) + static_cast<uint64_t>(i)), true,
+                                                 report.rays_cast)
+                           : s.reflected[static_cast<size_t>(i)]);
         continue;
       }
       const SourceTree::Node& node = s.nodes[static_cast<size_t>(e)];
-      const Vec3 r = node.centre - x;
-      const double d = glm::length(r);
-      const double cos_r = glm::dot(n, r) / d, cos_s = -glm::dot(s.normal, r) / d;
       ++report.gather_nodes;
-      if (cos_r <= 0.0 || cos_s <= 0.0) continue;
-      const double f = node.area * cos_r * cos_s / (std::numbers::pi * d * d);
-      weight += f;
-      sum += f * (occludable ? m.visible_reflected(x, n, patch, static_cast<int>(q), s, node.begin, node.end,
-                                                   pair_seed(stream, static_cast<uint64_t>(e)),
-                                                   m.occlusion.may_occlude(patch, x, n, static_cast<int>(q), node.rect, s.normal),
-                                                   report.rays_cast)
-                             : node.reflected);
+      const detail::NodeTerm term = detail::node_term(node, x, n, s.normal);
+      if (!(term.f > 0.0)) continue;
+      weight += term.f;
+      const bool shaded = occludable && m.occlusion.may_occlude(patch, x, n, static_cast<int>(q), node.rect, s.normal);
+      if (shaded || !term.smooth)
+        sum += term.f * m.visible_reflected(x, n, patch, static_cast<int>(q), s, node.begin, node.end,
+                                            pair_seed(stream, static_cast<uint64_t>(e)), shaded, report.rays_cast);
+      else
+        sum += term.f * node.reflected + term.first;
     }
     if (weight > 0.0) h += (fq / weight) * sum;
   }

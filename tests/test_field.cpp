@@ -6,6 +6,8 @@
 #include "meshing/errors.h"
 #include "radiosity/direct.h"
 #include "radiosity/field.h"
+#include "radiosity/form_factor.h"
+#include "radiosity/gather_node.h"
 #include "radiosity/method.h"
 
 #include "tests/test_util.h"
@@ -202,4 +204,66 @@ TEST(Field, ModesParseAndAnUnknownOneIsAnInputError) {
   for (FieldMode m : {FieldMode::gather, FieldMode::fit, FieldMode::mean}) EXPECT_EQ(parse_field_mode(to_string(m)), m);
   const std::string message = test::message_of<InputError>([] { parse_field_mode("smooth"); });
   EXPECT_TRUE(test::contains(message, "--field smooth")) << message;
+}
+
+namespace {
+// A square node of side h centred at the origin of the plane y = 0 (normal
+// +y), as two triangles (split along a diagonal) reflecting r1 and r2.
+struct SquareNode {
+  Triangle t1, t2;
+  detail::GatherNode node;
+  SquareNode(double h, double r1, double r2) {
+    const Vec3 up(0.0, 1.0, 0.0);
+    const Vec3 a(-h / 2, 0, -h / 2), b(h / 2, 0, -h / 2), c(h / 2, 0, h / 2), d(-h / 2, 0, h / 2);
+    t1 = make_triangle(a, d, c, up);
+    t2 = make_triangle(a, c, b, up);
+    node = detail::gather_node({&t1, &t2}, {Rgb(r1), Rgb(r2)}, up);
+  }
+};
+}  // namespace
+
+TEST(Field, ANodeTakenWholeIsExactToThirdOrderInItsSize) {
+  // Seen from a tilted point, the node's form factor from its moments
+  // (the kernel's Taylor expansion to second order) against Lambert's
+  // exact formula on its two triangles: halving the node must cut the
+  // error at least 8-fold (third order), where the point form factor at
+  // the centroid (second order) cuts it only about 4-fold.
+  const Vec3 x(0.6, 1.0, 0.3), n = glm::normalize(Vec3(-0.3, -1.0, 0.2)), up(0.0, 1.0, 0.0);
+  double expanded[2], point[2];
+  for (int k = 0; k < 2; ++k) {
+    const SquareNode s(0.4 / (1 << k), 1.0, 1.0);
+    const double exact = point_polygon_form_factor(x, n, s.t1.v.data(), 3, up) +
+                         point_polygon_form_factor(x, n, s.t2.v.data(), 3, up);
+    const detail::NodeTerm t = detail::node_term(s.node, x, n, up);
+    ASSERT_TRUE(t.smooth);
+    const Vec3 r = s.node.centre - x;
+    point[k] = std::abs(glm::dot(n, r) * -glm::dot(up, r) * s.node.area / (std::numbers::pi * std::pow(glm::dot(r, r), 2)) - exact) / exact;
+    expanded[k] = std::abs(t.f - exact) / exact;
+  }
+  EXPECT_GT(point[0] / point[1], 3.0);
+  EXPECT_LT(point[0] / point[1], 5.0);
+  EXPECT_GT(expanded[0] / expanded[1], 8.0);
+  EXPECT_LT(expanded[0], point[0] / 4.0);
+}
+
+TEST(Field, ANodesFirstMomentTakesTheRadiosityWhereTheKernelIsLarger) {
+  // The two halves of the node reflect 1 and 3: the integral of K R is
+  // exact as R1 F1 + R2 F2. The node's mean radiosity times its form factor
+  // is off at first order in the node's size; with the first moment's term
+  // at second order (halving the node cuts the error at least 3.5-fold,
+  // the mean's about 2-fold).
+  const Vec3 x(0.6, 1.0, 0.3), n = glm::normalize(Vec3(-0.3, -1.0, 0.2)), up(0.0, 1.0, 0.0);
+  double with[2], without[2];
+  for (int k = 0; k < 2; ++k) {
+    const SquareNode s(0.4 / (1 << k), 1.0, 3.0);
+    const double exact = 1.0 * point_polygon_form_factor(x, n, s.t1.v.data(), 3, up) +
+                         3.0 * point_polygon_form_factor(x, n, s.t2.v.data(), 3, up);
+    const detail::NodeTerm t = detail::node_term(s.node, x, n, up);
+    with[k] = std::abs(t.f * s.node.reflected.x + t.first.x - exact) / exact;
+    without[k] = std::abs(t.f * s.node.reflected.x - exact) / exact;
+  }
+  EXPECT_GT(without[0] / without[1], 1.5);
+  EXPECT_LT(without[0] / without[1], 2.5);
+  EXPECT_GT(with[0] / with[1], 3.5);
+  EXPECT_LT(with[0], without[0] / 4.0);
 }
