@@ -36,8 +36,12 @@ struct DirectCounts {
 // projected from x into the emitter's plane, and the union of these shadows
 // is subtracted from the emitter polygon (exact 2-D Boolean operations,
 // CGAL Epeck, in the emitter's plane). Lambert's contour formula applied to
-// what is left gives the exact unoccluded-part form factor; rounding happens
-// only when the visible polygon is turned back into doubles for that formula.
+// what is left gives the unoccluded-part form factor. Rounding happens where
+// the shadows' corners are projected (in double precision, in homogeneous
+// coordinates, a shared corner alike for both shadows; in exact arithmetic
+// where an occluder comes near x) and where the visible polygon is turned
+// back into doubles for that formula: results agree with closed forms to
+// 1e-15 (tests).
 class DirectIllumination {
 public:
   explicit DirectIllumination(const Scene& scene);

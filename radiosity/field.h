@@ -42,16 +42,18 @@ struct FieldReport {
 // tree over its triangles (split at the median centroid along the longest
 // axis) decides how finely the patch is taken: a node is taken whole when
 // its bounding sphere (radius r, centre at distance d) subtends
-// r / d <= kOpening (then its point form factor is A cos cos / (pi d^2) at
-// its area centroid, and the error of that approximation is O((r/d)^2)),
-// otherwise its children are; at most two triangles are taken one by one
-// with Lambert's exact formula. The node form factors are only weights
+// r / d <= kOpening (then it is integrated by its moments, the point form
+// factor's kernel expanded about its centroid: detail::node_term in
+// gather_node.h, error O((r/d)^3)), otherwise its children are; at most two
+// triangles are taken one by one with Lambert's exact formula. The node
+// form factors are only weights
 // within the patch: their sum is scaled to the exact form factor to the
 // whole patch (Lambert's formula on its outline and holes), so a uniform
 // source is gathered exactly, and in a closed scene the form factors at a
 // point sum to 1 whatever the tree. Visibility: options.rays / 4
 // stratified shadow rays per node or triangle taken, cast only where the
-// shaft test finds a patch that may be in the way; each ray also samples
+// shaft from x to the node's rectangle (or the triangle) may hold another
+// patch; each ray also samples
 // the source's radiosity where it lands, weighted by the point form
 // factor's kernel there (visibility and radiosity are correlated: the part
 // of a source hidden from x is often its dark part). One random stream per
