@@ -151,7 +151,14 @@ struct FieldEvaluator::Impl {
                         uint64_t seed, bool cast, long long& rays) const {
     SplitMix rng(seed);
     const int k = rays_per_node;
-    Rgb sum(0.0);
+    thread_local std::vector<Vec3> from, to;
+    thread_local std::vector<double> w;
+    thread_local std::vector<int> tri;
+    thread_local std::vector<unsigned char> seen;
+    from.clear();
+    to.clear();
+    w.clear();
+    tri.clear();
     double weight = 0.0;
     for (int s = 0; s < k; ++s) {
       const double u = (s + rng.uniform()) / k;
@@ -160,11 +167,22 @@ struct FieldEvaluator::Impl {
       const Vec3 y = tree.sample(begin, end, u, a, b, t);
       // The point form factor's kernel at y: the samples are weighted by it.
       const Vec3 r = y - x;
-      const double w = std::max(0.0, glm::dot(n, r)) * std::max(0.0, -glm::dot(tree.normal, r)) / std::pow(glm::dot(r, r), 2);
-      weight += w;
-      if (w > 0.0 && (!cast || visibility->visible(x, y, p, q))) sum += w * tree.reflected[static_cast<size_t>(t)];
+      const double ws = std::max(0.0, glm::dot(n, r)) * std::max(0.0, -glm::dot(tree.normal, r)) / std::pow(glm::dot(r, r), 2);
+      weight += ws;
+      if (!(ws > 0.0)) continue;
+      from.push_back(x);
+      to.push_back(y);
+      w.push_back(ws);
+      tri.push_back(t);
     }
-    if (cast) rays += k;
+    seen.assign(to.size(), 1);
+    if (cast) {
+      visibility->visible(from.data(), to.data(), to.size(), p, q, seen.data());
+      rays += k;
+    }
+    Rgb sum(0.0);
+    for (size_t i = 0; i < to.size(); ++i)
+      if (seen[i]) sum += w[i] * tree.reflected[static_cast<size_t>(tri[i])];
     return weight > 0.0 ? sum / weight : Rgb(0.0);
   }
 };

@@ -87,25 +87,35 @@ double VisibilityEstimator::visible_fraction(const Triangle& a, int pa, uint64_t
   std::iota(perm.begin(), perm.begin() + rays, 0);
   for (int k = rays - 1; k > 0; --k)
     std::swap(perm[static_cast<size_t>(k)], perm[static_cast<size_t>(rng.next() % static_cast<uint64_t>(k + 1))]);
-  int open = 0, facing = 0, open_facing = 0;
+  thread_local std::vector<Vec3> xs, ys;
+  thread_local std::vector<unsigned char> seen;
+  xs.resize(static_cast<size_t>(rays));
+  ys.resize(static_cast<size_t>(rays));
+  seen.resize(static_cast<size_t>(rays));
   for (int k = 0; k < rays; ++k) {
     const int s = k, t = perm[static_cast<size_t>(k)];
     // Each point's second coordinate is drawn first, in an order written out
     // (the order of evaluating function arguments is unspecified).
     const double xv = ((s / side) + rng.uniform()) / side;
     const double xu = ((s % side) + rng.uniform()) / side;
-    const Vec3 x = triangle_point(ti.v[0], ti.v[1], ti.v[2], xu, xv);
+    xs[static_cast<size_t>(k)] = triangle_point(ti.v[0], ti.v[1], ti.v[2], xu, xv);
     const double yv = ((t / side) + rng.uniform()) / side;
     const double yu = ((t % side) + rng.uniform()) / side;
-    const Vec3 y = triangle_point(tj.v[0], tj.v[1], tj.v[2], yu, yv);
-    const bool seen = impl_->embree->visible(x, y, pi, pj);
-    open += seen;
+    ys[static_cast<size_t>(k)] = triangle_point(tj.v[0], tj.v[1], tj.v[2], yu, yv);
+  }
+  impl_->embree->visible(xs.data(), ys.data(), xs.size(), pi, pj, seen.data());
+  int open = 0, facing = 0, open_facing = 0;
+  for (size_t k = 0; k < xs.size(); ++k) {
+    const Vec3& x = xs[k];
+    const Vec3& y = ys[k];
+    const bool visible = seen[k] != 0;
+    open += visible;
     // Light passes between x and y only when each lies in front of the
     // other's plane; a ray behind either one (an element straddling the
     // other's plane) crosses what the exchange never does and says nothing.
     if (glm::dot(x - tj.v[0], tj.normal) > 0.0 && glm::dot(y - ti.v[0], ti.normal) > 0.0) {
       ++facing;
-      open_facing += seen;
+      open_facing += visible;
     }
   }
   count.cast += rays;

@@ -23,6 +23,9 @@ public:
   // True when the open segment (from, to) is unobstructed by every patch but
   // `ignore_a` and `ignore_b` (-1: none). Thread-safe.
   bool visible(const Vec3& from, const Vec3& to, int ignore_a, int ignore_b) const;
+  // The same for n segments (from[i], to[i]) at once, into seen[i]: one
+  // call to Embree, which traces nearby rays together. Thread-safe.
+  void visible(const Vec3* from, const Vec3* to, size_t n, int ignore_a, int ignore_b, unsigned char* seen) const;
 
   // The patch first hit by the ray from `from` along `direction` (any
   // length) between 1e-7 and 1 times `reach` times the direction's length

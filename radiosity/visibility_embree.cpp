@@ -139,6 +139,17 @@ bool Visibility::visible(const Vec3& from, const Vec3& to, int ignore_a, int ign
   return ray.tfar >= 0.0f;  // Embree sets tfar to -inf when occluded
 }
 
+void Visibility::visible(const Vec3* from, const Vec3* to, size_t n, int ignore_a, int ignore_b, unsigned char* seen) const {
+  const Impl& m = *impl_;
+  QueryContext ctx = make_context(m.prim_patch, ignore_a, ignore_b);
+  ctx.base.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+  thread_local std::vector<RTCRay> rays;
+  rays.resize(n);
+  for (size_t i = 0; i < n; ++i) rays[i] = make_ray(from[i], m.origin, to[i] - from[i], 1e-6f, 1.0f - 1e-6f);
+  rtcOccluded1M(m.scene, &ctx.base, rays.data(), static_cast<unsigned>(n), sizeof(RTCRay));
+  for (size_t i = 0; i < n; ++i) seen[i] = rays[i].tfar >= 0.0f ? 1 : 0;
+}
+
 int Visibility::first_hit(const Vec3& from, const Vec3& direction, double reach, int ignore) const {
   const Impl& m = *impl_;
   QueryContext ctx = make_context(m.prim_patch, ignore, -1);
