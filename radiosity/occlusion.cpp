@@ -154,17 +154,20 @@ bool Occlusion::may_occlude(int pa, int pb, const Triangle& a, const Triangle& b
   return shaft_blocked(pa, pb, a.v, b.v, a.normal, b.normal);
 }
 
-bool Occlusion::may_occlude(int px, const Vec3& x, const Vec3& nx, int pb, const std::array<Vec3, 4>& b,
-                            const Vec3& nb) const {
+template <class B>
+bool Occlusion::point_shaft(int px, const Vec3& x, const Vec3& nx, int pb, const B& b, const Vec3& nb) const {
   if (convex_ || px == pb) return false;
-  if (pair_ && !may_occlude(px, pb)) return false;
+  if (pair_ && !may_occlude(px, pb)) return false;  // the patches' shaft is clear, so is this one
   return shaft_blocked(px, pb, std::array<Vec3, 1>{x}, b, nx, nb);
 }
 
+bool Occlusion::may_occlude(int px, const Vec3& x, const Vec3& nx, int pb, const std::array<Vec3, 4>& b,
+                            const Vec3& nb) const {
+  return point_shaft(px, x, nx, pb, b, nb);
+}
+
 bool Occlusion::may_occlude(int px, const Vec3& x, const Vec3& nx, int pb, const Triangle& b) const {
-  if (convex_ || px == pb) return false;
-  if (pair_ && !may_occlude(px, pb)) return false;
-  return shaft_blocked(px, pb, std::array<Vec3, 1>{x}, b.v, nx, b.normal);
+  return point_shaft(px, x, nx, pb, b.v, b.normal);
 }
 
 }  // namespace radmesh

@@ -61,6 +61,9 @@ private:
   // between the convex polygons a and b (normals na, nb).
   template <class A, class B>
   bool shaft_blocked(int pa, int pb, const A& a, const B& b, const Vec3& na, const Vec3& nb) const;
+  // The shaft from the point x to the convex polygon b, after the patches'.
+  template <class B>
+  bool point_shaft(int px, const Vec3& x, const Vec3& nx, int pb, const B& b, const Vec3& nb) const;
   std::vector<Poly> polys_;
   BoxTree tree_;
   // Per pair p < q when the scene is small: 0 unknown, 1 clear, 2 may occlude.
