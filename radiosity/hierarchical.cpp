@@ -287,36 +287,42 @@ private:
   // pair alone, with its own random stream, so the result does not depend on
   // the threads); deciding, splitting and storing is sequential and in order.
   void link_pairs(std::vector<std::pair<int, int>> todo) {
+    constexpr size_t kBlock = size_t{1} << 14;  // scratch per block, reused (see link_cluster_pairs)
+    std::vector<Link> ev;
+    std::vector<RayCount> rays;
     while (!todo.empty()) {
-      std::vector<Link> ev(todo.size());
-      std::vector<RayCount> rays(todo.size());
-      tbb::parallel_for(tbb::blocked_range<size_t>(0, todo.size(), 16), [&](const tbb::blocked_range<size_t>& r) {
-        for (size_t i = r.begin(); i != r.end(); ++i) {
-          const auto [p, q] = todo[i];
-          Link& l = ev[i];
-          l.source = q;
-          l.f = form_factor_to(p, q);
-          if (l.f <= 0.0) continue;
-          l.visible = visibility_.visible_fraction(tri_[static_cast<size_t>(p)], node_patch(p), static_cast<uint64_t>(p),
-                                                   tri_[static_cast<size_t>(q)], node_patch(q), static_cast<uint64_t>(q),
-                                                   rays[i]);
-          l.spread = spread(p, q, l.f);
-        }
-      });
       std::vector<std::pair<int, int>> next;
-      for (size_t i = 0; i < todo.size(); ++i) {
-        const int p = todo[i].first;
-        ++out_.stats.links_examined;
-        out_.stats.rays_cast += rays[i].cast;
-        out_.stats.rays_skipped += rays[i].skipped;
-        out_.stats.pairs_unoccludable += rays[i].unoccludable;
-        const Link& l = ev[i];
-        if (!std::isfinite(l.f) || !std::isfinite(l.spread))
-          throw NumericalError(scene_.source + ": link from node " + std::to_string(l.source) + " to node " +
-                               std::to_string(p) + " has a non-finite form factor");
-        if (l.f <= 0.0) continue;
-        if (wants_refinement(p, l) && split_pair(p, l.source, spread_dominates(l), next)) continue;
-        store_element_link(p, l);
+      for (size_t begin = 0; begin < todo.size(); begin += kBlock) {
+        const size_t count = std::min(kBlock, todo.size() - begin);
+        ev.assign(count, Link{});
+        rays.assign(count, RayCount{});
+        tbb::parallel_for(tbb::blocked_range<size_t>(0, count, 16), [&](const tbb::blocked_range<size_t>& r) {
+          for (size_t i = r.begin(); i != r.end(); ++i) {
+            const auto [p, q] = todo[begin + i];
+            Link& l = ev[i];
+            l.source = q;
+            l.f = form_factor_to(p, q);
+            if (l.f <= 0.0) continue;
+            l.visible = visibility_.visible_fraction(tri_[static_cast<size_t>(p)], node_patch(p), static_cast<uint64_t>(p),
+                                                     tri_[static_cast<size_t>(q)], node_patch(q), static_cast<uint64_t>(q),
+                                                     rays[i]);
+            l.spread = spread(p, q, l.f);
+          }
+        });
+        for (size_t i = 0; i < count; ++i) {
+          const int p = todo[begin + i].first;
+          ++out_.stats.links_examined;
+          out_.stats.rays_cast += rays[i].cast;
+          out_.stats.rays_skipped += rays[i].skipped;
+          out_.stats.pairs_unoccludable += rays[i].unoccludable;
+          const Link& l = ev[i];
+          if (!std::isfinite(l.f) || !std::isfinite(l.spread))
+            throw NumericalError(scene_.source + ": link from node " + std::to_string(l.source) + " to node " +
+                                 std::to_string(p) + " has a non-finite form factor");
+          if (l.f <= 0.0) continue;
+          if (wants_refinement(p, l) && split_pair(p, l.source, spread_dominates(l), next)) continue;
+          store_element_link(p, l);
+        }
       }
       todo.swap(next);
       check_memory();
@@ -1324,52 +1330,63 @@ private:
         else
           pairs.emplace_back(p, q);
       }
-      std::vector<Link> ev(pairs.size());
-      std::vector<std::array<float, ClusterTree::kGroups>> per_group(pairs.size());
-      std::vector<RayCount> rays(pairs.size());
-      std::vector<char> split(pairs.size(), 0);
-      tbb::parallel_for(tbb::blocked_range<size_t>(0, pairs.size(), 16), [&](const tbb::blocked_range<size_t>& r) {
-        for (size_t i = r.begin(); i != r.end(); ++i) {
-          const auto [p, q] = pairs[i];
-          Link& l = ev[i];
-          l.source = q;
-          const double shape = cluster_shape_error(p, q);
-          if (shape == 0.0) continue;
-          const double rb = code_rho(p) * code_radiosity(q);
-          if (shape < 0.0 || rb * shape > hopt_.epsilon * scale_ || small_code(p) || small_code(q)) {
-            split[i] = 1;
+      // In blocks, so that the per-pair scratch stays small and is reused
+      // (a generation holds tens of millions of pairs at 10^5 faces; the
+      // blocks are consumed in order, so the result is the same).
+      constexpr size_t kBlock = size_t{1} << 14;
+      std::vector<Link> ev;
+      std::vector<std::array<float, ClusterTree::kGroups>> per_group;
+      std::vector<RayCount> rays;
+      std::vector<char> split;
+      for (size_t begin = 0; begin < pairs.size(); begin += kBlock) {
+        const size_t count = std::min(kBlock, pairs.size() - begin);
+        ev.assign(count, Link{});
+        per_group.resize(count);
+        rays.assign(count, RayCount{});
+        split.assign(count, 0);
+        tbb::parallel_for(tbb::blocked_range<size_t>(0, count, 16), [&](const tbb::blocked_range<size_t>& r) {
+          for (size_t i = r.begin(); i != r.end(); ++i) {
+            const auto [p, q] = pairs[begin + i];
+            Link& l = ev[i];
+            l.source = q;
+            const double shape = cluster_shape_error(p, q);
+            if (shape == 0.0) continue;
+            const double rb = code_rho(p) * code_radiosity(q);
+            if (shape < 0.0 || rb * shape > hopt_.epsilon * scale_ || small_code(p) || small_code(q)) {
+              split[i] = 1;
+              continue;
+            }
+            l.spread = shape;
+            const double d = glm::length(code_centre(q) - code_centre(p));
+            l.f = code_area(q) / (std::numbers::pi * d * d);
+            l.visible = cluster_visible(p, q, rays[i], per_group[i]);
+            if (wants_cluster_refinement(p, l)) split[i] = 1;
+          }
+        });
+        for (size_t i = 0; i < count; ++i) {
+          const auto [p, q] = pairs[begin + i];
+          ++out_.stats.links_examined;
+          out_.stats.rays_cast += rays[i].cast;
+          out_.stats.rays_skipped += rays[i].skipped;
+          out_.stats.pairs_unoccludable += rays[i].unoccludable;
+          if (split[i]) {
+            split_cluster_pair(p, q, next);
             continue;
           }
-          l.spread = shape;
-          const double d = glm::length(code_centre(q) - code_centre(p));
-          l.f = code_area(q) / (std::numbers::pi * d * d);
-          l.visible = cluster_visible(p, q, rays[i], per_group[i]);
-          if (wants_cluster_refinement(p, l)) split[i] = 1;
-        }
-      });
-      for (size_t i = 0; i < pairs.size(); ++i) {
-        const auto [p, q] = pairs[i];
-        ++out_.stats.links_examined;
-        out_.stats.rays_cast += rays[i].cast;
-        out_.stats.rays_skipped += rays[i].skipped;
-        out_.stats.pairs_unoccludable += rays[i].unoccludable;
-        if (split[i]) {
-          split_cluster_pair(p, q, next);
-          continue;
-        }
-        Link& l = ev[i];
-        if (!(l.f > 0.0)) continue;
-        if (l.partial()) {
-          const ClusterTree::Cluster& end = ct_.cluster(cluster_of(p < 0 ? p : q));
-          l.group_visible = static_cast<int>(group_visible_.size());
-          group_visible_.insert(group_visible_.end(), per_group[i].begin(),
-                                per_group[i].begin() + (end.group_end - end.group_begin));
-        }
-        if (p >= 0) {
-          links_[static_cast<size_t>(p)].push_back(l);
-          dirty_[static_cast<size_t>(p)] = 1;
-        } else {
-          clinks_[static_cast<size_t>(cluster_of(p))].push_back(l);
+          Link& l = ev[i];
+          if (!(l.f > 0.0)) continue;
+          if (l.partial()) {
+            const ClusterTree::Cluster& end = ct_.cluster(cluster_of(p < 0 ? p : q));
+            l.group_visible = static_cast<int>(group_visible_.size());
+            group_visible_.insert(group_visible_.end(), per_group[i].begin(),
+                                  per_group[i].begin() + (end.group_end - end.group_begin));
+          }
+          if (p >= 0) {
+            links_[static_cast<size_t>(p)].push_back(l);
+            dirty_[static_cast<size_t>(p)] = 1;
+          } else {
+            clinks_[static_cast<size_t>(cluster_of(p))].push_back(l);
+          }
         }
       }
       todo.swap(next);
