@@ -145,8 +145,10 @@ public:
   // copied into the result.
   void finish() {
     out_.stats.links = count_links();
-    out_.links.assign(links_.size(), {});
+    out_.links.clear();
     out_.cluster_links.clear();
+    if (!hopt_.keep_links) return;
+    out_.links.assign(links_.size(), {});
     auto cluster_link = [&](int p, const Link& l) {
       HierarchicalClusterLink c;
       c.receiver = code_centre(p);
@@ -595,7 +597,8 @@ private:
     terms_[x].clear();
     F_sum_[x] = 0.0;
     F_approx_[x] = 0.0;
-    std::vector<const Link*> path;
+    thread_local std::vector<const Link*> path;  // per thread: this runs once per leaf
+    path.clear();
     size_t own = 0;  // the leaf's own links come first
     for (int a = static_cast<int>(x); a >= 0; a = tree.node(a).parent) {
       for (const Link& l : links_[static_cast<size_t>(a)]) path.push_back(&l);
@@ -660,7 +663,8 @@ private:
     auto& sent = sent_[y];
     sent.clear();
     const bool leaf = out_.tree.is_leaf(static_cast<int>(y));
-    std::vector<std::pair<int, const Link*>> path;
+    thread_local std::vector<std::pair<int, const Link*>> path;
+    path.clear();
     for (int a = static_cast<int>(y), d = 0; a >= 0 && d <= kSenderDepth; a = out_.tree.node(a).parent, ++d)
       if (d == kSenderDepth || leaf)
         for (int k = out_begin[static_cast<size_t>(a)]; k < out_begin[static_cast<size_t>(a) + 1]; ++k)

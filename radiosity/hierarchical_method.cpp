@@ -125,6 +125,7 @@ Method make_hierarchical_method() {
     ho.min_area = o.number("min_area");
     ho.baum_relative = o.number("baum");
     ho.clusters = parse_cluster_mode(o.text("clusters"));
+    ho.keep_links = o.number("export_links") != 0.0;
     std::function<void(const HierarchicalSolution&, int)> on_round;
     if (cb.on_round)
       on_round = [&](const HierarchicalSolution& h, int round) {

@@ -377,14 +377,17 @@ TEST(HierarchicalStress, MemoryLimitIsAClearErrorBeforeAnyCrash) {
 
 TEST(Hierarchical, SolverObjectStepsToTheOneOffResult) {
   // The solver object keeps tree, links and radiosity between rounds:
-  // stepping it by hand ends where solve_hierarchical ends, round for round.
+  // stepping it by hand ends where solve_hierarchical ends, round for round
+  // (that one without copying its links out).
   const Scene s = read_obj_scene(kData + "/box_on_floor/box_on_floor.obj");
   const Mesh m = coarse_mesh(s, 1.0);
   HierarchicalOptions ho;
   ho.epsilon = 0.01;
   std::vector<long long> links_seen;
+  HierarchicalOptions without_links = ho;  // changes what is copied out, nothing else
+  without_links.keep_links = false;
   const HierarchicalSolution once =
-      solve_hierarchical(s, m, {}, ho, [&](const HierarchicalSolution& h, int round) {
+      solve_hierarchical(s, m, {}, without_links, [&](const HierarchicalSolution& h, int round) {
         EXPECT_EQ(static_cast<int>(links_seen.size()), round);
         links_seen.push_back(h.stats.links_per_round.back());
       });
@@ -405,6 +408,9 @@ TEST(Hierarchical, SolverObjectStepsToTheOneOffResult) {
   for (const auto& l : stepped.links) published += static_cast<long long>(l.size());
   EXPECT_EQ(published, stepped.stats.links);
   EXPECT_EQ(static_cast<long long>(stepped.cluster_links.size()), stepped.stats.cluster_links);
+  EXPECT_TRUE(once.links.empty());
+  EXPECT_TRUE(once.cluster_links.empty());
+  EXPECT_EQ(once.stats.links, stepped.stats.links);
 }
 
 TEST(Hierarchical, ReportsProgressFromTheCallingThread) {
