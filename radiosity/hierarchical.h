@@ -76,8 +76,8 @@ struct HierarchicalOptions {
   // faster (README, "Clusters").
   ClusterMode clusters = ClusterMode::volume;
   // Copy the links into the solution at the end (links, cluster_links).
-  // The radmesh program asks for them only with export_links: at 10^5
-  // input triangles the copy of 6 M links took 4 s, a twentieth of the run.
+  // The radmesh program asks for them only with export_links: on a sphere
+  // room of 81,927 faces the copy of 5.8 M links took about 4 s of 97 (perf).
   bool keep_links = true;
 };
 
