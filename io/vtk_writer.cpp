@@ -141,6 +141,7 @@ void write_grid(const std::string& path, vtkUnstructuredGrid* grid) {
   writer->SetInputData(grid);
   writer->SetDataModeToBinary();
   writer->SetCompressorTypeToZLib();
+  writer->SetCompressionLevel(1);
   writer->WriteToOutputStringOn();
   io_detail::run_vtk_writer(writer.Get(), path);
   const std::string bytes = writer->GetOutputString();
