@@ -3,13 +3,11 @@
 #include "radiosity/solve.h"
 
 #include <algorithm>
+#include <cstdint>
 #include <cmath>
 #include <numbers>
-#include <functional>
-#include <map>
 #include <numeric>
 #include <optional>
-#include <set>
 
 namespace radmesh {
 
@@ -35,35 +33,47 @@ NodalField compute_nodal(const Scene& scene, const Mesh& mesh, const std::vector
     const Patch& pb = scene.patches[static_cast<size_t>(mesh.patch[static_cast<size_t>(b)])];
     return pa.material == pb.material && glm::dot(pa.normal, pb.normal) >= cos_crease;
   };
-  std::set<std::pair<int, int>> features;
-  for (const auto& e : mesh.feature_edges) features.insert({e[0], e[1]});
+  // Discontinuity lines as sorted (low, high) vertex pairs.
+  std::vector<std::pair<int, int>> features;
+  for (const auto& e : mesh.feature_edges) features.push_back({std::min(e[0], e[1]), std::max(e[0], e[1])});
+  std::sort(features.begin(), features.end());
+  auto is_feature = [&](int a, int b) {
+    return std::binary_search(features.begin(), features.end(), std::pair<int, int>{std::min(a, b), std::max(a, b)});
+  };
   auto share_edge_at = [&](int a, int b, int v) {
     // Triangles a and b both contain v; they share an edge through v when they
     // have a second vertex in common, unless that edge is a discontinuity line.
     for (int x : mesh.triangles[static_cast<size_t>(a)])
       if (x != v)
         for (int y : mesh.triangles[static_cast<size_t>(b)])
-          if (x == y) return !features.count({std::min(v, x), std::max(v, x)});
+          if (x == y) return !is_feature(v, x);
     return false;
   };
 
-  // Triangles across each non-feature edge (for widening a degenerate fit).
-  std::map<std::pair<int, int>, std::vector<int>> edge_tris;
-  if (fit)
-    for (size_t t = 0; t < nt; ++t)
-      for (int c = 0; c < 3; ++c) {
-        const int x = mesh.triangles[t][static_cast<size_t>(c)], y = mesh.triangles[t][static_cast<size_t>((c + 1) % 3)];
-        edge_tris[{std::min(x, y), std::max(x, y)}].push_back(static_cast<int>(t));
-      }
+  // Triangles across each edge, as sorted (edge key, triangle): made on first
+  // use (widening a degenerate fit, rare).
+  std::vector<std::pair<uint64_t, int>> edge_tris;
+  auto edge_key = [](int x, int y) {
+    return (static_cast<uint64_t>(static_cast<uint32_t>(std::min(x, y))) << 32) | static_cast<uint32_t>(std::max(x, y));
+  };
   auto edge_neighbours = [&](int t) {
+    if (edge_tris.empty()) {
+      edge_tris.reserve(3 * nt);
+      for (size_t u = 0; u < nt; ++u)
+        for (int c = 0; c < 3; ++c)
+          edge_tris.push_back({edge_key(mesh.triangles[u][static_cast<size_t>(c)], mesh.triangles[u][static_cast<size_t>((c + 1) % 3)]),
+                               static_cast<int>(u)});
+      std::sort(edge_tris.begin(), edge_tris.end());
+    }
     std::vector<int> out;
     for (int c = 0; c < 3; ++c) {
       const int x = mesh.triangles[static_cast<size_t>(t)][static_cast<size_t>(c)];
       const int y = mesh.triangles[static_cast<size_t>(t)][static_cast<size_t>((c + 1) % 3)];
-      const std::pair<int, int> e{std::min(x, y), std::max(x, y)};
-      if (features.count(e)) continue;
-      for (int o : edge_tris[e])
-        if (o != t) out.push_back(o);
+      if (is_feature(x, y)) continue;
+      const uint64_t k = edge_key(x, y);
+      for (auto it = std::lower_bound(edge_tris.begin(), edge_tris.end(), std::pair<uint64_t, int>{k, -1});
+           it != edge_tris.end() && it->first == k; ++it)
+        if (it->second != t) out.push_back(it->second);
     }
     return out;
   };
@@ -103,24 +113,25 @@ NodalField compute_nodal(const Scene& scene, const Mesh& mesh, const std::vector
 
   NodalField field;
   field.corners.assign(nt, {-1, -1, -1});
-  std::vector<int> group;
+  std::vector<int> group, display;
+  std::vector<double> weight;
+  auto find = [&group](int x) {
+    while (group[static_cast<size_t>(x)] != x) x = group[static_cast<size_t>(x)] = group[static_cast<size_t>(group[static_cast<size_t>(x)])];
+    return x;
+  };
   for (size_t v = 0; v < nv; ++v) {
     const int b = start[v], e = start[v + 1];
     const int k = e - b;
     // Union-find over the triangles around v, joining compatible neighbours.
     group.resize(static_cast<size_t>(k));
     std::iota(group.begin(), group.end(), 0);
-    std::function<int(int)> find = [&](int x) {
-      while (group[static_cast<size_t>(x)] != x) x = group[static_cast<size_t>(x)] = group[static_cast<size_t>(group[static_cast<size_t>(x)])];
-      return x;
-    };
     for (int i = 0; i < k; ++i)
       for (int j = i + 1; j < k; ++j) {
         const int ta = around[static_cast<size_t>(b + i)], tb = around[static_cast<size_t>(b + j)];
         if (compatible(ta, tb) && share_edge_at(ta, tb, static_cast<int>(v))) group[static_cast<size_t>(find(i))] = find(j);
       }
     // One display vertex per group: the area-weighted mean of its elements.
-    std::vector<int> display(static_cast<size_t>(k), -1);
+    display.assign(static_cast<size_t>(k), -1);
     for (int i = 0; i < k; ++i) {
       const int root = find(i);
       if (display[static_cast<size_t>(root)] < 0) {
@@ -130,7 +141,7 @@ NodalField compute_nodal(const Scene& scene, const Mesh& mesh, const std::vector
         field.radiosity.push_back(Rgb(0.0));
       }
     }
-    std::vector<double> weight(static_cast<size_t>(k), 0.0);
+    weight.assign(static_cast<size_t>(k), 0.0);
     for (int i = 0; i < k; ++i) {
       const int t = around[static_cast<size_t>(b + i)];
       const int root = find(i);
