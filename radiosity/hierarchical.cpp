@@ -298,8 +298,9 @@ private:
     constexpr size_t kBlock = size_t{1} << 14;  // scratch per block, reused (see link_cluster_pairs)
     std::vector<Link> ev;
     std::vector<RayCount> rays;
+    std::vector<std::pair<int, int>> next;  // its memory kept from generation to generation
     while (!todo.empty()) {
-      std::vector<std::pair<int, int>> next;
+      next.clear();
       for (size_t begin = 0; begin < todo.size(); begin += kBlock) {
         const size_t count = std::min(kBlock, todo.size() - begin);
         ev.assign(count, Link{});
@@ -1333,8 +1334,10 @@ private:
   // elements reached, for link_pairs.
   std::vector<std::pair<int, int>> link_cluster_pairs(std::vector<std::pair<int, int>> todo) {
     std::vector<std::pair<int, int>> elements;
+    std::vector<std::pair<int, int>> pairs, next;  // their memory kept from generation to generation
     while (!todo.empty()) {
-      std::vector<std::pair<int, int>> pairs, next;
+      pairs.clear();
+      next.clear();
       for (const auto& [p, q] : todo) {
         if (p >= 0 && q >= 0)
           elements.emplace_back(p, q);
