@@ -294,15 +294,21 @@ private:
   // visibility and spread of a generation are computed in parallel (each
   // pair alone, with its own random stream, so the result does not depend on
   // the threads); deciding, splitting and storing is sequential and in order.
+  //
+  // A generation is evaluated kLinkBlock pairs at a time, so that the
+  // per-pair scratch stays small and is reused (link_cluster_pairs too): on a
+  // sphere room of 81,927 faces a generation held tens of millions of pairs,
+  // and allocating and zeroing scratch for all of them at once cost more
+  // than evaluating them. The blocks are consumed in order: same result.
+  static constexpr size_t kLinkBlock = size_t{1} << 14;
   void link_pairs(std::vector<std::pair<int, int>> todo) {
-    constexpr size_t kBlock = size_t{1} << 14;  // scratch per block, reused (see link_cluster_pairs)
     std::vector<Link> ev;
     std::vector<RayCount> rays;
     std::vector<std::pair<int, int>> next;  // its memory kept from generation to generation
     while (!todo.empty()) {
       next.clear();
-      for (size_t begin = 0; begin < todo.size(); begin += kBlock) {
-        const size_t count = std::min(kBlock, todo.size() - begin);
+      for (size_t begin = 0; begin < todo.size(); begin += kLinkBlock) {
+        const size_t count = std::min(kLinkBlock, todo.size() - begin);
         ev.assign(count, Link{});
         rays.assign(count, RayCount{});
         tbb::parallel_for(tbb::blocked_range<size_t>(0, count, 16), [&](const tbb::blocked_range<size_t>& r) {
@@ -1335,6 +1341,10 @@ private:
   std::vector<std::pair<int, int>> link_cluster_pairs(std::vector<std::pair<int, int>> todo) {
     std::vector<std::pair<int, int>> elements;
     std::vector<std::pair<int, int>> pairs, next;  // their memory kept from generation to generation
+    std::vector<Link> ev;                           // per block (kLinkBlock)
+    std::vector<std::array<float, ClusterTree::kGroups>> per_group;
+    std::vector<RayCount> rays;
+    std::vector<char> split;
     while (!todo.empty()) {
       pairs.clear();
       next.clear();
@@ -1346,16 +1356,8 @@ private:
         else
           pairs.emplace_back(p, q);
       }
-      // In blocks, so that the per-pair scratch stays small and is reused
-      // (a generation holds tens of millions of pairs at 10^5 faces; the
-      // blocks are consumed in order, so the result is the same).
-      constexpr size_t kBlock = size_t{1} << 14;
-      std::vector<Link> ev;
-      std::vector<std::array<float, ClusterTree::kGroups>> per_group;
-      std::vector<RayCount> rays;
-      std::vector<char> split;
-      for (size_t begin = 0; begin < pairs.size(); begin += kBlock) {
-        const size_t count = std::min(kBlock, pairs.size() - begin);
+      for (size_t begin = 0; begin < pairs.size(); begin += kLinkBlock) {
+        const size_t count = std::min(kLinkBlock, pairs.size() - begin);
         ev.assign(count, Link{});
         per_group.resize(count);
         rays.assign(count, RayCount{});
