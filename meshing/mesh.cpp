@@ -21,4 +21,14 @@ Vec3 Mesh::centroid(int t) const {
   return (positions[tri[0]] + positions[tri[1]] + positions[tri[2]]) / 3.0;
 }
 
+FeatureEdges::FeatureEdges(const Mesh& mesh) {
+  keys_.reserve(mesh.feature_edges.size());
+  for (const auto& e : mesh.feature_edges) keys_.push_back(undirected_edge_key(e[0], e[1]));
+  std::sort(keys_.begin(), keys_.end());
+}
+
+bool FeatureEdges::contains(int a, int b) const {
+  return std::binary_search(keys_.begin(), keys_.end(), undirected_edge_key(a, b));
+}
+
 }  // namespace radmesh

@@ -5,6 +5,7 @@
 #include "meshing/geometry.h"
 #include "meshing/scene.h"
 
+#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <vector>
@@ -26,6 +27,22 @@ struct Mesh {
   // squared): the zero-area triangles that close T-vertices of a hierarchical
   // mesh, whose middle vertex lies on the long edge only up to rounding.
   bool zero_area(int t) const;
+};
+
+// An edge (a, b) as one number, the same for (b, a).
+inline uint64_t undirected_edge_key(int a, int b) {
+  return (static_cast<uint64_t>(static_cast<uint32_t>(std::min(a, b))) << 32) | static_cast<uint32_t>(std::max(a, b));
+}
+
+// Whether a vertex pair, in either order, is one of a mesh's feature edges
+// (a sorted copy of them, searched).
+class FeatureEdges {
+public:
+  explicit FeatureEdges(const Mesh& mesh);
+  bool contains(int a, int b) const;
+
+private:
+  std::vector<uint64_t> keys_;
 };
 
 struct MeshingOptions {

@@ -816,9 +816,7 @@ private:
     s.nodal = compute_nodal(scene_, o.mesh, s.element, opt_.crease_angle, nodal_method(opt_.field));
     // Leaf edges: directed edge (u, w) -> leaf triangle. The finer side of an
     // unsplit edge (a, b) of leaf t holds its pieces reversed.
-    std::vector<std::pair<int, int>> features;  // sorted (low, high)
-    for (const auto& e : o.mesh.feature_edges) features.push_back({std::min(e[0], e[1]), std::max(e[0], e[1])});
-    std::sort(features.begin(), features.end());
+    const FeatureEdges features(o.mesh);
     std::unordered_map<uint64_t, int> edge_of;
     edge_of.reserve(3 * o.leaf_of.size());
     auto key = [](int u, int w) { return (static_cast<uint64_t>(static_cast<uint32_t>(u)) << 32) | static_cast<uint32_t>(w); };
@@ -869,8 +867,7 @@ private:
         }
         bool feature = false;  // a contact line along the edge: the value may jump there
         for (size_t i = 0; i + 1 < chain.size() && !feature; ++i)
-          feature = std::binary_search(features.begin(), features.end(),
-                                       std::pair<int, int>{std::min(chain[i], chain[i + 1]), std::max(chain[i], chain[i + 1])});
+          feature = features.contains(chain[i], chain[i + 1]);
         if (feature || across.size() + 1 != chain.size() || display_in(across.front(), a) != da ||
             display_in(across.back(), b) != db)
           continue;

@@ -33,44 +33,36 @@ NodalField compute_nodal(const Scene& scene, const Mesh& mesh, const std::vector
     const Patch& pb = scene.patches[static_cast<size_t>(mesh.patch[static_cast<size_t>(b)])];
     return pa.material == pb.material && glm::dot(pa.normal, pb.normal) >= cos_crease;
   };
-  // Discontinuity lines as sorted (low, high) vertex pairs.
-  std::vector<std::pair<int, int>> features;
-  for (const auto& e : mesh.feature_edges) features.push_back({std::min(e[0], e[1]), std::max(e[0], e[1])});
-  std::sort(features.begin(), features.end());
-  auto is_feature = [&](int a, int b) {
-    return std::binary_search(features.begin(), features.end(), std::pair<int, int>{std::min(a, b), std::max(a, b)});
-  };
+  const FeatureEdges features(mesh);
   auto share_edge_at = [&](int a, int b, int v) {
     // Triangles a and b both contain v; they share an edge through v when they
     // have a second vertex in common, unless that edge is a discontinuity line.
     for (int x : mesh.triangles[static_cast<size_t>(a)])
       if (x != v)
         for (int y : mesh.triangles[static_cast<size_t>(b)])
-          if (x == y) return !is_feature(v, x);
+          if (x == y) return !features.contains(v, x);
     return false;
   };
 
   // Triangles across each edge, as sorted (edge key, triangle): made on first
   // use (widening a degenerate fit, rare).
   std::vector<std::pair<uint64_t, int>> edge_tris;
-  auto edge_key = [](int x, int y) {
-    return (static_cast<uint64_t>(static_cast<uint32_t>(std::min(x, y))) << 32) | static_cast<uint32_t>(std::max(x, y));
-  };
   auto edge_neighbours = [&](int t) {
     if (edge_tris.empty()) {
       edge_tris.reserve(3 * nt);
-      for (size_t u = 0; u < nt; ++u)
-        for (int c = 0; c < 3; ++c)
-          edge_tris.push_back({edge_key(mesh.triangles[u][static_cast<size_t>(c)], mesh.triangles[u][static_cast<size_t>((c + 1) % 3)]),
-                               static_cast<int>(u)});
+      for (size_t u = 0; u < nt; ++u) {
+        const auto& tri = mesh.triangles[u];
+        for (size_t c = 0; c < 3; ++c)
+          edge_tris.push_back({undirected_edge_key(tri[c], tri[(c + 1) % 3]), static_cast<int>(u)});
+      }
       std::sort(edge_tris.begin(), edge_tris.end());
     }
     std::vector<int> out;
     for (int c = 0; c < 3; ++c) {
       const int x = mesh.triangles[static_cast<size_t>(t)][static_cast<size_t>(c)];
       const int y = mesh.triangles[static_cast<size_t>(t)][static_cast<size_t>((c + 1) % 3)];
-      if (is_feature(x, y)) continue;
-      const uint64_t k = edge_key(x, y);
+      if (features.contains(x, y)) continue;
+      const uint64_t k = undirected_edge_key(x, y);
       for (auto it = std::lower_bound(edge_tris.begin(), edge_tris.end(), std::pair<uint64_t, int>{k, -1});
            it != edge_tris.end() && it->first == k; ++it)
         if (it->second != t) out.push_back(it->second);

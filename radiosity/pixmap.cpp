@@ -250,15 +250,12 @@ PixmapLayout layout_of(const Scene& scene, const Mesh& coarse, const PixmapOptio
   std::vector<std::vector<std::pair<Vec3, Vec3>>> contact_world(L.pixmaps.size());
   if (!coarse.feature_edges.empty()) {
     std::unordered_map<uint64_t, int> pixmap_of_edge;
-    auto edge_key = [](int a, int b) {
-      return (static_cast<uint64_t>(std::min(a, b)) << 32) | static_cast<uint32_t>(std::max(a, b));
-    };
     for (int t = 0; t < coarse.triangle_count(); ++t)
       for (int c = 0; c < 3; ++c)
-        pixmap_of_edge.emplace(edge_key(coarse.triangles[t][c], coarse.triangles[t][(c + 1) % 3]),
+        pixmap_of_edge.emplace(undirected_edge_key(coarse.triangles[t][c], coarse.triangles[t][(c + 1) % 3]),
                                L.pixmap_of_patch[coarse.patch[t]]);
     for (const auto& e : coarse.feature_edges)
-      if (const auto it = pixmap_of_edge.find(edge_key(e[0], e[1])); it != pixmap_of_edge.end())
+      if (const auto it = pixmap_of_edge.find(undirected_edge_key(e[0], e[1])); it != pixmap_of_edge.end())
         contact_world[static_cast<size_t>(it->second)].push_back({coarse.positions[e[0]], coarse.positions[e[1]]});
   }
   for (int t = 0; t < coarse.triangle_count(); ++t) triangles_of[L.pixmap_of_patch[coarse.patch[t]]].push_back(t);
