@@ -148,35 +148,43 @@ void form_factors(const ReceiverPoints& r, const Triangle* const* sources, size_
     std::vector<int> source, point;
     std::vector<char> clipped;
   };
+  // Sized once for every pair and filled by index (no push_back per
+  // coordinate: that bookkeeping took longer than the kernel itself).
   thread_local Scratch m;
-  for (auto& v : m.d) v.clear();
-  m.source.clear();
-  m.point.clear();
-  m.clipped.clear();
+  const size_t points = r.x.size();
+  const size_t most = count * points;
+  if (m.source.size() < most) {
+    for (auto& v : m.d) v.resize(most);
+    m.sum.resize(most);
+    m.source.resize(most);
+    m.point.resize(most);
+    m.clipped.resize(most);
+  }
+  std::array<double*, 9> d;
+  for (size_t k = 0; k < 9; ++k) d[k] = m.d[k].data();
+  size_t n = 0;
   for (size_t j = 0; j < count; ++j) {
     const Triangle& t = *sources[j];
     out[j] = 0.0;
-    for (size_t q = 0; q < r.x.size(); ++q) {
+    for (size_t q = 0; q < points; ++q) {
       const Vec3& x = r.x[q];
       if (glm::dot(x - t.v[0], t.normal) <= 0.0) continue;  // behind the source: it emits from its front only
       bool in_front = true;
       for (size_t k = 0; k < 3; ++k) {
-        const Vec3 d = t.v[k] - x;
-        m.d[3 * k].push_back(d.x);
-        m.d[3 * k + 1].push_back(d.y);
-        m.d[3 * k + 2].push_back(d.z);
-        in_front = in_front && glm::dot(r.normal, d) >= 0.0;
+        const Vec3 e = t.v[k] - x;
+        d[3 * k][n] = e.x;
+        d[3 * k + 1][n] = e.y;
+        d[3 * k + 2][n] = e.z;
+        in_front = in_front && glm::dot(r.normal, e) >= 0.0;
       }
-      m.source.push_back(static_cast<int>(j));
-      m.point.push_back(static_cast<int>(q));
-      m.clipped.push_back(in_front ? 0 : 1);
+      m.source[n] = static_cast<int>(j);
+      m.point[n] = static_cast<int>(q);
+      m.clipped[n] = in_front ? 0 : 1;
+      ++n;
     }
   }
-  const size_t n = m.source.size();
-  m.sum.resize(n);
-  detail::lambert_triangle_sums(n, {m.d[0].data(), m.d[1].data(), m.d[2].data(), m.d[3].data(), m.d[4].data(),
-                                    m.d[5].data(), m.d[6].data(), m.d[7].data(), m.d[8].data()},
-                                r.normal.x, r.normal.y, r.normal.z, m.sum.data());
+  detail::lambert_triangle_sums(n, {d[0], d[1], d[2], d[3], d[4], d[5], d[6], d[7], d[8]}, r.normal.x, r.normal.y,
+                                r.normal.z, m.sum.data());
   for (size_t i = 0; i < n; ++i) {
     const Triangle& t = *sources[static_cast<size_t>(m.source[i])];
     const size_t q = static_cast<size_t>(m.point[i]);
