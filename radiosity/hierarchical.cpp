@@ -1234,6 +1234,12 @@ private:
   // `per_group` (the whole pair's where a group got no ray): a floor piece
   // and the dim sides of the box standing on it, in one cluster, do not see
   // a light alike.
+  // -1 when none of the first `rays` point pairs drawn face each other
+  // (kernel 0 at every one): the sampled transport is zero and the pair is
+  // dropped, neither linked nor split. Parts of one convex object never
+  // see each other: in the 20,487-face sphere room 79% of the pairs tried
+  // were such, and each drew 4 x `rays` point pairs for nothing, then was
+  // linked as fully visible (0.8 M of its 2.1 M links, carrying nothing).
   double cluster_visible(int p, int q, RayCount& count, std::array<float, ClusterTree::kGroups>& per_group) const {
     const int rays = opt_.rays;
     per_group.fill(1.0f);
@@ -1253,7 +1259,7 @@ private:
     SplitMix rng(pair_seed(code_key(a), code_key(b)));
     double weight = 0.0, open = 0.0;
     int used = 0;
-    for (int k = 0; k < 4 * rays && used < rays; ++k) {
+    for (int k = 0; k < 4 * rays && used < rays && (used > 0 || k < rays); ++k) {
       Vec3 x, nx, y, ny;
       int px = -1, py = -1, rx = -1, ry = -1;
       sample_node(a, rng, x, nx, px, rx);
@@ -1269,7 +1275,8 @@ private:
       seen.emplace_back(end_is_a ? rx : ry, w, through);
     }
     count.cast += used;
-    const double visible = weight > 0.0 ? open / weight : 1.0;
+    if (used == 0) return -1.0;
+    const double visible = open / weight;
     if (visible > 0.0 && visible < 1.0) {
       const ClusterTree::Cluster& cl = ct_.cluster(cluster_of(p < 0 ? p : q));
       std::array<double, ClusterTree::kGroups> gweight{}, gopen{};
@@ -1389,6 +1396,10 @@ private:
             const double d = glm::length(code_centre(q) - code_centre(p));
             l.f = code_area(q) / (std::numbers::pi * d * d);
             l.visible = cluster_visible(p, q, rays[i], per_group[i]);
+            if (l.visible < 0.0) {
+              l.f = 0.0;
+              continue;
+            }
             if (wants_cluster_refinement(p, l)) split[i] = 1;
           }
         });
