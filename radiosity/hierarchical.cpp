@@ -1319,6 +1319,21 @@ private:
     return rb * (l.spread + unseen) > hopt_.epsilon * scale_;
   }
 
+  // Queues the pair (a, b). Two elements that cannot see each other (one
+  // wholly behind the other's plane) are dropped here, as the element
+  // linking would drop them, instead of waiting in the pair lists: the
+  // clusters of one convex object, too near one another for the gap rule,
+  // are split down to their triangles, and in the 327,687-face sphere room
+  // that made 112 M pairs of sphere triangles (0.9 GB of lists, 1.1 GB
+  // with their growth), nearly all facing away.
+  void queue_pair(int a, int b, std::vector<std::pair<int, int>>& next) {
+    if (a >= 0 && b >= 0 && facing_away(tri_[static_cast<size_t>(a)], tri_[static_cast<size_t>(b)])) {
+      ++out_.stats.links_examined;
+      return;
+    }
+    next.emplace_back(a, b);
+  }
+
   // Queues the children pairs of (p, q), one end at least a cluster: a
   // small cluster first (it may not end a link), else the larger end by
   // radius, an element too (split in four, as the element linking would)
@@ -1329,7 +1344,7 @@ private:
       if (p >= 0) return;  // a planar element does not see itself
       const auto children = ct_.children(cluster_of(p));
       for (int a : children)
-        for (int b : children) next.emplace_back(a, b);
+        for (int b : children) queue_pair(a, b, next);
       return;
     }
     auto may_split = [&](int code) { return code < 0 || splittable(code); };
@@ -1342,7 +1357,7 @@ private:
       split_p = code_radius(p) >= code_radius(q);
     const int n = split_p ? p : q;
     if (n < 0) {
-      for (int c : ct_.children(cluster_of(n))) next.emplace_back(split_p ? c : p, split_p ? q : c);
+      for (int c : ct_.children(cluster_of(n))) queue_pair(split_p ? c : p, split_p ? q : c, next);
       return;
     }
     int first = out_.tree.node(n).child;
