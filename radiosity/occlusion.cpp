@@ -103,17 +103,21 @@ bool Occlusion::shaft_blocked(int pa, int pb, const A& a, const B& b, const Vec3
   Box3 shaft;
   for (const Vec3& v : a) shaft.add(v);
   for (const Vec3& v : b) shaft.add(v);
-  int tests = 0;
-  bool blocked = false;
-  tree_.overlapping(shaft, eps_, [&](int k) {
+  // The candidates first: with more than kMaxTests of them the shaft is
+  // taken as occludable whatever the tests would say, so none is made
+  // (before, the first kMaxTests were tested anyway; results are the same).
+  std::array<int, kMaxTests> candidates;
+  int count = 0;
+  const bool few = tree_.overlapping(shaft, eps_, [&](int k) {
     if (k == pa || k == pb) return true;
-    if (++tests > kMaxTests || !separated(a, b, polys_[static_cast<size_t>(k)].v, na, nb, eps_)) {
-      blocked = true;
-      return false;
-    }
+    if (count == kMaxTests) return false;
+    candidates[static_cast<size_t>(count++)] = k;
     return true;
   });
-  return blocked;
+  if (!few) return true;
+  for (int i = 0; i < count; ++i)
+    if (!separated(a, b, polys_[static_cast<size_t>(candidates[static_cast<size_t>(i)])].v, na, nb, eps_)) return true;
+  return false;
 }
 
 bool Occlusion::may_occlude(int p, int q) const {
