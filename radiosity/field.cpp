@@ -139,50 +139,51 @@ struct FieldEvaluator::Impl {
   Impl(const Scene& s, const SolveOptions& o)
       : scene(s), diagonal(s.diagonal()), rays_per_node(std::max(1, o.rays / 4)), direct(s), occlusion(s) {}
 
-  // The mean of V(x, y) R(y) over area-uniform stratified points y of
-  // triangles [begin .. end) of source q, by shadow rays from x (on
-  // patch p). Visibility and the reflected radiosity are sampled together:
-  // where the hidden part of a source is also its dark part (the floor at a
-  // block's foot seen from the ceiling), the mean visibility times the mean
-  // radiosity would come out low. With `cast` false the same points are
-  // taken without rays (the kernel-weighted mean of R where the shaft is
-  // clear but the node straddles x's tangent plane).
-  Rgb visible_reflected(const Vec3& x, const Vec3& n, int p, int q, const SourceTree& tree, int begin, int end,
-                        uint64_t seed, bool cast, long long& rays) const {
+  // Area-uniform stratified points y of triangles [begin .. end) of a
+  // source, for the mean of V(x, y) R(y) seen from x (normal n): appended
+  // to `batch` (those where the point form factor's kernel, their weight,
+  // is positive), with the sum of all the points' weights. Visibility and
+  // the reflected radiosity are sampled together: where the hidden part of
+  // a source is also its dark part (the floor at a block's foot seen from
+  // the ceiling), the mean visibility times the mean radiosity would come
+  // out low.
+  struct Samples {
+    std::vector<Vec3> to;
+    std::vector<double> w;
+    std::vector<int> triangle;
+    void clear() {
+      to.clear();
+      w.clear();
+      triangle.clear();
+    }
+  };
+  double draw(const Vec3& x, const Vec3& n, const SourceTree& tree, int begin, int end, uint64_t seed,
+              Samples& batch) const {
     SplitMix rng(seed);
     const int k = rays_per_node;
-    thread_local std::vector<Vec3> from, to;
-    thread_local std::vector<double> w;
-    thread_local std::vector<int> tri;
-    thread_local std::vector<unsigned char> seen;
-    from.clear();
-    to.clear();
-    w.clear();
-    tri.clear();
     double weight = 0.0;
     for (int s = 0; s < k; ++s) {
       const double u = (s + rng.uniform()) / k;
       const double a = rng.uniform(), b = rng.uniform();
       int t = -1;
       const Vec3 y = tree.sample(begin, end, u, a, b, t);
-      // The point form factor's kernel at y: the samples are weighted by it.
       const Vec3 r = y - x;
       const double ws = std::max(0.0, glm::dot(n, r)) * std::max(0.0, -glm::dot(tree.normal, r)) / std::pow(glm::dot(r, r), 2);
       weight += ws;
       if (!(ws > 0.0)) continue;
-      from.push_back(x);
-      to.push_back(y);
-      w.push_back(ws);
-      tri.push_back(t);
+      batch.to.push_back(y);
+      batch.w.push_back(ws);
+      batch.triangle.push_back(t);
     }
-    seen.assign(to.size(), 1);
-    if (cast) {
-      visibility->visible(from.data(), to.data(), to.size(), p, q, seen.data());
-      rays += k;
-    }
+    return weight;
+  }
+  // The weighted mean of R over samples [begin .. end) of `batch` whose
+  // segment from x got through (seen; null: all of them).
+  static Rgb sampled_mean(const SourceTree& tree, const Samples& batch, size_t begin, size_t end,
+                          const unsigned char* seen, double weight) {
     Rgb sum(0.0);
-    for (size_t i = 0; i < to.size(); ++i)
-      if (seen[i]) sum += w[i] * tree.reflected[static_cast<size_t>(tri[i])];
+    for (size_t i = begin; i < end; ++i)
+      if (!seen || seen[i]) sum += batch.w[i] * tree.reflected[static_cast<size_t>(batch.triangle[i])];
     return weight > 0.0 ? sum / weight : Rgb(0.0);
   }
 };
@@ -325,13 +326,27 @@ Rgb FieldEvaluator::indirect(const Vec3& x, int patch, uint64_t id, FieldReport&
   if (max3(rho) <= 0.0) return Rgb(0.0);
   const Vec3& n = receiver.normal;
   Rgb h(0.0);
-  std::vector<int> stack, cut;
-  std::vector<const Triangle*> triangles;
-  std::vector<double> tri_f;
-  ReceiverPoints at_x;  // x alone, for form_factors
+  // What one entry of a source's tree cut adds: f x its radiosity (send),
+  // or f x the mean over its samples [begin .. end) once their rays are cast.
+  struct CutTerm {
+    double f = 0.0;
+    Rgb send{0.0};
+    bool sampled = false;
+    size_t begin = 0, end = 0;
+    double weight = 0.0;  // of the samples, those with a zero kernel included
+  };
+  // Kept per thread: this runs once per vertex.
+  thread_local std::vector<int> stack, cut;
+  thread_local std::vector<const Triangle*> triangles;
+  thread_local std::vector<double> tri_f;
+  thread_local std::vector<CutTerm> terms;
+  thread_local Impl::Samples samples, unshaded;
+  thread_local std::vector<Vec3> from;
+  thread_local std::vector<unsigned char> seen;
+  thread_local ReceiverPoints at_x;  // x alone, for form_factors
   at_x.normal = n;
-  at_x.x = {x};
-  at_x.w = {1.0};
+  at_x.x.assign(1, x);
+  at_x.w.assign(1, 1.0);
   for (size_t q = 0; q < m.sources.size(); ++q) {
     const SourceTree& s = m.sources[q];
     if (s.nodes.empty() || static_cast<int>(q) == patch || !m.occlusion.facing(patch, static_cast<int>(q))) continue;
@@ -364,35 +379,63 @@ Rgb FieldEvaluator::indirect(const Vec3& x, int patch, uint64_t id, FieldReport&
       if (e < 0) triangles.push_back(&s.triangle[static_cast<size_t>(-1 - e)]);
     tri_f.resize(triangles.size());
     form_factors(at_x, triangles.data(), triangles.size(), tri_f.data());
-    double weight = 0.0;
-    Rgb sum(0.0);
+    // Per entry of the cut, its weight and what it sends: at once where its
+    // shaft is clear, else from samples whose shadow rays are cast
+    // together, one Embree call for the whole source.
+    terms.clear();
+    samples.clear();
     size_t next = 0;
     for (const int e : cut) {
-      if (e < 0) {
-        const int i = -1 - e;
-        const double f = tri_f[next++];
+      CutTerm term;
+      const int i = -1 - e;
+      const bool is_triangle = e < 0;
+      const SourceTree::Node* node = is_triangle ? nullptr : &s.nodes[static_cast<size_t>(e)];
+      detail::NodeTerm nt;
+      if (is_triangle) {
+        nt.f = tri_f[next++];
         ++report.gather_triangles;
-        if (f <= 0.0) continue;
-        weight += f;
-        const bool shaded =
-            occludable && m.occlusion.may_occlude(patch, x, n, static_cast<int>(q), s.triangle[static_cast<size_t>(i)]);
-        sum += f * (shaded ? m.visible_reflected(x, n, patch, static_cast<int>(q), s, i, i + 1,
-                                                 pair_seed(stream, (uint64_t{1} << 32) + static_cast<uint64_t>(i)), true,
-                                                 report.rays_cast)
-                           : s.reflected[static_cast<size_t>(i)]);
-        continue;
+      } else {
+        nt = detail::node_term(*node, x, n, s.normal);
+        ++report.gather_nodes;
       }
-      const SourceTree::Node& node = s.nodes[static_cast<size_t>(e)];
-      ++report.gather_nodes;
-      const detail::NodeTerm term = detail::node_term(node, x, n, s.normal);
-      if (!(term.f > 0.0)) continue;
-      weight += term.f;
-      const bool shaded = occludable && m.occlusion.may_occlude(patch, x, n, static_cast<int>(q), node.rect, s.normal);
-      if (shaded || !term.smooth)
-        sum += term.f * m.visible_reflected(x, n, patch, static_cast<int>(q), s, node.begin, node.end,
-                                            pair_seed(stream, static_cast<uint64_t>(e)), shaded, report.rays_cast);
-      else
-        sum += term.f * node.reflected + term.first;
+      if (!(nt.f > 0.0)) continue;
+      term.f = nt.f;
+      const bool shaded =
+          occludable &&
+          (is_triangle ? m.occlusion.may_occlude(patch, x, n, static_cast<int>(q), s.triangle[static_cast<size_t>(i)])
+                       : m.occlusion.may_occlude(patch, x, n, static_cast<int>(q), node->rect, s.normal));
+      const int begin = is_triangle ? i : node->begin, end = is_triangle ? i + 1 : node->end;
+      const uint64_t seed =
+          pair_seed(stream, is_triangle ? (uint64_t{1} << 32) + static_cast<uint64_t>(i) : static_cast<uint64_t>(e));
+      if (shaded) {
+        term.begin = samples.to.size();
+        term.weight = m.draw(x, n, s, begin, end, seed, samples);
+        term.end = samples.to.size();
+        term.sampled = true;
+        report.rays_cast += m.rays_per_node;
+      } else if (is_triangle) {
+        term.send = term.f * s.reflected[static_cast<size_t>(i)];
+      } else if (nt.smooth) {
+        term.send = term.f * node->reflected + nt.first;
+      } else {
+        // The node straddles x's tangent plane (the expansion fails): the
+        // same points, without rays (the shaft is clear).
+        unshaded.clear();
+        const double w = m.draw(x, n, s, begin, end, seed, unshaded);
+        term.send = term.f * Impl::sampled_mean(s, unshaded, 0, unshaded.to.size(), nullptr, w);
+      }
+      terms.push_back(term);
+    }
+    seen.assign(samples.to.size(), 1);
+    if (!samples.to.empty()) {
+      from.assign(samples.to.size(), x);
+      m.visibility->visible(from.data(), samples.to.data(), samples.to.size(), patch, static_cast<int>(q), seen.data());
+    }
+    double weight = 0.0;
+    Rgb sum(0.0);
+    for (const CutTerm& t : terms) {
+      weight += t.f;
+      sum += t.sampled ? t.f * Impl::sampled_mean(s, samples, t.begin, t.end, seen.data(), t.weight) : t.send;
     }
     if (weight > 0.0) h += (fq / weight) * sum;
   }
