@@ -138,7 +138,15 @@ double form_factor(const ReceiverPoints& r, const Triangle& source) {
   return f;
 }
 
-void form_factors(const ReceiverPoints& r, const Triangle* const* sources, size_t count, double* out) {
+namespace {
+
+// Calls visit(j, q, F(x_q -> *sources[j])) for every pair whose point lies
+// in front of the source (the others are 0), in source order, then point
+// order. The pairs go through the vectorized kernel as struct of arrays; a
+// pair whose triangle crosses the point's tangent plane takes the clipping
+// formula instead.
+template <class Visit>
+void point_source_pairs(const ReceiverPoints& r, const Triangle* const* sources, size_t count, Visit&& visit) {
   // The (point, source) pairs with the point in front of the source, as
   // struct of arrays for the vectorized kernel; a pair whose triangle
   // crosses the point's tangent plane takes the clipping formula instead.
@@ -165,7 +173,6 @@ void form_factors(const ReceiverPoints& r, const Triangle* const* sources, size_
   size_t n = 0;
   for (size_t j = 0; j < count; ++j) {
     const Triangle& t = *sources[j];
-    out[j] = 0.0;
     for (size_t q = 0; q < points; ++q) {
       const Vec3& x = r.x[q];
       if (glm::dot(x - t.v[0], t.normal) <= 0.0) continue;  // behind the source: it emits from its front only
@@ -190,8 +197,21 @@ void form_factors(const ReceiverPoints& r, const Triangle* const* sources, size_
     const size_t q = static_cast<size_t>(m.point[i]);
     const double f = m.clipped[i] ? point_polygon_form_factor(r.x[q], r.normal, t.v.data(), 3, t.normal)
                                   : std::abs(m.sum[i]) / (2.0 * std::numbers::pi);
-    out[static_cast<size_t>(m.source[i])] += r.w[q] * f;
+    visit(static_cast<size_t>(m.source[i]), q, f);
   }
+}
+
+}  // namespace
+
+void form_factors(const ReceiverPoints& r, const Triangle* const* sources, size_t count, double* out) {
+  std::fill(out, out + count, 0.0);
+  point_source_pairs(r, sources, count, [&](size_t j, size_t q, double f) { out[j] += r.w[q] * f; });
+}
+
+void point_form_factors(const ReceiverPoints& r, const Triangle& source, double* out) {
+  const Triangle* one = &source;
+  std::fill(out, out + r.x.size(), 0.0);
+  point_source_pairs(r, &one, 1, [&](size_t, size_t q, double f) { out[q] = f; });
 }
 
 double element_form_factor(const Triangle& receiver, const Triangle& source, const QuadratureOptions& options) {

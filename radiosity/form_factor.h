@@ -73,6 +73,10 @@ double form_factor(const ReceiverPoints& receiver, const Triangle& source);
 // vectorized pass: the cheaper way when a receiver has many sources).
 void form_factors(const ReceiverPoints& receiver, const Triangle* const* sources, size_t count, double* out);
 
+// The point form factors F(x_q -> source) at each point of `receiver` (its
+// weights unused) into out[q], in the same vectorized pass.
+void point_form_factors(const ReceiverPoints& receiver, const Triangle& source, double* out);
+
 // F(receiver -> source) for one pair, with the points graded toward `source`.
 double element_form_factor(const Triangle& receiver, const Triangle& source,
                            const QuadratureOptions& options = {});

@@ -386,11 +386,17 @@ private:
   double spread(int p, int q, double f) const {
     const Triangle& a = tri_[static_cast<size_t>(p)];
     const Triangle& b = tri_[static_cast<size_t>(q)];
+    // The four points in one pass of the vectorized kernel (per thread: this
+    // runs for every pair examined).
+    thread_local ReceiverPoints at;
+    at.normal = a.normal;
+    at.x.clear();
+    for (const Vec3& x : {a.v[0], a.v[1], a.v[2], a.centroid()})
+      at.x.push_back(x + 1e-6 * (a.centroid() - x));  // a corner on q's edge sees q edge-on
+    std::array<double, 4> point_f;
+    point_form_factors(at, b, point_f.data());
     double s = 0.0;
-    for (const Vec3& x : {a.v[0], a.v[1], a.v[2], a.centroid()}) {
-      const Vec3 inside = x + 1e-6 * (a.centroid() - x);  // a corner on q's edge sees q edge-on
-      s = std::max(s, std::abs(point_polygon_form_factor(inside, a.normal, b.v.data(), 3, b.normal) - f));
-    }
+    for (const double pf : point_f) s = std::max(s, std::abs(pf - f));
     return s;
   }
 
