@@ -7,10 +7,16 @@ namespace radmesh {
 
 namespace {
 
-// True when every point of `k` lies strictly outside some supporting plane
-// of the convex hull of a and b: then k cannot meet any segment from a to b.
-// Planes tried: the two polygons' own planes and the planes through an edge
-// of one polygon and a vertex of the other that have both polygons on one side.
+// True when every point of `k` lies on or outside some supporting plane of
+// the convex hull of a and b: then k meets no segment from a to b but
+// those on the hull's boundary, which join points on the edges of a and b
+// (no area of either: they carry no light). Planes tried: the two
+// polygons' own planes and the planes through an edge of one polygon and a
+// vertex of the other that have both polygons on one side. A patch that
+// only touches the hull (a wall of the room along which the shaft runs, a
+// face standing on the edge of one polygon) is thus clear; when it was
+// not, its shadow rays were cast, and the few that grazed it in single
+// precision made a pair near the room's corners look partly hidden.
 template <class A, class B, class C>
 bool separated(const A& a, const B& b, const C& k, const Vec3& na, const Vec3& nb, double eps) {
   auto behind_all = [&](const Vec3& origin, const Vec3& n) {
@@ -45,7 +51,7 @@ bool separated(const A& a, const B& b, const C& k, const Vec3& na, const Vec3& n
         if (pos > 0) m = -m;
         bool out = true;
         for (const Vec3& q : k)
-          if (glm::dot(q - p0, m) <= eps) {
+          if (glm::dot(q - p0, m) < -eps) {
             out = false;
             break;
           }
