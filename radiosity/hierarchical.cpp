@@ -4,6 +4,7 @@
 
 #include "meshing/errors.h"
 #include "radiosity/clusters.h"
+#include "radiosity/field.h"
 #include "radiosity/form_factor.h"
 #include "radiosity/sampling.h"
 #include "radiosity/transport.h"
@@ -129,14 +130,21 @@ public:
     const auto t2 = std::chrono::steady_clock::now();
     report("refine", 0.0);
     const long long refined = refine_links();
-    const int baum = split_by_variation(refined > 0);
+    // Where the field is gathered at the vertices, Baum's splits only add
+    // display vertices (see display_round): they wait until no link is
+    // refined any more.
+    const bool display_only = gathered_field();
+    const int baum = display_only && refined > 0 ? 0 : split_by_variation(refined > 0 || display_only);
     close_t_vertices();
     st.seconds_link += seconds_since(t2);
     if (refined == 0 && baum == 0) {
       done_ = true;
       return false;
     }
-    solve_round();
+    if (refined == 0 && display_only)
+      display_round();
+    else
+      solve_round();
     return true;
   }
 
@@ -200,6 +208,36 @@ private:
       st.last_change = top > 0.0 ? change / top : 0.0;
     }
   }
+
+  // A round of Baum's splits alone, where the field is gathered: the new
+  // leaves take their parent's radiosity (grow) and are not solved. The
+  // gather evaluates every display vertex anew, exact direct light
+  // included, so what the splits buy is vertices where the field bends;
+  // as sources of the gather, the leaves' values at their parent's
+  // resolution did as well on the Cornell box (L2 0.426% against 0.439%,
+  // worst patch mean 0.374% against 0.372%) as solving them, which took a
+  // fifth of the solve (their terms, their sweeps and a round of their
+  // own). With nothing to solve, the round splits on until the criterion
+  // holds (or its budget is spent), publishing the mesh after each level
+  // of splits: one round, one file of the series. The balance and the
+  // solver's statistics stay the last solve's.
+  void display_round() {
+    auto& st = out_.stats;
+    const auto t1 = std::chrono::steady_clock::now();
+    ++st.rounds;
+    do publish_mesh();
+    while (split_by_variation(true) > 0);
+    st.seconds_solve += seconds_since(t1);
+    SolveStats& solved = out_.solution.stats;
+    solved.elements = st.leaves;
+    solved.seconds_form_factors = st.seconds_link;
+    solved.seconds_solve = st.seconds_solve;
+    st.links_per_round.push_back(st.links);
+    st.leaves_per_round.push_back(st.leaves);
+  }
+  // The field the run will show is the gather (FieldMode gather, or
+  // automatic within the gather's budget on the mesh as it stands).
+  bool gathered_field() const { return resolve_field_mode(opt_.field, scene_, out_.mesh) == FieldMode::gather; }
 
   int node_patch(int n) const { return out_.tree.node(n).patch; }
   // Keeps the per-node arrays as long as the tree.
@@ -819,14 +857,19 @@ private:
   // Fills the output: conforming mesh, per-triangle values, vertex values,
   // counts and the energy balance.
   void publish() {
+    publish_mesh();
+    publish_balance();
+  }
+  // The conforming mesh, its per-triangle values, vertex values and counts
+  // (the solution's statistics are kept).
+  void publish_mesh() {
     HierarchicalSolution& o = out_;
     o.node_radiosity = B_;
     o.node_links.assign(links_.size(), 0);
     for (size_t p = 0; p < links_.size(); ++p) o.node_links[p] = static_cast<int>(links_[p].size());
     o.mesh = o.tree.conforming_mesh(&o.leaf_of);
     Solution& s = o.solution;
-    s = Solution{};
-    s.element.resize(o.leaf_of.size());
+    s.element.assign(o.leaf_of.size(), Rgb(0.0));
     // A zero-area triangle takes the value of the leaf whose edge it closes:
     // the leaf emitted just before its fan.
     int owner = -1;
@@ -919,9 +962,14 @@ private:
         }
       }
     }
-    // Row sums, energy balance and the residual of the leaf equations
-    // B = E + rho H over the leaves (H gathered after the last sweep).
-    SolveStats& st = s.stats;
+  }
+  // Row sums, energy balance and the residual of the leaf equations
+  // B = E + rho H over the leaves (H gathered after the last sweep), and the
+  // solver's statistics.
+  void publish_balance() {
+    HierarchicalSolution& o = out_;
+    SolveStats& st = o.solution.stats;
+    st = SolveStats{};
     st.elements = o.stats.leaves;
     o.stats.row_sum_min = 1e300;
     o.stats.row_sum_max = -1e300;
