@@ -214,9 +214,9 @@ private:
   // gather evaluates every display vertex anew, exact direct light
   // included, so what the splits buy is vertices where the field bends;
   // as sources of the gather, the leaves' values at their parent's
-  // resolution did as well on the Cornell box (L2 0.426% against 0.439%,
-  // worst patch mean 0.374% against 0.372%) as solving them, which took a
-  // fifth of the solve (their terms, their sweeps and a round of their
+  // resolution did as well on the Cornell box (L2 0.432% against 0.439%,
+  // worst patch mean 0.37% either way) as solving them, which took a
+  // seventh of the run (their terms, their sweeps and a round of their
   // own). With nothing to solve, the round splits on until the criterion
   // holds (or its budget is spent), publishing the mesh after each level
   // of splits: one round, one file of the series. The balance and the
