@@ -235,9 +235,20 @@ private:
     st.links_per_round.push_back(st.links);
     st.leaves_per_round.push_back(st.leaves);
   }
-  // The field the run will show is the gather (FieldMode gather, or
-  // automatic within the gather's budget on the mesh as it stands).
-  bool gathered_field() const { return resolve_field_mode(opt_.field, scene_, out_.mesh) == FieldMode::gather; }
+  // The field the run will show is the gather: FieldMode gather, or
+  // automatic within the gather's budget with room for Baum's splits to
+  // come (resolve_field_mode decides on the final mesh). They add at most
+  // kBaumShare of the leaves, a vertex at most per leaf added, and a mesh
+  // has about half as many vertices as triangles: the vertices grow by
+  // 2 x kBaumShare of themselves at most. Early rounds (a small mesh) may
+  // say gather and later ones fit; never the other way (the mesh only
+  // grows), and a display round is made only while it says gather, so its
+  // leaves, which are not solved, always end under the gather.
+  bool gathered_field() const {
+    if (opt_.field != FieldMode::automatic) return opt_.field == FieldMode::gather;
+    const double vertices = (1.0 + 2.0 * kBaumShare) * static_cast<double>(out_.mesh.positions.size());
+    return vertices * static_cast<double>(scene_.patches.size()) <= kGatherBudget;
+  }
 
   int node_patch(int n) const { return out_.tree.node(n).patch; }
   // Keeps the per-node arrays as long as the tree.
