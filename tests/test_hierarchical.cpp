@@ -436,3 +436,45 @@ TEST(Hierarchical, ReportsProgressFromTheCallingThread) {
   EXPECT_TRUE(rising);
   EXPECT_TRUE(same_thread);
 }
+
+// Where the field is gathered at the vertices, Baum's splits only add display
+// vertices: they wait until no link is refined, come in one last round, and
+// their leaves take their parent's radiosity unsolved. With the fit they are
+// solved like every other leaf.
+TEST(Hierarchical, BaumLeavesOfAGatheredFieldTakeTheirParentsRadiosity) {
+  const Scene s = read_obj_scene(kData + "/box_on_floor/box_on_floor.obj");
+  const Mesh m = coarse_mesh(s, 1.0);
+  HierarchicalOptions ho;
+  ho.epsilon = 0.01;
+  ho.max_rounds = 30;
+  ho.baum_relative = 0.05;
+  SolveOptions gather, fit;
+  gather.field = FieldMode::gather;
+  fit.field = FieldMode::fit;
+  const HierarchicalSolution g = solve_hierarchical(s, m, gather, ho);
+  const HierarchicalSolution f = solve_hierarchical(s, m, fit, ho);
+  // Leaves whose radiosity is exactly their parent's.
+  auto as_parent = [](const HierarchicalSolution& h) {
+    int count = 0;
+    for (int t : h.leaf_of) {
+      if (t < 0) continue;
+      const int parent = h.tree.node(t).parent;
+      if (parent >= 0 && h.node_radiosity[static_cast<size_t>(t)] == h.node_radiosity[static_cast<size_t>(parent)]) ++count;
+    }
+    return count;
+  };
+  std::printf("[hierarchical] Baum, gathered: %d splits, %d rounds, %d leaves as their parent; fit: %d splits, %d rounds, %d\n",
+              g.stats.baum_splits, g.stats.rounds, as_parent(g), f.stats.baum_splits, f.stats.rounds, as_parent(f));
+  ASSERT_GT(g.stats.baum_splits, 0);
+  ASSERT_GT(f.stats.baum_splits, 0);
+  // A split makes 4 leaves of its parent's value; one split again (the round
+  // splits on) is no leaf, but its 4 children are: at least 3 a split.
+  EXPECT_GE(as_parent(g), 3 * g.stats.baum_splits);
+  EXPECT_LT(as_parent(f), 3 * f.stats.baum_splits);
+  // The last round refined no link and added the leaves.
+  const auto& links = g.stats.links_per_round;
+  const auto& leaves = g.stats.leaves_per_round;
+  ASSERT_GE(links.size(), 2u);
+  EXPECT_EQ(links.back(), links[links.size() - 2]);
+  EXPECT_EQ(leaves.back() - leaves[leaves.size() - 2], 3 * g.stats.baum_splits);
+}
