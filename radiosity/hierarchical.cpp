@@ -216,8 +216,7 @@ private:
   // as sources of the gather, the leaves' values at their parent's
   // resolution did as well on the Cornell box (L2 0.432% against 0.439%,
   // worst patch mean 0.37% either way) as solving them, which took a
-  // seventh of the run (their terms, their sweeps and a round of their
-  // own). With nothing to solve, the round splits on until the criterion
+  // tenth of the run (their terms, their sweeps and a round of their own). With nothing to solve, the round splits on until the criterion
   // holds (or its budget is spent), publishing the mesh after each level
   // of splits: one round, one file of the series. The balance and the
   // solver's statistics stay the last solve's.
@@ -455,7 +454,7 @@ private:
   // the receiver is split first, is split whatever its shadow rays say
   // (wants_refinement and spread_dominates hold for every visible fraction,
   // and with l.visible left at 1 they see the same): its rays are not cast.
-  // On the Cornell box these were most of the pairs the linking examined.
+  // On the Cornell box 8% of the pairs the linking examined (62 k of 744 k).
   bool split_whatever_visible(int p, const Link& l) const {
     const double rb = max3(rho_[static_cast<size_t>(p)]) * max3(B_[static_cast<size_t>(l.source)]);
     return rb * l.spread > hopt_.epsilon * scale_ && l.spread > 0.5 * l.f && (splittable(p) || splittable(l.source));
