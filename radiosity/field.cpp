@@ -139,14 +139,8 @@ struct FieldEvaluator::Impl {
   Impl(const Scene& s, const SolveOptions& o)
       : scene(s), diagonal(s.diagonal()), rays_per_node(std::max(1, o.rays / 4)), direct(s), occlusion(s) {}
 
-  // Area-uniform stratified points y of triangles [begin .. end) of a
-  // source, for the mean of V(x, y) R(y) seen from x (normal n): appended
-  // to `batch` (those where the point form factor's kernel, their weight,
-  // is positive), with the sum of all the points' weights. Visibility and
-  // the reflected radiosity are sampled together: where the hidden part of
-  // a source is also its dark part (the floor at a block's foot seen from
-  // the ceiling), the mean visibility times the mean radiosity would come
-  // out low.
+  // Sample points of a source seen from one point: where each lies, its
+  // weight (the point form factor's kernel there) and its triangle.
   struct Samples {
     std::vector<Vec3> to;
     std::vector<double> w;
@@ -157,6 +151,13 @@ struct FieldEvaluator::Impl {
       triangle.clear();
     }
   };
+  // Area-uniform stratified points y of triangles [begin .. end) of a
+  // source, for the mean of V(x, y) R(y) seen from x (normal n): appended
+  // to `batch` (those where the kernel is positive); returns the sum of
+  // all the points' weights. Visibility and the reflected radiosity are
+  // sampled together: where the hidden part of a source is also its dark
+  // part (the floor at a block's foot seen from the ceiling), the mean
+  // visibility times the mean radiosity would come out low.
   double draw(const Vec3& x, const Vec3& n, const SourceTree& tree, int begin, int end, uint64_t seed,
               Samples& batch) const {
     SplitMix rng(seed);
