@@ -308,11 +308,15 @@ TEST(Hierarchical, BaumCriterionSplitsWhereVertexValuesDiffer) {
   ho.epsilon = 0.01;
   ho.max_rounds = 30;
   ho.baum_relative = 0.0;
-  const HierarchicalSolution plain = solve_hierarchical(s, m, {}, ho);
+  // The fit: the splits' leaves are solved (with the gather they are not,
+  // see BaumLeavesOfAGatheredFieldTakeTheirParentsRadiosity).
+  SolveOptions fit;
+  fit.field = FieldMode::fit;
+  const HierarchicalSolution plain = solve_hierarchical(s, m, fit, ho);
   int within_budget = 0;
   for (double rel : {0.05, 0.1, 0.15, 0.2}) {
     ho.baum_relative = rel;
-    const HierarchicalSolution baum = solve_hierarchical(s, m, {}, ho);
+    const HierarchicalSolution baum = solve_hierarchical(s, m, fit, ho);
     std::printf("[hierarchical] Baum %.0f%%: %d leaves (%d Baum splits, %d rounds) against %d without\n", 100 * rel,
                 baum.stats.leaves, baum.stats.baum_splits, baum.stats.rounds, plain.stats.leaves);
     EXPECT_EQ(baum.stats.leaves > plain.stats.leaves, baum.stats.baum_splits > 0);
@@ -438,9 +442,9 @@ TEST(Hierarchical, ReportsProgressFromTheCallingThread) {
 }
 
 // Where the field is gathered at the vertices, Baum's splits only add display
-// vertices: they wait until no link is refined, come in one last round, and
-// their leaves take their parent's radiosity unsolved. With the fit they are
-// solved like every other leaf.
+// vertices: they wait until no link is refined, come in one last round (in
+// depth, on the last solve's values), and their leaves take their parent's
+// radiosity unsolved. With the fit they are solved like every other leaf.
 TEST(Hierarchical, BaumLeavesOfAGatheredFieldTakeTheirParentsRadiosity) {
   const Scene s = read_obj_scene(kData + "/box_on_floor/box_on_floor.obj");
   const Mesh m = coarse_mesh(s, 1.0);
@@ -467,8 +471,8 @@ TEST(Hierarchical, BaumLeavesOfAGatheredFieldTakeTheirParentsRadiosity) {
               g.stats.baum_splits, g.stats.rounds, as_parent(g), f.stats.baum_splits, f.stats.rounds, as_parent(f));
   ASSERT_GT(g.stats.baum_splits, 0);
   ASSERT_GT(f.stats.baum_splits, 0);
-  // A split makes 4 leaves of its parent's value; one split again (the round
-  // splits on) is no leaf, but its 4 children are: at least 3 a split.
+  // A split makes 4 leaves of its parent's value; one split again (a leaf
+  // is split in depth) is no leaf, but its 4 children are: at least 3 a split.
   EXPECT_GE(as_parent(g), 3 * g.stats.baum_splits);
   EXPECT_LT(as_parent(f), 3 * f.stats.baum_splits);
   // The last round refined no link and added the leaves.
