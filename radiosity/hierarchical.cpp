@@ -219,7 +219,7 @@ private:
   // fit over leaves of their parent's value shows steps between them, and
   // splitting on those (10 meshes published) gave 31,802 leaves, L2
   // 0.432% and worst patch mean 0.37% on the Cornell box, once in depth
-  // 31,031, 0.427% and 0.35%, in 0.90x the solve time. The balance and the
+  // 30,590, 0.444% and 0.38%, in 0.84x the solve time. The balance and the
   // solver's statistics stay the last solve's. False when nothing is split.
   bool display_round() {
     done_ = true;
