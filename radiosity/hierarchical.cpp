@@ -287,11 +287,13 @@ private:
   // round split 18 leaves of 30,689 and cost 6% of the run.
   static constexpr double kBaumShare = 0.5;
   static constexpr double kBaumRound = 0.01;
-  // `deep` (the display round, whose leaves are not solved): a leaf is
-  // split ceil(log2(spread / threshold)) levels down at once (to the
-  // floor), since the spread halves with each level where the field is
-  // linear over the leaf.
-  int split_by_variation(bool links_refined, bool deep = false) {
+  // `round_made`: the round is made anyway (links were refined, or it is
+  // the display round, which costs a publish only), so the kBaumRound rule
+  // does not apply. `deep` (the display round, whose leaves are not
+  // solved): a leaf is split ceil(log2(spread / threshold)) levels down at
+  // once (to the floor), since the spread halves with each level where the
+  // field is linear over the leaf.
+  int split_by_variation(bool round_made, bool deep = false) {
     if (!(hopt_.baum_relative > 0.0)) return 0;
     const HierarchicalSolution& o = out_;
     const double top = scale_;  // the largest reflected radiosity
@@ -313,7 +315,7 @@ private:
     const long long added = 3LL * out_.stats.baum_splits;
     const long long budget = static_cast<long long>(kBaumShare * static_cast<double>(o.stats.leaves - added)) - added;
     const long long wanted = std::min(3LL * static_cast<long long>(todo.size()), budget);
-    if (!links_refined && static_cast<double>(wanted) < kBaumRound * static_cast<double>(o.stats.leaves)) return 0;
+    if (!round_made && static_cast<double>(wanted) < kBaumRound * static_cast<double>(o.stats.leaves)) return 0;
     const double threshold = std::max(hopt_.baum_relative * top, hopt_.baum_absolute);
     int splits = 0;
     std::vector<std::pair<int, int>> down;  // (node, levels left)
