@@ -313,19 +313,32 @@ double ClusterTree::bytes(double clusters, double groups) {
                    sizeof(std::vector<std::pair<int, double>>));
 }
 
-void ClusterTree::radiosity(const std::vector<Rgb>& root_radiosity, std::vector<Rgb>& group_radiosity) const {
+void ClusterTree::radiosity(const std::vector<Rgb>& root_radiosity, std::vector<Rgb>& group_radiosity,
+                            const std::vector<double>* root_weight, const std::vector<double>* group_weight) const {
   group_radiosity.resize(groups_.size());
+  std::array<Rgb, kGroups> plain;
+  std::array<double, kGroups> weight;
   for (int c = static_cast<int>(clusters_.size()) - 1; c >= 0; --c) {
     const Cluster& cl = clusters_[static_cast<size_t>(c)];
+    plain.fill(Rgb(0.0));
+    weight.fill(0.0);
     for (int g = cl.group_begin; g < cl.group_end; ++g) group_radiosity[static_cast<size_t>(g)] = Rgb(0.0);
     for (int k = cl.member_begin; k < cl.member_end; ++k) {
       const Member& m = members_[static_cast<size_t>(k)];
-      group_radiosity[static_cast<size_t>(m.group)] +=
-          m.area * (m.from >= 0 ? root_radiosity[static_cast<size_t>(m.from)]
-                                : group_radiosity[static_cast<size_t>(-2 - m.from)]);
+      const Rgb b = m.from >= 0 ? root_radiosity[static_cast<size_t>(m.from)] : group_radiosity[static_cast<size_t>(-2 - m.from)];
+      const size_t i = static_cast<size_t>(m.group - cl.group_begin);
+      plain[i] += m.area * b;
+      if (!root_weight) continue;
+      const double w = m.area * (m.from >= 0 ? (*root_weight)[static_cast<size_t>(m.from)]
+                                             : (*group_weight)[static_cast<size_t>(-2 - m.from)]);
+      group_radiosity[static_cast<size_t>(m.group)] += w * b;
+      weight[i] += w;
     }
-    for (int g = cl.group_begin; g < cl.group_end; ++g)
-      group_radiosity[static_cast<size_t>(g)] /= groups_[static_cast<size_t>(g)].area;
+    for (int g = cl.group_begin; g < cl.group_end; ++g) {
+      const size_t i = static_cast<size_t>(g - cl.group_begin);
+      Rgb& out = group_radiosity[static_cast<size_t>(g)];
+      out = weight[i] > 0.0 ? out / weight[i] : plain[i] / groups_[static_cast<size_t>(g)].area;
+    }
   }
 }
 

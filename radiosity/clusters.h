@@ -90,8 +90,13 @@ public:
   int root_group(int r) const { return root_group_[static_cast<size_t>(r)]; }
 
   // Group radiosity (area means over members) from the roots' radiosity
-  // (root_radiosity[r] for root r), children first.
-  void radiosity(const std::vector<Rgb>& root_radiosity, std::vector<Rgb>& group_radiosity) const;
+  // (root_radiosity[r] for root r), children first. With weights, the
+  // means weigh a member by its area times its weight (root_weight[r] for
+  // root r, group_weight[g] for a child group g); a group whose members
+  // all weigh 0 takes the plain area mean.
+  void radiosity(const std::vector<Rgb>& root_radiosity, std::vector<Rgb>& group_radiosity,
+                 const std::vector<double>* root_weight = nullptr,
+                 const std::vector<double>* group_weight = nullptr) const;
   // The area-mean radiosity of cluster c from its groups'.
   Rgb mean(int c, const std::vector<Rgb>& group_radiosity) const;
 

@@ -1042,16 +1042,18 @@ private:
     const size_t n = B_.size();
     std::vector<double> by_node(n, 0.0), by_group(ct_.group_count(), 0.0);
     if (!ct_.empty()) {
-      // A group's receiving area: its leaves' area x row scale, with its
-      // descendants' (parents have the larger group numbers).
+      // A group's receiving area: its leaves' area x row scale x their
+      // root's openness, with its descendants' (parents have the larger
+      // group numbers); over the group's mean openness where it is used.
       std::vector<double> receiving(ct_.group_count(), 0.0);
       for (size_t x = 0; x < n; ++x) {
         if (!tree.is_leaf(static_cast<int>(x))) continue;
-        const int g = ct_.root_group(tree.node(static_cast<int>(x)).root);
-        if (g >= 0) receiving[static_cast<size_t>(g)] += tri_[x].area * row_scale_[x];
+        const int root = tree.node(static_cast<int>(x)).root;
+        const int g = ct_.root_group(root);
+        if (g >= 0) receiving[static_cast<size_t>(g)] += tri_[x].area * row_scale_[x] * open_[static_cast<size_t>(root)];
         for (const Term& t : terms_[x])
           if (t.q < 0)
-            by_group[static_cast<size_t>(-2 - t.q)] += tri_[x].area * row_scale_[x] * term_f(x, t) / ct_.group(-2 - t.q).area;
+            by_group[static_cast<size_t>(-2 - t.q)] += tri_[x].area * row_scale_[x] * term_f(x, t) / sending_area(-2 - t.q);
       }
       for (size_t g = 0; g < receiving.size(); ++g) {
         const int up = ct_.group(static_cast<int>(g)).up;
@@ -1059,10 +1061,11 @@ private:
       }
       for (size_t g = 0; g < gterms_.size(); ++g)
         for (const auto& [q, f] : gterms_[g]) {
+          const double received = receiving[g] * per_open(g) * f;
           if (q >= 0)
-            by_node[static_cast<size_t>(q)] += receiving[g] * f / tri_[static_cast<size_t>(q)].area;
+            by_node[static_cast<size_t>(q)] += received / tri_[static_cast<size_t>(q)].area;
           else
-            by_group[static_cast<size_t>(-2 - q)] += receiving[g] * f / ct_.group(-2 - q).area;
+            by_group[static_cast<size_t>(-2 - q)] += received / sending_area(-2 - q);
         }
     }
     for (size_t c = 0; c < n; ++c)
@@ -1073,9 +1076,11 @@ private:
       if (!tree.is_leaf(static_cast<int>(y))) continue;
       double r = 0.0;
       for (int a = static_cast<int>(y); a >= 0; a = tree.node(a).parent) r += by_node[static_cast<size_t>(a)];
-      if (!ct_.empty())
-        for (int g = ct_.root_group(tree.node(static_cast<int>(y)).root); g >= 0; g = ct_.group(g).up)
-          r += by_group[static_cast<size_t>(g)];
+      if (!ct_.empty()) {
+        const int root = tree.node(static_cast<int>(y)).root;
+        for (int g = ct_.root_group(root); g >= 0; g = ct_.group(g).up)
+          r += by_group[static_cast<size_t>(g)] * (group_open_[static_cast<size_t>(g)] > 0.0 ? open_[static_cast<size_t>(root)] : 1.0);
+      }
       row[y] = r;
     }
     return row;
@@ -1109,8 +1114,9 @@ private:
   // root belongs to, and that group's form factors.
   Rgb pushed(int leaf) const {
     if (ct_.empty()) return Rgb(0.0);
-    const int g = ct_.root_group(out_.tree.node(leaf).root);
-    return g >= 0 ? HGacc_[static_cast<size_t>(g)] : Rgb(0.0);
+    const int r = out_.tree.node(leaf).root;
+    const int g = ct_.root_group(r);
+    return g >= 0 ? open_[static_cast<size_t>(r)] * HGacc_[static_cast<size_t>(g)] : Rgb(0.0);
   }
   // What a leaf gathers: its exact terms (element links, >= 0), then its
   // approximate ones (big clusters' groups at its centroid, < 0, and what its
@@ -1130,8 +1136,9 @@ private:
   double approx_row_sum(size_t leaf) const {
     double f = F_approx_[leaf];
     if (!ct_.empty()) {
-      const int g = ct_.root_group(out_.tree.node(static_cast<int>(leaf)).root);
-      if (g >= 0) f += FGacc_[static_cast<size_t>(g)];
+      const int r = out_.tree.node(static_cast<int>(leaf)).root;
+      const int g = ct_.root_group(r);
+      if (g >= 0) f += open_[static_cast<size_t>(r)] * FGacc_[static_cast<size_t>(g)];
     }
     return f;
   }
@@ -1241,12 +1248,79 @@ private:
     FG_.assign(groups, 0.0);
     FGacc_.assign(groups, 0.0);
     gterms_.assign(groups, {});
+    openness();
     update_groups();
   }
 
-  // Group radiosity from the roots' (area means of their leaves).
+  // What a receiving group gathers is shared among its members' roots in
+  // proportion to their openness o: the fraction of their hemisphere (16
+  // cosine-distributed rays from stratified points of the root) that is
+  // not shut in, the ray meeting nothing or the front of a patch. A group
+  // gathers at its centroid through its mean visibility, so without this
+  // every member got the same: in a closed room of 16 x 16 boxes the floor
+  // under the boxes (every ray meets a box from inside) was lit like the
+  // floor between them, 1.7% of the emitted power escaped the closed room
+  // (0.5% without clusters), and the floor and boxes between needed their
+  // approximate rows scaled up 1.4 to 2.1 times where the scale stops at
+  // kMaxRowScale. A root's share of group g's light is o / (the area mean
+  // of o over g's roots), which keeps what g gathers in all; a group
+  // whose roots are all shut in gathers nothing. The seed's local
+  // visibility per direction, without the directions.
+  static constexpr int kOpennessRays = 16;
+  void openness() {
+    const int roots = out_.tree.root_count();
+    open_.assign(static_cast<size_t>(roots), 1.0);
+    if (!visibility_.convex_enclosure()) {
+      const Visibility& rays = visibility_.rays();
+      const double reach = 4.0 * diagonal_;
+      tbb::parallel_for(tbb::blocked_range<int>(0, roots, 64), [&](const tbb::blocked_range<int>& range) {
+        for (int r = range.begin(); r != range.end(); ++r) {
+          const Triangle& t = tri_[static_cast<size_t>(r)];
+          const Vec3 a = std::abs(t.normal.x) < 0.9 ? Vec3(1, 0, 0) : Vec3(0, 1, 0);
+          const Vec3 u = glm::normalize(glm::cross(t.normal, a)), v = glm::cross(t.normal, u);
+          SplitMix rng(pair_seed(static_cast<uint64_t>(r), 0x0BE11E55ULL));
+          constexpr int side = 4;  // kOpennessRays = side^2 strata
+          static_assert(side * side == kOpennessRays);
+          int open = 0;
+          for (int k = 0; k < kOpennessRays; ++k) {
+            const double r1 = ((k / side) + rng.uniform()) / side, r2 = ((k % side) + rng.uniform()) / side;
+            const double pa = rng.uniform(), pb = rng.uniform();
+            const Vec3 x = triangle_point(t.v[0], t.v[1], t.v[2], pa, pb);
+            const double rr = std::sqrt(r1), phi = 2.0 * std::numbers::pi * r2;
+            const Vec3 d = rr * std::cos(phi) * u + rr * std::sin(phi) * v + std::sqrt(std::max(0.0, 1.0 - r1)) * t.normal;
+            const int hit = rays.first_hit(x, d, reach, node_patch(r));
+            open += hit < 0 || glm::dot(scene_.patches[static_cast<size_t>(hit)].normal, d) < 0.0;
+          }
+          open_[static_cast<size_t>(r)] = static_cast<double>(open) / kOpennessRays;
+        }
+      });
+    }
+    // Per group, the area mean of its roots' openness (a root counts for
+    // every group above its own).
+    std::vector<double> sum(ct_.group_count(), 0.0), area(ct_.group_count(), 0.0);
+    for (int r = 0; r < roots; ++r)
+      for (int g = ct_.root_group(r); g >= 0; g = ct_.group(g).up) {
+        sum[static_cast<size_t>(g)] += tri_[static_cast<size_t>(r)].area * open_[static_cast<size_t>(r)];
+        area[static_cast<size_t>(g)] += tri_[static_cast<size_t>(r)].area;
+      }
+    group_open_.assign(ct_.group_count(), 0.0);
+    for (size_t g = 0; g < group_open_.size(); ++g)
+      group_open_[g] = area[g] > 0.0 ? sum[g] / area[g] : 0.0;
+  }
+  // 1 / (the group's mean openness), 0 for a group shut in.
+  double per_open(size_t g) const { return group_open_[g] > 0.0 ? 1.0 / group_open_[g] : 0.0; }
+  // The area over which group g's mean radiosity weighs its members, each
+  // leaf by its area x its root's openness (all of it for a group shut in,
+  // whose mean is the plain one: see update_groups).
+  double sending_area(int g) const {
+    const double open = group_open_[static_cast<size_t>(g)];
+    return ct_.group(g).area * (open > 0.0 ? open : 1.0);
+  }
+
+  // Group radiosity from the roots' (area means of their leaves), each
+  // root weighed by its openness (see openness()).
   void update_groups() {
-    if (!ct_.empty()) ct_.radiosity(B_, GB_);
+    if (!ct_.empty()) ct_.radiosity(B_, GB_, &open_, &group_open_);
   }
 
   // Per group of every receiving cluster: (source, F) at the group's
@@ -1289,7 +1363,8 @@ private:
     // larger group numbers).
     for (int g = static_cast<int>(ct_.group_count()) - 1; g >= 0; --g) {
       const int up = ct_.group(g).up;
-      FGacc_[static_cast<size_t>(g)] = FG_[static_cast<size_t>(g)] + (up >= 0 ? FGacc_[static_cast<size_t>(up)] : 0.0);
+      FGacc_[static_cast<size_t>(g)] =
+          per_open(static_cast<size_t>(g)) * FG_[static_cast<size_t>(g)] + (up >= 0 ? FGacc_[static_cast<size_t>(up)] : 0.0);
     }
   }
 
@@ -1306,7 +1381,8 @@ private:
     });
     for (int g = static_cast<int>(ct_.group_count()) - 1; g >= 0; --g) {
       const int up = ct_.group(g).up;
-      HGacc_[static_cast<size_t>(g)] = HG_[static_cast<size_t>(g)] + (up >= 0 ? HGacc_[static_cast<size_t>(up)] : Rgb(0.0));
+      HGacc_[static_cast<size_t>(g)] =
+          per_open(static_cast<size_t>(g)) * HG_[static_cast<size_t>(g)] + (up >= 0 ? HGacc_[static_cast<size_t>(up)] : Rgb(0.0));
     }
   }
 
@@ -1616,6 +1692,8 @@ private:
   std::vector<std::vector<Link>> clinks_;  // per receiving cluster
   std::vector<std::vector<std::pair<int, double>>> gterms_;  // per group: (source, F) at its centroid
   std::vector<Rgb> GB_, HG_, HGacc_;      // per group: radiosity, gathered, gathered with its ancestors'
+  std::vector<double> open_;              // per root: its openness (see openness())
+  std::vector<double> group_open_;        // per group: the area mean of its roots' openness
   std::vector<double> FG_, FGacc_;        // per group: form factor sum, with its ancestors'
   std::vector<RayCount> leaf_rays_;    // per node: rays its leaf terms cast (gather_terms)
   std::vector<double> row_scale_;      // per node (leaves): what its approximate part is scaled by (scale_rows)
