@@ -355,6 +355,10 @@ Rgb FieldEvaluator::indirect(const Vec3& x, int patch, uint64_t id, FieldReport&
     if (fq <= 0.0) continue;
     ++report.gather_sources;
     const bool occludable = m.visibility && m.occlusion.may_occlude(patch, static_cast<int>(q));
+    // What may lie between x and the parts of q, found once (when a part
+    // first needs a shaft test).
+    Occlusion::Candidates candidates;
+    bool listed = false;
     // One random stream per (point, source node or triangle).
     const uint64_t stream = pair_seed(id, q);
     // The tree cut: nodes far enough to take whole (>= 0) and the
@@ -401,10 +405,15 @@ Rgb FieldEvaluator::indirect(const Vec3& x, int patch, uint64_t id, FieldReport&
       }
       if (!(nt.f > 0.0)) continue;
       term.f = nt.f;
+      if (occludable && !listed) {
+        candidates = m.occlusion.candidates(patch, x, n, static_cast<int>(q));
+        listed = true;
+      }
       const bool shaded =
-          occludable &&
-          (is_triangle ? m.occlusion.may_occlude(patch, x, n, static_cast<int>(q), s.triangle[static_cast<size_t>(i)])
-                       : m.occlusion.may_occlude(patch, x, n, static_cast<int>(q), node->rect, s.normal));
+          occludable && (is_triangle ? m.occlusion.may_occlude(candidates, patch, x, n, static_cast<int>(q),
+                                                               s.triangle[static_cast<size_t>(i)])
+                                     : m.occlusion.may_occlude(candidates, patch, x, n, static_cast<int>(q), node->rect,
+                                                               s.normal));
       const int begin = is_triangle ? i : node->begin, end = is_triangle ? i + 1 : node->end;
       const uint64_t seed =
           pair_seed(stream, is_triangle ? (uint64_t{1} << 32) + static_cast<uint64_t>(i) : static_cast<uint64_t>(e));

@@ -180,4 +180,51 @@ bool Occlusion::may_occlude(int px, const Vec3& x, const Vec3& nx, int pb, const
   return point_shaft(px, x, nx, pb, b.v, b.normal);
 }
 
+Occlusion::Candidates Occlusion::candidates(int px, const Vec3& x, const Vec3& nx, int pb) const {
+  Candidates c;
+  static_assert(std::tuple_size_v<decltype(c.k)> == kMaxTests);
+  const Poly& b = polys_[static_cast<size_t>(pb)];
+  Box3 shaft = b.box;
+  shaft.add(x);
+  const std::array<Vec3, 1> a{x};
+  // At most 4 x kMaxTests patches tested, so that a point's cost per source
+  // stays bounded where the whole source's shaft meets many boxes.
+  int tested = 0;
+  c.all = !tree_.overlapping(shaft, eps_, [&](int k) {
+    if (k == px || k == pb) return true;
+    if (++tested > 4 * kMaxTests) return false;
+    if (separated(a, b.v, polys_[static_cast<size_t>(k)].v, nx, b.normal, eps_)) return true;
+    if (c.count == kMaxTests) return false;
+    c.k[static_cast<size_t>(c.count++)] = k;
+    return true;
+  });
+  return c;
+}
+
+template <class B>
+bool Occlusion::candidate_shaft(const Candidates& c, int px, const Vec3& x, const Vec3& nx, int pb, const B& b,
+                                const Vec3& nb) const {
+  if (c.all) return point_shaft(px, x, nx, pb, b, nb);
+  if (c.count == 0) return false;
+  Box3 shaft;
+  shaft.add(x);
+  for (const Vec3& v : b) shaft.add(v);
+  const std::array<Vec3, 1> a{x};
+  for (int i = 0; i < c.count; ++i) {
+    const Poly& k = polys_[static_cast<size_t>(c.k[static_cast<size_t>(i)])];
+    if (k.box.overlaps(shaft, eps_) && !separated(a, b, k.v, nx, nb, eps_)) return true;
+  }
+  return false;
+}
+
+bool Occlusion::may_occlude(const Candidates& c, int px, const Vec3& x, const Vec3& nx, int pb,
+                            const std::array<Vec3, 4>& b, const Vec3& nb) const {
+  return candidate_shaft(c, px, x, nx, pb, b, nb);
+}
+
+bool Occlusion::may_occlude(const Candidates& c, int px, const Vec3& x, const Vec3& nx, int pb,
+                            const Triangle& b) const {
+  return candidate_shaft(c, px, x, nx, pb, b.v, b.normal);
+}
+
 }  // namespace radmesh

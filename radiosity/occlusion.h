@@ -48,6 +48,25 @@ public:
   bool may_occlude(int px, const Vec3& x, const Vec3& nx, int pb, const std::array<Vec3, 4>& b, const Vec3& nb) const;
   bool may_occlude(int px, const Vec3& x, const Vec3& nx, int pb, const Triangle& b) const;
 
+  // The patches that may lie between the point x (on patch px, normal nx)
+  // and any part of patch pb: those whose boxes meet the shaft from x to
+  // pb's outline and which no supporting plane of that shaft separates
+  // from it. A patch separated from the whole shaft is separated from the
+  // shaft to any part of pb (its points are points of pb), so a part's
+  // shaft need test only these. `all` where there were more than
+  // kMaxTests (or more than 4 x kMaxTests boxes met): then the parts are
+  // tested as may_occlude does.
+  struct Candidates {
+    std::array<int, 8> k{};
+    int count = 0;
+    bool all = false;
+  };
+  Candidates candidates(int px, const Vec3& x, const Vec3& nx, int pb) const;
+  // may_occlude(px, x, nx, pb, b, nb) for a part b of pb, testing only c.
+  bool may_occlude(const Candidates& c, int px, const Vec3& x, const Vec3& nx, int pb, const std::array<Vec3, 4>& b,
+                   const Vec3& nb) const;
+  bool may_occlude(const Candidates& c, int px, const Vec3& x, const Vec3& nx, int pb, const Triangle& b) const;
+
   static constexpr int kMaxTests = 8;
   static constexpr size_t kCachedPatches = 4096;
 
@@ -64,6 +83,9 @@ private:
   // The shaft from the point x to the convex polygon b, after the patches'.
   template <class B>
   bool point_shaft(int px, const Vec3& x, const Vec3& nx, int pb, const B& b, const Vec3& nb) const;
+  template <class B>
+  bool candidate_shaft(const Candidates& c, int px, const Vec3& x, const Vec3& nx, int pb, const B& b,
+                       const Vec3& nb) const;
   std::vector<Poly> polys_;
   BoxTree tree_;
   // Per pair p < q when the scene is small: 0 unknown, 1 clear, 2 may occlude.
