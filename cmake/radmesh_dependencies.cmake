@@ -10,6 +10,10 @@ find_package(tinyobjloader REQUIRED)
 find_package(assimp 5 REQUIRED)
 find_package(nlohmann_json 3 REQUIRED)
 find_package(CLI11 REQUIRED)
+# Clipper (Debian's libpolyclipping-dev, no CMake package): the exact direct
+# light's polygon Booleans, in integer arithmetic.
+find_path(POLYCLIPPING_INCLUDE_DIR polyclipping/clipper.hpp REQUIRED)
+find_library(POLYCLIPPING_LIBRARY polyclipping REQUIRED)
 
 set(RADMESH_VTK_COMPONENTS CommonCore CommonDataModel CommonExecutionModel CommonMisc IOXML IOImage)
 if(RADMESH_WITH_RENDERING)
@@ -19,7 +23,8 @@ if(RADMESH_WITH_RENDERING)
 endif()
 find_package(VTK 9 REQUIRED COMPONENTS ${RADMESH_VTK_COMPONENTS})
 
-set(RADMESH_PRIVATE_LIBRARIES CGAL::CGAL embree TBB::tbb tinyobjloader::tinyobjloader_double assimp::assimp ${VTK_LIBRARIES})
+set(RADMESH_PRIVATE_LIBRARIES CGAL::CGAL embree TBB::tbb tinyobjloader::tinyobjloader_double assimp::assimp ${VTK_LIBRARIES}
+    ${POLYCLIPPING_LIBRARY})
 if(RADMESH_WITH_RENDERING)
   list(APPEND RADMESH_PRIVATE_LIBRARIES X11::X11)
 endif()

@@ -1,18 +1,18 @@
-// Exact direct illumination: emitter polygon minus the occluders' shadows,
-// with CGAL's exact 2-D Boolean operations. The only CGAL translation unit of
-// the radiosity module.
+// Exact direct illumination: emitter polygon minus the occluders' shadows.
+// CGAL's exact kernel clips and projects where double precision would not
+// do; the 2-D Boolean operations are Clipper's, exact in integers on a fine
+// grid. The only CGAL translation unit of the radiosity module.
 
 #include "radiosity/direct.h"
 
 #include "meshing/errors.h"
 #include "radiosity/form_factor.h"
 
-#include <CGAL/Boolean_set_operations_2.h>
 #include <CGAL/Exact_predicates_exact_constructions_kernel.h>
 #include <CGAL/Polygon_2.h>
-#include <CGAL/Polygon_set_2.h>
 #include <CGAL/Polygon_with_holes_2.h>
 
+#include <polyclipping/clipper.hpp>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -27,7 +27,6 @@ using EK = CGAL::Exact_predicates_exact_constructions_kernel;
 using Point3 = EK::Point_3;
 using Polygon2 = CGAL::Polygon_2<EK>;
 using PolygonWithHoles2 = CGAL::Polygon_with_holes_2<EK>;
-using PolygonSet2 = CGAL::Polygon_set_2<EK>;
 
 Point3 exact(const Vec3& p) { return Point3(p.x, p.y, p.z); }
 Vec3 rounded(const Point3& p) { return Vec3(CGAL::to_double(p.x()), CGAL::to_double(p.y()), CGAL::to_double(p.z())); }
@@ -48,6 +47,24 @@ struct Emitter {
   Vec3 origin{0.0};                      // a point of the plane (double): n . y = n . origin
   int iu = 1, iv = 2;                    // the scene axes of the 2-D map's u and v
   double umin = 0.0, umax = 0.0, vmin = 0.0, vmax = 0.0;  // the padded box of the 2-D map
+  // The integer grid of the Boolean operations: a 2-D point (u, v) is
+  // ((u - cu) grid, (v - cv) grid) rounded, grid a power of two making the
+  // padded box at most 2^51 units across (Clipper takes up to 2^62).
+  double cu = 0.0, cv = 0.0, grid = 1.0;
+  ClipperLib::Paths lit;  // the emitter on that grid: outline counter-clockwise, holes clockwise
+
+  ClipperLib::IntPoint snap(double u, double v) const {
+    return {static_cast<ClipperLib::cInt>(std::llround((u - cu) * grid)),
+            static_cast<ClipperLib::cInt>(std::llround((v - cv) * grid))};
+  }
+  // A grid point lifted onto the plane (double).
+  Vec3 lift(const ClipperLib::IntPoint& p) const {
+    Vec3 y(0.0);
+    y[iu] = cu + static_cast<double>(p.X) / grid;
+    y[iv] = cv + static_cast<double>(p.Y) / grid;
+    y[drop] = origin[drop] + (normal[iu] * (origin[iu] - y[iu]) + normal[iv] * (origin[iv] - y[iv])) / normal[drop];
+    return y;
+  }
 
   EK::Point_2 to2(const Point3& p) const {
     if (drop == 0) return EK::Point_2(p.y(), p.z());
@@ -249,12 +266,11 @@ struct DirectIllumination::Impl {
                  const std::vector<int>* candidates) const {
     const Point3 X = exact(x);
     if (e.plane.oriented_side(X) != CGAL::ON_POSITIVE_SIDE) return 0.0;
-    PolygonSet2 lit(e.shape);
+    std::vector<Polygon2> shadows;
     if (candidates) {
       const double s = glm::dot(e.normal, x - e.origin);
       std::vector<EK::Plane_3> planes;  // the exact path's pyramid and slab, made when first needed
       const Vec3 lo = glm::min(x, e.lo), hi = glm::max(x, e.hi);
-      std::vector<Polygon2> shadows;
       for (const int index : *candidates) {
         const OccluderPolygon& t = occluders[static_cast<size_t>(index)];
         if (t.patch == receiver || t.patch == e.patch) continue;
@@ -264,26 +280,35 @@ struct DirectIllumination::Impl {
                          [&](const Point3& p) { return e.plane.oriented_side(p) == CGAL::ON_POSITIVE_SIDE; }))
           continue;
         Polygon2 dark = shadow(t, x, X, s, e, planes);
-        if (dark.is_empty()) continue;
-        if (dark.orientation() == CGAL::CLOCKWISE) dark.reverse_orientation();
-        shadows.push_back(std::move(dark));
-      }
-      if (!shadows.empty()) {
-        PolygonSet2 dark;
-        dark.join(shadows.begin(), shadows.end());
-        lit.difference(dark);
+        if (!dark.is_empty()) shadows.push_back(std::move(dark));
       }
     }
-    std::vector<PolygonWithHoles2> parts;
-    lit.polygons_with_holes(std::back_inserter(parts));
+    if (shadows.empty()) return unoccluded(x, n, e);
+    // The emitter minus the union of the shadows, on the grid (nonzero
+    // winding: every shadow made counter-clockwise). Integer arithmetic
+    // decides every crossing alike whichever shadows share an edge; the
+    // corners are rounded to the grid (by at most 2^-51 of the emitter's
+    // padded box), about the double rounding they had already. With CGAL's
+    // exact Boolean operations (Polygon_set_2, Epeck), which gave the same
+    // values to 1e-15, they took 84% of the direct pass.
+    ClipperLib::Clipper clipper;
+    clipper.AddPaths(e.lit, ClipperLib::ptSubject, true);
+    ClipperLib::Path path;
+    for (const Polygon2& dark : shadows) {
+      path.clear();
+      for (auto v = dark.vertices_begin(); v != dark.vertices_end(); ++v)
+        path.push_back(e.snap(CGAL::to_double(v->x()), CGAL::to_double(v->y())));
+      if (!ClipperLib::Orientation(path)) ClipperLib::ReversePath(path);
+      clipper.AddPath(path, ClipperLib::ptClip, true);  // false (ignored) for a shadow that snapped to no area
+    }
+    ClipperLib::Paths lit;
+    clipper.Execute(ClipperLib::ctDifference, lit, ClipperLib::pftNonZero, ClipperLib::pftNonZero);
     double sum = 0.0;
-    for (const PolygonWithHoles2& part : parts) {
-      const std::vector<Vec3> outer = e.lifted(part.outer_boundary());
-      sum += lambert_contour_sum(x, n, outer.data(), outer.size());
-      for (auto h = part.holes_begin(); h != part.holes_end(); ++h) {
-        const std::vector<Vec3> hole = e.lifted(*h);
-        sum += lambert_contour_sum(x, n, hole.data(), hole.size());
-      }
+    std::vector<Vec3> loop;
+    for (const ClipperLib::Path& p : lit) {
+      loop.clear();
+      for (const ClipperLib::IntPoint& q : p) loop.push_back(e.lift(q));
+      sum += lambert_contour_sum(x, n, loop.data(), loop.size());
     }
     return std::abs(sum) / (2.0 * std::numbers::pi);
   }
@@ -529,6 +554,17 @@ DirectIllumination::DirectIllumination(const Scene& scene) : impl_(std::make_uni
     e.umax = box.xmax() + pad;
     e.vmin = box.ymin() - pad;
     e.vmax = box.ymax() + pad;
+    e.cu = 0.5 * (e.umin + e.umax);
+    e.cv = 0.5 * (e.vmin + e.vmax);
+    e.grid = std::ldexp(1.0, 51 - std::ilogb(std::max(e.umax - e.umin, e.vmax - e.vmin)) - 1);
+    auto on_grid = [&](const Polygon2& poly) {
+      ClipperLib::Path path;
+      for (auto v = poly.vertices_begin(); v != poly.vertices_end(); ++v)
+        path.push_back(e.snap(CGAL::to_double(v->x()), CGAL::to_double(v->y())));
+      return path;
+    };
+    e.lit.push_back(on_grid(outer2));  // counter-clockwise (made so above)
+    for (const Polygon2& h : holes) e.lit.push_back(on_grid(h));  // clockwise
     for (int i = 0; i < 4; ++i) e.corners[static_cast<size_t>(i)] = e.lift(c2[i]);
     // Evaluated exactly now, while one thread holds them: CGAL tightens an
     // object's interval when it first evaluates it exactly, so a shared

@@ -5,7 +5,7 @@ set -euo pipefail
 
 packages=(
   build-essential cmake pkg-config
-  libcgal-dev libgmp-dev libmpfr-dev libboost-dev
+  libcgal-dev libgmp-dev libmpfr-dev libboost-dev libpolyclipping-dev
   libembree-dev libtbb-dev libglm-dev
   libvtk9-dev
   libtinyobjloader-dev libassimp-dev libcli11-dev nlohmann-json3-dev
