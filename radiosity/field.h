@@ -54,8 +54,9 @@ struct FieldReport {
 // stratified shadow rays per node or triangle taken, cast only where the
 // shaft from x to the node's rectangle (or the triangle) may hold another
 // patch, of those that the shaft from x to the whole source may hold (found
-// once per point and source: on the Cornell box 3.6 M rays where testing
-// each node's shaft on its own cast 6.1 M); each ray also samples
+// once per point and source whose cut has 8 parts or more: on the Cornell
+// box 3.6 M rays where testing each part's shaft alone cast 6.1 M); each
+// ray also samples
 // the source's radiosity where it lands, weighted by the point form
 // factor's kernel there (visibility and radiosity are correlated: the part
 // of a source hidden from x is often its dark part). One random stream per
