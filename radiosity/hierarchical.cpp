@@ -1169,22 +1169,37 @@ private:
   bool enclosed(size_t leaf) const {
     const Triangle& t = tri_[leaf];
     const Vec3 c = t.centroid();
-    const Vec3 n = t.normal;
-    const Vec3 a = std::abs(n.x) < 0.9 ? Vec3(1, 0, 0) : Vec3(0, 1, 0);
-    const Vec3 u = glm::normalize(glm::cross(n, a)), v = glm::cross(n, u);
-    const Visibility& rays = visibility_.rays();
-    const double reach = 4.0 * diagonal_;
+    const Hemisphere h(t.normal);
     const int patch = node_patch(static_cast<int>(leaf));
     SplitMix rng(pair_seed(static_cast<uint64_t>(leaf), 0xE17C105EULL));
-    constexpr int side = 8;  // kEnclosureRays = side^2 strata
-    for (int k = 0; k < side * side; ++k) {
+    constexpr int side = 8;
+    static_assert(side * side == kEnclosureRays);
+    for (int k = 0; k < kEnclosureRays; ++k)
+      if (ray_end(c, h.direction(k, side, rng), patch) != RayEnd::front) return false;
+    return true;
+  }
+  // Cosine-distributed directions about a unit normal: stratum k of a
+  // side x side grid (two draws of rng).
+  struct Hemisphere {
+    Vec3 n, u, v;
+    explicit Hemisphere(const Vec3& normal) : n(normal) {
+      const Vec3 a = std::abs(n.x) < 0.9 ? Vec3(1, 0, 0) : Vec3(0, 1, 0);
+      u = glm::normalize(glm::cross(n, a));
+      v = glm::cross(n, u);
+    }
+    Vec3 direction(int k, int side, SplitMix& rng) const {
       const double r1 = ((k / side) + rng.uniform()) / side, r2 = ((k % side) + rng.uniform()) / side;
       const double r = std::sqrt(r1), phi = 2.0 * std::numbers::pi * r2;
-      const Vec3 d = r * std::cos(phi) * u + r * std::sin(phi) * v + std::sqrt(std::max(0.0, 1.0 - r1)) * n;
-      const int hit = rays.first_hit(c, d, reach, patch);
-      if (hit < 0 || glm::dot(scene_.patches[static_cast<size_t>(hit)].normal, d) >= 0.0) return false;
+      return r * std::cos(phi) * u + r * std::sin(phi) * v + std::sqrt(std::max(0.0, 1.0 - r1)) * n;
     }
-    return true;
+  };
+  // Where a ray from x (on `patch`) along d ends: nowhere (it leaves the
+  // scene), on the front of a patch, or on the back of one (or edge on).
+  enum class RayEnd { nowhere, front, back };
+  RayEnd ray_end(const Vec3& x, const Vec3& d, int patch) const {
+    const int hit = visibility_.rays().first_hit(x, d, 4.0 * diagonal_, patch);
+    if (hit < 0) return RayEnd::nowhere;
+    return glm::dot(scene_.patches[static_cast<size_t>(hit)].normal, d) < 0.0 ? RayEnd::front : RayEnd::back;
   }
   void scale_rows() {
     const size_t n = B_.size();
@@ -1277,25 +1292,18 @@ private:
     const int roots = out_.tree.root_count();
     open_.assign(static_cast<size_t>(roots), 1.0);
     if (!visibility_.convex_enclosure()) {
-      const Visibility& rays = visibility_.rays();
-      const double reach = 4.0 * diagonal_;
       tbb::parallel_for(tbb::blocked_range<int>(0, roots, 64), [&](const tbb::blocked_range<int>& range) {
         for (int r = range.begin(); r != range.end(); ++r) {
           const Triangle& t = tri_[static_cast<size_t>(r)];
-          const Vec3 a = std::abs(t.normal.x) < 0.9 ? Vec3(1, 0, 0) : Vec3(0, 1, 0);
-          const Vec3 u = glm::normalize(glm::cross(t.normal, a)), v = glm::cross(t.normal, u);
+          const Hemisphere h(t.normal);
           SplitMix rng(pair_seed(static_cast<uint64_t>(r), 0x0BE11E55ULL));
-          constexpr int side = 4;  // kOpennessRays = side^2 strata
+          constexpr int side = 4;
           static_assert(side * side == kOpennessRays);
           int open = 0;
           for (int k = 0; k < kOpennessRays; ++k) {
-            const double r1 = ((k / side) + rng.uniform()) / side, r2 = ((k % side) + rng.uniform()) / side;
+            const Vec3 d = h.direction(k, side, rng);
             const double pa = rng.uniform(), pb = rng.uniform();
-            const Vec3 x = triangle_point(t.v[0], t.v[1], t.v[2], pa, pb);
-            const double rr = std::sqrt(r1), phi = 2.0 * std::numbers::pi * r2;
-            const Vec3 d = rr * std::cos(phi) * u + rr * std::sin(phi) * v + std::sqrt(std::max(0.0, 1.0 - r1)) * t.normal;
-            const int hit = rays.first_hit(x, d, reach, node_patch(r));
-            open += hit < 0 || glm::dot(scene_.patches[static_cast<size_t>(hit)].normal, d) < 0.0;
+            open += ray_end(triangle_point(t.v[0], t.v[1], t.v[2], pa, pb), d, node_patch(r)) != RayEnd::back;
           }
           open_[static_cast<size_t>(r)] = static_cast<double>(open) / kOpennessRays;
         }
