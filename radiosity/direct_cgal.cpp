@@ -53,9 +53,13 @@ struct Emitter {
   double cu = 0.0, cv = 0.0, grid = 1.0;
   ClipperLib::Paths lit;  // the emitter on that grid: outline counter-clockwise, holes clockwise
 
-  ClipperLib::IntPoint snap(double u, double v) const {
-    return {static_cast<ClipperLib::cInt>(std::llround((u - cu) * grid)),
-            static_cast<ClipperLib::cInt>(std::llround((v - cv) * grid))};
+  // A polygon of the 2-D map on the grid.
+  ClipperLib::Path on_grid(const Polygon2& poly) const {
+    ClipperLib::Path path;
+    for (auto v = poly.vertices_begin(); v != poly.vertices_end(); ++v)
+      path.push_back({static_cast<ClipperLib::cInt>(std::llround((CGAL::to_double(v->x()) - cu) * grid)),
+                      static_cast<ClipperLib::cInt>(std::llround((CGAL::to_double(v->y()) - cv) * grid))});
+    return path;
   }
   // A grid point lifted onto the plane (double).
   Vec3 lift(const ClipperLib::IntPoint& p) const {
@@ -293,11 +297,8 @@ struct DirectIllumination::Impl {
     // values to 1e-15, they took 84% of the direct pass.
     ClipperLib::Clipper clipper;
     clipper.AddPaths(e.lit, ClipperLib::ptSubject, true);
-    ClipperLib::Path path;
     for (const Polygon2& dark : shadows) {
-      path.clear();
-      for (auto v = dark.vertices_begin(); v != dark.vertices_end(); ++v)
-        path.push_back(e.snap(CGAL::to_double(v->x()), CGAL::to_double(v->y())));
+      ClipperLib::Path path = e.on_grid(dark);
       if (!ClipperLib::Orientation(path)) ClipperLib::ReversePath(path);
       clipper.AddPath(path, ClipperLib::ptClip, true);  // false (ignored) for a shadow that snapped to no area
     }
@@ -557,14 +558,8 @@ DirectIllumination::DirectIllumination(const Scene& scene) : impl_(std::make_uni
     e.cu = 0.5 * (e.umin + e.umax);
     e.cv = 0.5 * (e.vmin + e.vmax);
     e.grid = std::ldexp(1.0, 51 - std::ilogb(std::max(e.umax - e.umin, e.vmax - e.vmin)) - 1);
-    auto on_grid = [&](const Polygon2& poly) {
-      ClipperLib::Path path;
-      for (auto v = poly.vertices_begin(); v != poly.vertices_end(); ++v)
-        path.push_back(e.snap(CGAL::to_double(v->x()), CGAL::to_double(v->y())));
-      return path;
-    };
-    e.lit.push_back(on_grid(outer2));  // counter-clockwise (made so above)
-    for (const Polygon2& h : holes) e.lit.push_back(on_grid(h));  // clockwise
+    e.lit.push_back(e.on_grid(outer2));  // counter-clockwise (made so above)
+    for (const Polygon2& h : holes) e.lit.push_back(e.on_grid(h));  // clockwise
     for (int i = 0; i < 4; ++i) e.corners[static_cast<size_t>(i)] = e.lift(c2[i]);
     // Evaluated exactly now, while one thread holds them: CGAL tightens an
     // object's interval when it first evaluates it exactly, so a shared
