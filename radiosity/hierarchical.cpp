@@ -744,11 +744,14 @@ private:
       // own visible fraction.
       const bool own_rays = k >= own && l->visible < 1.0 &&
                             rho * f0 * max3(B_[static_cast<size_t>(l->source)]) > kLeafRaysBound * hopt_.epsilon * scale_;
+      // No shaft test: the ancestor's shaft holds an occluder, and on the
+      // Cornell box 97% of the leaves' shafts did too (573 k pairs, 15 k
+      // cleared); the tests cost more than the rays they saved.
       const double v = own_rays
                            ? visibility_.visible_fraction(t, node_patch(static_cast<int>(x)), static_cast<uint64_t>(x),
                                                           tri_[static_cast<size_t>(l->source)], node_patch(l->source),
                                                           static_cast<uint64_t>(l->source), leaf_rays_[x],
-                                                          std::max(1, visibility_.side() / 2))
+                                                          std::max(1, visibility_.side() / 2), false)
                            : l->visible;
       const double f = f0 * v;
       if (f <= 0.0) continue;

@@ -69,10 +69,10 @@ bool VisibilityEstimator::facing(int p, int q) const { return impl_->occlusion.f
 double VisibilityEstimator::distance_to_patch(int p, const Vec3& x) const { return impl_->occlusion.distance(p, x); }
 
 double VisibilityEstimator::visible_fraction(const Triangle& a, int pa, uint64_t id_a, const Triangle& b, int pb,
-                                             uint64_t id_b, RayCount& count, int side) const {
+                                             uint64_t id_b, RayCount& count, int side, bool test_shaft) const {
   if (side <= 0) side = side_;
   const int rays = side * side;
-  if (!impl_->embree || !impl_->occlusion.may_occlude(pa, pb, a, b)) {
+  if (!impl_->embree || (test_shaft && !impl_->occlusion.may_occlude(pa, pb, a, b))) {
     count.skipped += rays;
     ++count.unoccludable;
     return 1.0;

@@ -70,9 +70,12 @@ public:
   // a, b: the two elements' triangles (a point is a triangle with three equal
   // corners), pa, pb their patches, id_a, id_b their ids for the stream.
   // Thread-safe; counts the rays in `count`. side x side rays (stratified
-  // on both triangles); 0: the estimator's own count.
+  // on both triangles); 0: the estimator's own count. The rays are cast
+  // only where the shaft test says something may be in the way, unless
+  // `test_shaft` is false (for pairs known to be near an occluder, where the
+  // test almost never clears them and costs more than the rays).
   double visible_fraction(const Triangle& a, int pa, uint64_t id_a, const Triangle& b, int pb, uint64_t id_b,
-                          RayCount& count, int side = 0) const;
+                          RayCount& count, int side = 0, bool test_shaft = true) const;
   int side() const { return side_; }
 
   // The open segment (x, y) is clear of every patch but pa and pb (always
