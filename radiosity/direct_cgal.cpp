@@ -558,6 +558,9 @@ DirectIllumination::DirectIllumination(const Scene& scene) : impl_(std::make_uni
     e.cu = 0.5 * (e.umin + e.umax);
     e.cv = 0.5 * (e.vmin + e.vmax);
     e.grid = std::ldexp(1.0, 51 - std::ilogb(std::max(e.umax - e.umin, e.vmax - e.vmin)) - 1);
+    if (!std::isfinite(e.grid) || !(e.grid > 0.0))
+      throw GeometryError(where(patch.file, patch.line) + "emitter '" + patch.name + "' is too small (" +
+                          format_number(e.umax - e.umin) + " across) for the exact direct light");
     e.lit.push_back(e.on_grid(outer2));  // counter-clockwise (made so above)
     for (const Polygon2& h : holes) e.lit.push_back(e.on_grid(h));  // clockwise
     for (int i = 0; i < 4; ++i) e.corners[static_cast<size_t>(i)] = e.lift(c2[i]);
