@@ -606,6 +606,7 @@ private:
     F_approx_.resize(n, 0.0);
     fix_exact_.resize(n, 1.0);
     fix_approx_.resize(n, 1.0);
+    node_open_.resize(n, -1.0f);
     std::vector<int> todo, send_todo;
     for (size_t x = 0; x < n; ++x) {
       bool send_changed = false;
@@ -796,8 +797,13 @@ private:
     for (const auto& pl : path) receivers.push_back(&tri_[static_cast<size_t>(pl.first)]);
     f.resize(receivers.size());
     form_factors(at_c, receivers.data(), receivers.size(), f.data());
+    // A piece shut in (the ceiling above a light hung under it sees only
+    // the light's back) sends nothing: weighed by its openness, so that a
+    // link from a node straddling it carries the radiosity of the part
+    // that sends.
+    if (node_open_[y] < 0.0f) node_open_[y] = static_cast<float>(openness_of(static_cast<int>(y)));
     for (size_t k = 0; k < path.size(); ++k) {
-      const float w = static_cast<float>(t.area * f[k] * path[k].second->visible);
+      const float w = static_cast<float>(t.area * f[k] * path[k].second->visible) * node_open_[y];
       if (w > 0.0f) sent.push_back({path[k].second->id, w});
     }
   }
@@ -1294,24 +1300,9 @@ private:
   void openness() {
     const int roots = out_.tree.root_count();
     open_.assign(static_cast<size_t>(roots), 1.0);
-    if (!visibility_.convex_enclosure()) {
-      tbb::parallel_for(tbb::blocked_range<int>(0, roots, 64), [&](const tbb::blocked_range<int>& range) {
-        for (int r = range.begin(); r != range.end(); ++r) {
-          const Triangle& t = tri_[static_cast<size_t>(r)];
-          const Hemisphere h(t.normal);
-          SplitMix rng(pair_seed(static_cast<uint64_t>(r), 0x0BE11E55ULL));
-          constexpr int side = 4;
-          static_assert(side * side == kOpennessRays);
-          int open = 0;
-          for (int k = 0; k < kOpennessRays; ++k) {
-            const Vec3 d = h.direction(k, side, rng);
-            const double pa = rng.uniform(), pb = rng.uniform();
-            open += ray_end(triangle_point(t.v[0], t.v[1], t.v[2], pa, pb), d, node_patch(r)) != RayEnd::back;
-          }
-          open_[static_cast<size_t>(r)] = static_cast<double>(open) / kOpennessRays;
-        }
-      });
-    }
+    tbb::parallel_for(tbb::blocked_range<int>(0, roots, 64), [&](const tbb::blocked_range<int>& range) {
+      for (int r = range.begin(); r != range.end(); ++r) open_[static_cast<size_t>(r)] = openness_of(r);
+    });
     // Per group, the area mean of its roots' openness (a root counts for
     // every group above its own).
     std::vector<double> sum(ct_.group_count(), 0.0), area(ct_.group_count(), 0.0);
@@ -1323,6 +1314,22 @@ private:
     group_open_.assign(ct_.group_count(), 0.0);
     for (size_t g = 0; g < group_open_.size(); ++g)
       group_open_[g] = area[g] > 0.0 ? sum[g] / area[g] : 0.0;
+  }
+  // The openness of node m (see openness()).
+  double openness_of(int m) const {
+    if (visibility_.convex_enclosure()) return 1.0;
+    const Triangle& t = tri_[static_cast<size_t>(m)];
+    const Hemisphere h(t.normal);
+    SplitMix rng(pair_seed(static_cast<uint64_t>(m), 0x0BE11E55ULL));
+    constexpr int side = 4;
+    static_assert(side * side == kOpennessRays);
+    int open = 0;
+    for (int k = 0; k < kOpennessRays; ++k) {
+      const Vec3 d = h.direction(k, side, rng);
+      const double pa = rng.uniform(), pb = rng.uniform();
+      open += ray_end(triangle_point(t.v[0], t.v[1], t.v[2], pa, pb), d, node_patch(m)) != RayEnd::back;
+    }
+    return static_cast<double>(open) / kOpennessRays;
   }
   // 1 / (the group's mean openness), 0 for a group shut in.
   double per_open(size_t g) const { return group_open_[g] > 0.0 ? 1.0 / group_open_[g] : 0.0; }
@@ -1695,6 +1702,7 @@ private:
   // Per node: (link id, A F(node -> receiver) x visibility), in float: it
   // only shares a link's transport out, and its sums are taken in double.
   std::vector<std::vector<std::pair<int, float>>> sent_;
+  std::vector<float> node_open_;          // per node: its openness (openness_of), -1 until needed
   std::vector<char> sent_dirty_;          // per node: element links from it changed since the last leaf_terms
   int next_id_ = 0;                       // element links numbered so far
   std::vector<int> free_ids_;             // numbers of removed links, to use again
