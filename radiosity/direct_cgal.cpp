@@ -61,13 +61,17 @@ struct Emitter {
                       static_cast<ClipperLib::cInt>(std::llround((CGAL::to_double(v->y()) - cv) * grid))});
     return path;
   }
-  // A grid point lifted onto the plane (double).
-  Vec3 lift(const ClipperLib::IntPoint& p) const {
+  // The point of the plane (double) above the 2-D point (u, v).
+  Vec3 on_plane(double u, double v) const {
     Vec3 y(0.0);
-    y[iu] = cu + static_cast<double>(p.X) / grid;
-    y[iv] = cv + static_cast<double>(p.Y) / grid;
-    y[drop] = origin[drop] + (normal[iu] * (origin[iu] - y[iu]) + normal[iv] * (origin[iv] - y[iv])) / normal[drop];
+    y[iu] = u;
+    y[iv] = v;
+    y[drop] = origin[drop] + (normal[iu] * (origin[iu] - u) + normal[iv] * (origin[iv] - v)) / normal[drop];
     return y;
+  }
+  // A grid point lifted onto the plane.
+  Vec3 on_plane(const ClipperLib::IntPoint& p) const {
+    return on_plane(cu + static_cast<double>(p.X) / grid, cv + static_cast<double>(p.Y) / grid);
   }
 
   EK::Point_2 to2(const Point3& p) const {
@@ -90,14 +94,8 @@ std::vector<Vec3> Emitter::lifted(const Polygon2& poly) const {
   // In double from the rounded 2-D corners, the same whatever CGAL has
   // evaluated exactly before (the emitter is shared between threads).
   std::vector<Vec3> out;
-  const int iw = drop;
-  for (auto v = poly.vertices_begin(); v != poly.vertices_end(); ++v) {
-    Vec3 y(0.0);
-    y[iu] = CGAL::to_double(v->x());
-    y[iv] = CGAL::to_double(v->y());
-    y[iw] = origin[iw] + (normal[iu] * (origin[iu] - y[iu]) + normal[iv] * (origin[iv] - y[iv])) / normal[iw];
-    out.push_back(y);
-  }
+  for (auto v = poly.vertices_begin(); v != poly.vertices_end(); ++v)
+    out.push_back(on_plane(CGAL::to_double(v->x()), CGAL::to_double(v->y())));
   return out;
 }
 
@@ -308,7 +306,7 @@ struct DirectIllumination::Impl {
     std::vector<Vec3> loop;
     for (const ClipperLib::Path& p : lit) {
       loop.clear();
-      for (const ClipperLib::IntPoint& q : p) loop.push_back(e.lift(q));
+      for (const ClipperLib::IntPoint& q : p) loop.push_back(e.on_plane(q));
       sum += lambert_contour_sum(x, n, loop.data(), loop.size());
     }
     return std::abs(sum) / (2.0 * std::numbers::pi);

@@ -1303,6 +1303,9 @@ private:
     tbb::parallel_for(tbb::blocked_range<int>(0, roots, 64), [&](const tbb::blocked_range<int>& range) {
       for (int r = range.begin(); r != range.end(); ++r) open_[static_cast<size_t>(r)] = openness_of(r);
     });
+    // The roots' sending weights take the same values (sender_terms).
+    node_open_.resize(std::max(node_open_.size(), static_cast<size_t>(roots)), -1.0f);
+    for (int r = 0; r < roots; ++r) node_open_[static_cast<size_t>(r)] = static_cast<float>(open_[static_cast<size_t>(r)]);
     // Per group, the area mean of its roots' openness (a root counts for
     // every group above its own).
     std::vector<double> sum(ct_.group_count(), 0.0), area(ct_.group_count(), 0.0);

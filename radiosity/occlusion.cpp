@@ -182,7 +182,6 @@ bool Occlusion::may_occlude(int px, const Vec3& x, const Vec3& nx, int pb, const
 
 Occlusion::Candidates Occlusion::candidates(int px, const Vec3& x, const Vec3& nx, int pb) const {
   Candidates c;
-  static_assert(std::tuple_size_v<decltype(c.k)> == kMaxTests);
   const Poly& b = polys_[static_cast<size_t>(pb)];
   Box3 shaft = b.box;
   shaft.add(x);

@@ -56,8 +56,9 @@ public:
   // shaft need test only these. `all` where there were more than
   // kMaxTests (or more than 4 x kMaxTests boxes met): then the parts are
   // tested as may_occlude does.
+  static constexpr int kMaxTests = 8;
   struct Candidates {
-    std::array<int, 8> k{};
+    std::array<int, kMaxTests> k{};
     int count = 0;
     bool all = false;
   };
@@ -67,7 +68,6 @@ public:
                    const Vec3& nb) const;
   bool may_occlude(const Candidates& c, int px, const Vec3& x, const Vec3& nx, int pb, const Triangle& b) const;
 
-  static constexpr int kMaxTests = 8;
   static constexpr size_t kCachedPatches = 4096;
 
 private:
