@@ -86,6 +86,8 @@ public:
     const Cluster& cl = cluster(c);
     return {children_.data() + cl.child_begin, static_cast<size_t>(cl.child_end - cl.child_begin)};
   }
+  // The i-th root in cluster order (cluster c's roots are root_at(begin .. end - 1)).
+  int root_at(int i) const { return order_[static_cast<size_t>(i)]; }
   // The group of its parent cluster root r belongs to.
   int root_group(int r) const { return root_group_[static_cast<size_t>(r)]; }
 
