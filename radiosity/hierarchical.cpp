@@ -1058,9 +1058,10 @@ private:
     const size_t n = B_.size();
     std::vector<double> by_node(n, 0.0), by_group(ct_.group_count(), 0.0);
     if (!ct_.empty()) {
-      // A group's receiving area: its leaves' area x row scale x their
-      // root's openness, with its descendants' (parents have the larger
-      // group numbers); over the group's mean openness where it is used.
+      // A group's receiving area per direction bin: its leaves' area x row
+      // scale x their root's share weight in the bin (its openness with one
+      // bin), with its descendants' (parents have the larger group
+      // numbers); over the group's mean weight where it is used.
       std::vector<double> receiving(ct_.group_count() * bins_, 0.0);
       for (size_t x = 0; x < n; ++x) {
         if (!tree.is_leaf(static_cast<int>(x))) continue;
