@@ -1396,15 +1396,11 @@ private:
       const Vec3 d = h.direction(k, side, rng);
       const double pa = rng.uniform(), pb = rng.uniform();
       const Vec3 x = triangle_point(t.v[0], t.v[1], t.v[2], pa, pb);
-      if (ray_end(x, d, node_patch(m)) == RayEnd::back) {
-        if (bins) ++rays[static_cast<size_t>(direction_bin(d))];
-        continue;
-      }
-      ++open;
-      if (!bins) continue;
       const size_t b = static_cast<size_t>(direction_bin(d));
-      ++rays[b];
-      if (reach > 0.0 && visibility_.rays().first_hit(x, d, reach, node_patch(m)) >= 0) continue;
+      if (bins) ++rays[b];
+      if (ray_end(x, d, node_patch(m)) == RayEnd::back) continue;
+      ++open;
+      if (!bins || (reach > 0.0 && visibility_.rays().first_hit(x, d, reach, node_patch(m)) >= 0)) continue;
       ++through[b];
       ++seen;
     }
