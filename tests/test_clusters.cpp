@@ -254,6 +254,42 @@ TEST(Clusters, PartsOfAConvexObjectAreNeverLinked) {
   EXPECT_EQ(joined, 0);
 }
 
+TEST(Clusters, SmallClustersEndLinksOnlyWhenTheirTrianglesCannotBeSplit) {
+  // A cluster of at most 16 roots is split down to its elements rather
+  // than end a link, unless its roots are, on average, too small to be
+  // split (4 x min_area): the sphere's 1,280 triangles (6.3e-3 each) lie
+  // below the links' floor at min_area 0.02, the room's (above 0.08) do not.
+  const Scene s = sphere_room(3);
+  const Mesh m = initial_mesh(s);
+  const double min_area = 0.02;
+  const HierarchicalSolution h = solve_hierarchical(s, m, {}, one_round(ClusterMode::volume, 0.01, min_area));
+  std::vector<Triangle> roots;
+  for (int t = 0; t < m.triangle_count(); ++t) {
+    const auto& tri = m.triangles[static_cast<size_t>(t)];
+    roots.push_back(make_triangle(m.positions[static_cast<size_t>(tri[0])], m.positions[static_cast<size_t>(tri[1])],
+                                  m.positions[static_cast<size_t>(tri[2])],
+                                  s.patches[static_cast<size_t>(m.patch[static_cast<size_t>(t)])].normal));
+  }
+  const ClusterTree ct = ClusterTree::volume(roots, std::vector<double>(roots.size(), 1.0));
+  int fine_small = 0, coarse_small = 0;
+  auto count = [&](int cluster, const Vec3& centre) {
+    if (cluster < 0) return;
+    ASSERT_LT(glm::length(ct.cluster(cluster).centre - centre), 1e-12);  // the same tree as the solver's
+    const int members = ct.members(cluster);
+    if (members > 16) return;
+    (ct.cluster(cluster).area > 4.0 * min_area * members ? coarse_small : fine_small) += 1;
+  };
+  for (const HierarchicalClusterLink& l : h.cluster_links) {
+    count(l.receiver_cluster, l.receiver);
+    count(l.source_cluster, l.source);
+  }
+  std::printf("[clusters] sphere room, %d roots: %zu cluster links; ends on small clusters of unsplittable roots %d, "
+              "of splittable ones %d\n",
+              m.triangle_count(), h.cluster_links.size(), fine_small, coarse_small);
+  EXPECT_GT(fine_small, 0);
+  EXPECT_EQ(coarse_small, 0);
+}
+
 TEST(Hierarchical, AClosedRoomAbsorbsWhatItEmitsAndMatchesTheMatrixMethod) {
   // An empty closed room: every watt emitted is absorbed. Links that
   // carried their source node's plain mean radiosity lost 0.9% of the power
