@@ -179,6 +179,19 @@ Mesh initial_mesh(const Scene& s) {
   return mesh_scene(s, o);
 }
 
+// The solver's volume cluster tree, rebuilt from the same roots (the volume
+// tree's shape depends on the roots alone).
+ClusterTree volume_tree(const Scene& s, const Mesh& m) {
+  std::vector<Triangle> roots;
+  for (int t = 0; t < m.triangle_count(); ++t) {
+    const auto& tri = m.triangles[static_cast<size_t>(t)];
+    roots.push_back(make_triangle(m.positions[static_cast<size_t>(tri[0])], m.positions[static_cast<size_t>(tri[1])],
+                                  m.positions[static_cast<size_t>(tri[2])],
+                                  s.patches[static_cast<size_t>(m.patch[static_cast<size_t>(t)])].normal));
+  }
+  return ClusterTree::volume(roots, std::vector<double>(roots.size(), 1.0));
+}
+
 TEST(Clusters, FewerLinksSameObjectMeansAndEnergyInAClosedRoom) {
   const Scene s = sphere_room(2);  // 320 sphere triangles
   const Mesh m = initial_mesh(s);
@@ -219,16 +232,7 @@ TEST(Clusters, PartsOfAConvexObjectAreNeverLinked) {
   const Scene s = sphere_room(3);
   const Mesh m = initial_mesh(s);
   const HierarchicalSolution h = solve_hierarchical(s, m, {}, one_round(ClusterMode::volume, 0.01, 0.02));
-  // The solver's cluster tree, rebuilt from the same roots (the volume
-  // tree's shape depends on the roots alone).
-  std::vector<Triangle> roots;
-  for (int t = 0; t < m.triangle_count(); ++t) {
-    const auto& tri = m.triangles[static_cast<size_t>(t)];
-    roots.push_back(make_triangle(m.positions[static_cast<size_t>(tri[0])], m.positions[static_cast<size_t>(tri[1])],
-                                  m.positions[static_cast<size_t>(tri[2])],
-                                  s.patches[static_cast<size_t>(m.patch[static_cast<size_t>(t)])].normal));
-  }
-  const ClusterTree ct = ClusterTree::volume(roots, std::vector<double>(roots.size(), 1.0));
+  const ClusterTree ct = volume_tree(s, m);
   auto sphere_node = [&](int node) { return s.patches[static_cast<size_t>(h.tree.node(node).patch)].name == "sphere"; };
   std::function<bool(int)> sphere_cluster = [&](int c) {
     for (const int child : ct.children(c))
@@ -263,14 +267,7 @@ TEST(Clusters, SmallClustersEndLinksOnlyWhenTheirTrianglesCannotBeSplit) {
   const Mesh m = initial_mesh(s);
   const double min_area = 0.02;
   const HierarchicalSolution h = solve_hierarchical(s, m, {}, one_round(ClusterMode::volume, 0.01, min_area));
-  std::vector<Triangle> roots;
-  for (int t = 0; t < m.triangle_count(); ++t) {
-    const auto& tri = m.triangles[static_cast<size_t>(t)];
-    roots.push_back(make_triangle(m.positions[static_cast<size_t>(tri[0])], m.positions[static_cast<size_t>(tri[1])],
-                                  m.positions[static_cast<size_t>(tri[2])],
-                                  s.patches[static_cast<size_t>(m.patch[static_cast<size_t>(t)])].normal));
-  }
-  const ClusterTree ct = ClusterTree::volume(roots, std::vector<double>(roots.size(), 1.0));
+  const ClusterTree ct = volume_tree(s, m);
   int fine_small = 0, coarse_small = 0;
   auto count = [&](int cluster, const Vec3& centre) {
     if (cluster < 0) return;
