@@ -1135,7 +1135,7 @@ private:
     if (code >= 0) return false;
     const int members = ct_.members(cluster_of(code));
     if (members > kSmallCluster) return false;
-    return fine_small_clusters_end_links_ ? code_area(code) > kSplittableArea * min_area_ * members : true;
+    return !fine_small_clusters_end_links_ || code_area(code) > kSplittableArea * min_area_ * members;
   }
 
   static constexpr int cluster_code(int c) { return ClusterTree::code(c); }
