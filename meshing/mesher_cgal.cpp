@@ -370,11 +370,15 @@ private:
     std::vector<Box3> vertex_boxes(scene_.vertices.size());
     for (size_t v = 0; v < vertex_boxes.size(); ++v) vertex_boxes[v].add(positions_[v]);
     const BoxTree vertex_tree(vertex_boxes);
+    // Cells counted from the scene's lowest corner (a scene far from the
+    // origin would overflow the cell numbers otherwise), clamped all the same.
     const double cell = 4.0 * eps_;
-    auto cell_of = [cell](const Vec3& p) {
-      return std::array<long long, 3>{static_cast<long long>(std::floor(p.x / cell)),
-                                      static_cast<long long>(std::floor(p.y / cell)),
-                                      static_cast<long long>(std::floor(p.z / cell))};
+    Box3 bounds;
+    for (const Box3& b : vertex_boxes) bounds.add(b);
+    const Vec3 origin = bounds.empty() ? Vec3(0.0) : bounds.lo;
+    auto cell_of = [cell, origin](const Vec3& p) {
+      auto index = [cell](double x) { return static_cast<long long>(std::clamp(std::floor(x / cell), -1e18, 1e18)); };
+      return std::array<long long, 3>{index(p.x - origin.x), index(p.y - origin.y), index(p.z - origin.z)};
     };
     std::map<std::array<long long, 3>, std::vector<int>> extra;  // constraint points made so far, by cell
     auto id_of = [&](const Vec3& p) {
