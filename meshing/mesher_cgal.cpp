@@ -415,15 +415,12 @@ private:
       // Exact crossings of the patch's lines, as parameters along each line.
       std::vector<std::vector<std::pair<double, Vec3>>> cuts(by_patch[p].size());
       std::vector<EK::Segment_2> seg2;
-      std::vector<K::Iso_rectangle_2> box;
+      std::vector<Box3> flat;  // each line's box, for the pairs that may cross
       for (size_t i : by_patch[p]) {
         const Point2 a = frame.to2(lines[i].a), b = frame.to2(lines[i].b);
         seg2.emplace_back(EK::Point_2(a.x(), a.y()), EK::Point_2(b.x(), b.y()));
-        box.emplace_back(std::min(a.x(), b.x()), std::min(a.y(), b.y()), std::max(a.x(), b.x()),
-                         std::max(a.y(), b.y()));
+        flat.push_back(flat_box(a.bbox() + b.bbox()));
       }
-      std::vector<Box3> flat(box.size());
-      for (size_t i = 0; i < box.size(); ++i) flat[i] = flat_box(box[i].bbox());
       const BoxTree line_tree(flat);
       std::vector<size_t> partners;
       for (size_t i = 0; i < seg2.size(); ++i) {
@@ -434,7 +431,6 @@ private:
         });
         std::sort(partners.begin(), partners.end());  // in the order of the pairwise scan
         for (size_t j : partners) {
-          if (!CGAL::do_overlap(box[i].bbox(), box[j].bbox())) continue;
           const auto hit = CGAL::intersection(seg2[i], seg2[j]);
           if (!hit) continue;
           const EK::Point_2* x = boost::get<EK::Point_2>(&*hit);

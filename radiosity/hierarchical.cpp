@@ -1344,7 +1344,7 @@ private:
     if (bins_ > 1)
       for (size_t c = 0; c < ct_.size(); ++c) {
         const ClusterTree::Cluster& cl = ct_.cluster(static_cast<int>(c));
-        if (cl.end - cl.begin <= kSmallCluster) continue;
+        if (small_code(cluster_code(static_cast<int>(c)))) continue;
         for (int i = cl.begin; i < cl.end; ++i) reach[static_cast<size_t>(ct_.root_at(i))] = cl.radius;
       }
     tbb::parallel_for(tbb::blocked_range<int>(0, roots, 64), [&](const tbb::blocked_range<int>& range) {
