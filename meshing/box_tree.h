@@ -38,16 +38,25 @@ public:
   // eps), until visit returns false. Returns false when stopped that way.
   template <class F>
   bool overlapping(const Box3& query, double eps, F&& visit) const {
+    return where([&](const Box3& b) { return b.overlaps(query, eps); }, visit);
+  }
+
+  // The same for any test of a box that holds for a box whenever it holds
+  // for a box inside it (a shaft, a segment's neighbourhood): calls
+  // visit(item) for every item whose box passes `test`, skipping the
+  // subtrees whose box fails it.
+  template <class Test, class F>
+  bool where(Test&& test, F&& visit) const {
     if (nodes_.empty()) return true;
     int stack[64];
     int top = 0;
     stack[top++] = 0;
     while (top > 0) {
       const Node& node = nodes_[static_cast<size_t>(stack[--top])];
-      if (!node.box.overlaps(query, eps)) continue;
+      if (!test(node.box)) continue;
       if (node.left < 0) {
         for (int i = node.begin; i < node.end; ++i)
-          if (boxes_[static_cast<size_t>(order_[static_cast<size_t>(i)])].overlaps(query, eps) &&
+          if (test(boxes_[static_cast<size_t>(order_[static_cast<size_t>(i)])]) &&
               !visit(order_[static_cast<size_t>(i)]))
             return false;
       } else {

@@ -212,23 +212,50 @@ namespace {
 // and b lie strictly on opposite sides of the patch's plane (beyond eps) and
 // the crossing point is inside the polygon. Touching a plane, or starting on
 // a patch, does not count.
+// The patches' boxes in a BoxTree: a segment meets the few patches its box
+// overlaps, not every patch of the scene.
 class Blockers {
 public:
-  Blockers(const std::vector<Poly>& polys, double eps) : polys_(polys), eps_(eps) {}
+  Blockers(const std::vector<Poly>& polys, double eps) : polys_(polys), eps_(eps), tree_(boxes_of(polys)) {}
   bool blocked(const Vec3& a, const Vec3& b) const {
-    const Vec3 lo = glm::min(a, b), hi = glm::max(a, b);
-    for (const Poly& t : polys_) {
-      if (glm::any(glm::lessThan(hi, t.lo - eps_)) || glm::any(glm::lessThan(t.hi + eps_, lo))) continue;
+    return !tree_.where([&](const Box3& box) { return segment_meets_box(a, b, box); }, [&](int i) {
+      const Poly& t = polys_[static_cast<size_t>(i)];
       const double da = t.dist(a), db = t.dist(b);
-      if (!((da > eps_ && db < -eps_) || (da < -eps_ && db > eps_))) continue;
-      if (inside(t, a + (da / (da - db)) * (b - a))) return true;
-    }
-    return false;
+      if (!((da > eps_ && db < -eps_) || (da < -eps_ && db > eps_))) return true;
+      return !inside(t, a + (da / (da - db)) * (b - a));
+    });
   }
+  const BoxTree& tree() const { return tree_; }
 
 private:
+  // Does segment (a, b) meet the box grown by eps? (Slabs: the parameter
+  // interval inside each pair of faces.)
+  bool segment_meets_box(const Vec3& a, const Vec3& b, const Box3& box) const {
+    double t0 = 0.0, t1 = 1.0;
+    for (int k = 0; k < 3; ++k) {
+      const double lo = box.lo[k] - eps_, hi = box.hi[k] + eps_, d = b[k] - a[k];
+      if (d == 0.0) {
+        if (a[k] < lo || a[k] > hi) return false;
+        continue;
+      }
+      const double u = (lo - a[k]) / d, v = (hi - a[k]) / d;
+      t0 = std::max(t0, std::min(u, v));
+      t1 = std::min(t1, std::max(u, v));
+      if (t0 > t1) return false;
+    }
+    return true;
+  }
+  static std::vector<Box3> boxes_of(const std::vector<Poly>& polys) {
+    std::vector<Box3> boxes(polys.size());
+    for (size_t p = 0; p < polys.size(); ++p) {
+      boxes[p].lo = polys[p].lo;
+      boxes[p].hi = polys[p].hi;
+    }
+    return boxes;
+  }
   const std::vector<Poly>& polys_;
   double eps_;
+  BoxTree tree_;
 };
 
 // Parameters of the closest points p0 + s d0 and p1 + t d1 of two lines;
@@ -312,21 +339,30 @@ private:
       ++rep_.back_facing_pairs_skipped;
       return;
     }
-    // Occluders: patches in the shaft's bounding box with a point in front of
-    // both the emitter and the receiver.
-    const Vec3 lo = glm::min(E.lo, R.lo) - Vec3(eps_), hi = glm::max(E.hi, R.hi) + Vec3(eps_);
+    // Occluders: patches in the shaft between the emitter and the receiver
+    // (their boxes overlap its box, no side of it has them all outside) with
+    // a point in front of both. A patch outside the shaft meets no segment
+    // from the receiver to the emitter, so it makes no event: the scan went
+    // over every patch, and every patch in the shaft's box made events, which
+    // made shadow lines quadratic in the patches.
+    const std::vector<Side> sides = shaft_sides(E, R);
+    Box3 box;
+    box.add(Box3{E.lo, E.hi});
+    box.add(Box3{R.lo, R.hi});
     std::vector<int> occluders;
-    for (int o = 0; o < static_cast<int>(polys_.size()); ++o) {
-      if (o == e || o == r) continue;
+    auto in_shaft = [&](const Box3& b) { return b.overlaps(box, eps_) && !box_outside(sides, b); };
+    blockers_.tree().where(in_shaft, [&](int o) {
+      if (o == e || o == r) return true;
       const Poly& O = polys_[static_cast<size_t>(o)];
-      if (glm::any(glm::lessThan(hi, O.lo)) || glm::any(glm::lessThan(O.hi, lo))) continue;
       bool fe = false, fr = false;
       for (const Vec3& q : O.loops[0]) {
         fe = fe || E.dist(q) > eps_;
         fr = fr || R.dist(q) > eps_;
       }
-      if (fe && fr) occluders.push_back(o);
-    }
+      if (fe && fr && !outside(sides, O)) occluders.push_back(o);
+      return true;
+    });
+    std::sort(occluders.begin(), occluders.end());  // in patch order, as the scan found them
     if (occluders.empty()) {
       ++rep_.no_occluder_pairs_skipped;
       return;
@@ -347,6 +383,63 @@ private:
                 occluder_vertex_event(e, r, o, a, v, f1, plane_r);
             }
         }
+  }
+
+  // A side of the shaft, the convex hull of the emitter's and the receiver's
+  // outer loops: a plane through an edge of one and a corner of the other
+  // with every corner of both on its inner side (dot(n, x) <= d + eps).
+  // Sides through other corners are not looked for: fewer sides cull less,
+  // never wrongly.
+  struct Side {
+    Vec3 n;
+    double d;
+  };
+  static constexpr size_t kMostShaftPairs = 64;
+  std::vector<Side> shaft_sides(const Poly& E, const Poly& R) const {
+    std::vector<Side> sides;
+    const std::vector<Vec3>& a = E.loops[0];
+    const std::vector<Vec3>& b = R.loops[0];
+    if (a.size() * b.size() > kMostShaftPairs) return sides;  // long loops: the box alone
+    auto try_side = [&](const Vec3& p, const Vec3& q, const Vec3& c) {
+      Vec3 n = glm::cross(q - p, c - p);
+      const double len = glm::length(n);
+      if (!(len > 1e-12 * glm::length(q - p) * glm::length(c - p))) return;
+      n /= len;
+      double d = glm::dot(n, p);
+      bool above = false, below = false;
+      for (const auto* loop : {&a, &b})
+        for (const Vec3& x : *loop) {
+          const double s = glm::dot(n, x) - d;
+          above = above || s > eps_;
+          below = below || s < -eps_;
+        }
+      if (above && below) return;
+      if (above) {
+        n = -n;
+        d = -d;
+      }
+      sides.push_back({n, d});
+    };
+    for (const auto& [edges, corners] : {std::pair{&a, &b}, std::pair{&b, &a}})
+      for (size_t i = 0; i < edges->size(); ++i)
+        for (const Vec3& c : *corners) try_side((*edges)[i], (*edges)[(i + 1) % edges->size()], c);
+    return sides;
+  }
+  // Is the whole box beyond eps outside one side of the shaft?
+  bool box_outside(const std::vector<Side>& sides, const Box3& b) const {
+    const Vec3 c = b.centre(), h = 0.5 * (b.hi - b.lo);
+    for (const Side& s : sides)
+      if (glm::dot(s.n, c) - glm::dot(glm::abs(s.n), h) - s.d > eps_) return true;
+    return false;
+  }
+  // Is every corner of O beyond eps outside one side of the shaft?
+  bool outside(const std::vector<Side>& sides, const Poly& O) const {
+    for (const Side& s : sides) {
+      bool all = true;
+      for (const Vec3& x : O.loops[0]) all = all && glm::dot(s.n, x) - s.d > eps_;
+      if (all) return true;
+    }
+    return false;
   }
 
   // Is some neighbour of vertex v (along any patch loop) within eps of the
@@ -496,7 +589,7 @@ private:
   // first, then D1, then D2): a segment loses the parts that run along a
   // segment already kept. Then the budget.
   std::vector<DiscontinuitySegment> finish() {
-    std::vector<std::vector<DiscontinuitySegment>> kept(found_.size());
+    std::vector<KeptSegments> kept(found_.size());
     for (const DiscontinuitySegment& c : contacts_) kept[static_cast<size_t>(c.patch)].push_back(c);
     std::vector<DiscontinuitySegment> out;
     for (size_t r = 0; r < found_.size(); ++r) {
@@ -531,30 +624,87 @@ private:
     return out;
   }
 
+  // The segments kept on one receiver, found by box in the order they were
+  // kept: BoxTrees over blocks of them whose sizes at least double from the
+  // newest block to the oldest (a new block swallows the smaller ones before
+  // it), and a short list of the latest. So a query visits O(log n) trees,
+  // and each segment joins O(log n) trees in all. A scan of all of them for
+  // every new segment was quadratic: on the 64 x 64 box field the floor
+  // holds 16 k contact segments and was offered 130 k shadow lines.
+  class KeptSegments {
+  public:
+    void push_back(const DiscontinuitySegment& s) {
+      segs_.push_back(s);
+      if (segs_.size() - covered_ < kTail) return;
+      size_t begin = covered_;
+      while (!blocks_.empty() && blocks_.back().end - blocks_.back().begin <= segs_.size() - begin) {
+        begin = blocks_.back().begin;
+        blocks_.pop_back();
+      }
+      std::vector<Box3> boxes;
+      for (size_t i = begin; i < segs_.size(); ++i) boxes.push_back(box_of(segs_[i]));
+      blocks_.push_back({begin, segs_.size(), BoxTree(boxes)});
+      covered_ = segs_.size();
+    }
+    // Calls visit(k) for every kept k whose box overlaps s's grown by eps,
+    // in the order they were kept, until visit returns false.
+    template <class F>
+    void near(const DiscontinuitySegment& s, double eps, F&& visit) const {
+      const Box3 box = box_of(s);
+      thread_local std::vector<size_t> hits;
+      hits.clear();
+      for (const Block& b : blocks_)
+        b.tree.overlapping(box, eps, [&](int i) {
+          hits.push_back(b.begin + static_cast<size_t>(i));
+          return true;
+        });
+      for (size_t i = covered_; i < segs_.size(); ++i)
+        if (box_of(segs_[i]).overlaps(box, eps)) hits.push_back(i);
+      std::sort(hits.begin(), hits.end());
+      for (size_t i : hits)
+        if (!visit(segs_[i])) return;
+    }
+
+  private:
+    static constexpr size_t kTail = 32;
+    struct Block {
+      size_t begin, end;
+      BoxTree tree;
+    };
+    static Box3 box_of(const DiscontinuitySegment& s) {
+      Box3 b;
+      b.add(s.a);
+      b.add(s.b);
+      return b;
+    }
+    std::vector<DiscontinuitySegment> segs_;
+    size_t covered_ = 0;  // segs_[0, covered_) are in blocks_
+    std::vector<Block> blocks_;
+  };
+
   // Is s within min_separation of one kept segment at both ends and its middle?
-  bool near_duplicate(const DiscontinuitySegment& s, const std::vector<DiscontinuitySegment>& kept) const {
+  bool near_duplicate(const DiscontinuitySegment& s, const KeptSegments& kept) const {
     const double tol = opt_.min_separation;
     if (!(tol > 0.0)) return false;
     auto dist = [](const Vec3& p, const DiscontinuitySegment& k) { return point_segment_distance(p, k.a, k.b); };
     const Vec3 mid = 0.5 * (s.a + s.b);
-    for (const DiscontinuitySegment& k : kept)
-      if (dist(s.a, k) <= tol && dist(s.b, k) <= tol && dist(mid, k) <= tol) return true;
-    return false;
+    bool found = false;
+    kept.near(s, tol, [&](const DiscontinuitySegment& k) {
+      found = dist(s.a, k) <= tol && dist(s.b, k) <= tol && dist(mid, k) <= tol;
+      return !found;
+    });
+    return found;
   }
 
   // The parts of s not covered by collinear segments in `kept`.
-  std::vector<DiscontinuitySegment> subtract(const DiscontinuitySegment& s,
-                                             const std::vector<DiscontinuitySegment>& kept) const {
+  std::vector<DiscontinuitySegment> subtract(const DiscontinuitySegment& s, const KeptSegments& kept) const {
     const Vec3 ab = s.b - s.a;
     const double len2 = glm::dot(ab, ab), len = std::sqrt(len2);
     // Intervals of s still free, with their end points.
     std::vector<std::pair<std::pair<double, Vec3>, std::pair<double, Vec3>>> free = {{{0.0, s.a}, {1.0, s.b}}};
     auto off_line = [&](const Vec3& p) { return glm::length(glm::cross(p - s.a, ab)) / len > eps_; };
-    const Vec3 lo = glm::min(s.a, s.b) - Vec3(eps_), hi = glm::max(s.a, s.b) + Vec3(eps_);
-    for (const DiscontinuitySegment& k : kept) {
-      if (glm::any(glm::lessThan(hi, glm::min(k.a, k.b))) || glm::any(glm::lessThan(glm::max(k.a, k.b), lo)))
-        continue;
-      if (off_line(k.a) || off_line(k.b)) continue;
+    kept.near(s, eps_, [&](const DiscontinuitySegment& k) {
+      if (off_line(k.a) || off_line(k.b)) return true;
       std::pair<double, Vec3> c0 = {glm::dot(k.a - s.a, ab) / len2, k.a}, c1 = {glm::dot(k.b - s.a, ab) / len2, k.b};
       if (c0.first > c1.first) std::swap(c0, c1);
       decltype(free) next;
@@ -567,7 +717,8 @@ private:
         if (c1.first < f1.first) next.push_back({c1, f1});
       }
       free = std::move(next);
-    }
+      return true;
+    });
     std::vector<DiscontinuitySegment> out;
     for (const auto& [f0, f1] : free) {
       if ((f1.first - f0.first) * len <= eps_) continue;

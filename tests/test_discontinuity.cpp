@@ -547,6 +547,52 @@ TEST(ShadowsStress, CoordinatesAroundAMillionWithFeaturesOfOne) {
   check_full_mesh(b.build(0.2, 3.0, Vec3(1e6, 1e6, -1e6)), "coordinates around 1e6");
 }
 
+TEST(Shadows, ManyBoxesLinesNeitherRunAlongAContactNorRepeatAnEarlierLine) {
+  // 8 x 8 boxes on the floor: 256 contact segments there, so each new line
+  // is checked against the kept ones through several blocks of their search
+  // structure. Every line kept on a patch must be free of collinear overlap
+  // with the contacts and the lines kept before it, and no near duplicate of
+  // one of them (checked here against all of them, pair by pair).
+  Builder b;
+  for (int i = 0; i < 8; ++i)
+    for (int j = 0; j < 8; ++j) {
+      const double x = 0.3 + 0.45 * i, z = 0.3 + 0.45 * j;
+      b.box(Vec3(x, 0.0, z), Vec3(x + 0.2, 0.1 + 0.05 * ((i + 2 * j) % 4), z + 0.2));
+    }
+  const Scene s = b.build(0.4);
+  const std::vector<DiscontinuitySegment> contacts = contact_segments(s);
+  ASSERT_EQ(contacts.size(), 256u);  // the boxes' footprints on the floor
+  ShadowOptions o;
+  o.min_separation = 2e-3;
+  o.max_lines_per_receiver = 1000000;
+  ShadowReport rep;
+  const std::vector<DiscontinuitySegment> lines = shadow_segments(s, contacts, o, &rep);
+  ASSERT_GT(lines.size(), 300u);
+  EXPECT_GT(rep.near_duplicates_dropped, 0);  // else the rule below says nothing
+  const double eps = 1e-9 * s.diagonal(), tol = o.min_separation;
+  std::vector<std::vector<const DiscontinuitySegment*>> before(s.patches.size());
+  for (const DiscontinuitySegment& c : contacts) before[static_cast<size_t>(c.patch)].push_back(&c);
+  int overlaps = 0, duplicates = 0;
+  for (const DiscontinuitySegment& l : lines) {
+    const Vec3 ab = l.b - l.a, mid = 0.5 * (l.a + l.b);
+    const double len = glm::length(ab);
+    for (const DiscontinuitySegment* k : before[static_cast<size_t>(l.patch)]) {
+      auto off_line = [&](const Vec3& p) { return glm::length(glm::cross(p - l.a, ab)) / len > eps; };
+      if (!off_line(k->a) && !off_line(k->b)) {
+        double t0 = glm::dot(k->a - l.a, ab) / (len * len), t1 = glm::dot(k->b - l.a, ab) / (len * len);
+        if (t0 > t1) std::swap(t0, t1);
+        if ((std::min(t1, 1.0) - std::max(t0, 0.0)) * len > eps) ++overlaps;
+      }
+      if (point_segment_distance(l.a, k->a, k->b) <= tol && point_segment_distance(l.b, k->a, k->b) <= tol &&
+          point_segment_distance(mid, k->a, k->b) <= tol)
+        ++duplicates;
+    }
+    before[static_cast<size_t>(l.patch)].push_back(&l);
+  }
+  EXPECT_EQ(overlaps, 0);
+  EXPECT_EQ(duplicates, 0);
+}
+
 namespace {
 // Meshes with full discontinuity lines and checks the mesh covers every
 // patch exactly (triangle areas sum to the patch area) with no degenerate
