@@ -12,6 +12,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdio>
 #include <cmath>
 #include <functional>
 #include <limits>
@@ -31,6 +32,20 @@ double physical_memory_bytes() {
   const long page = sysconf(_SC_PAGE_SIZE);
   return pages > 0 && page > 0 ? static_cast<double>(pages) * static_cast<double>(page) : 8e9;
 }
+
+}  // namespace
+
+double resident_memory_bytes() {
+  std::FILE* f = std::fopen("/proc/self/statm", "r");
+  if (!f) return 0.0;
+  long size = 0, resident = 0;
+  const bool ok = std::fscanf(f, "%ld %ld", &size, &resident) == 2;
+  std::fclose(f);
+  const long page = sysconf(_SC_PAGE_SIZE);
+  return ok && page > 0 ? static_cast<double>(resident) * static_cast<double>(page) : 0.0;
+}
+
+namespace {
 
 struct Counters {
   long long form_factors = 0, zero_pairs = 0, receiver_points = 0;

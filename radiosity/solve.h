@@ -44,8 +44,10 @@ struct SolveOptions {
   // error (mesh discretization dominates), level 1 in 0.70x the time of level
   // 2 while still giving adjacent elements more points (12 instead of 3).
   QuadratureOptions quadrature{1.0, 1};
-  // Memory the form-factor matrix (matrix method) or the links and leaf
-  // terms (hierarchical method) may take, GiB (0 = half the physical memory).
+  // Memory limit, GiB (0 = half the physical memory): the form-factor matrix
+  // (matrix method) or the whole process while it solves (hierarchical
+  // method: its resident memory, and its links, leaf terms and clusters as
+  // they are made).
   double max_memory_gb = 0.0;
   // Vertex values are averaged only over triangles of one material whose
   // normals differ by less than this angle (degrees).
@@ -63,6 +65,11 @@ void check_solve_options(const SolveOptions& options);
 
 // The memory limit in bytes: max_memory_gb, or half the physical memory.
 double memory_limit_bytes(const SolveOptions& options);
+
+// The calling process's resident memory now, bytes (Linux: /proc/self/statm;
+// 0 where the system does not say). The hierarchical solver holds it to the
+// limit along with its own count of what it is about to hold.
+double resident_memory_bytes();
 
 // Classic radiosity: every element-to-element form factor, then Gauss-Seidel
 // per colour channel. Refuses (NumericalError) a mesh whose matrix would not

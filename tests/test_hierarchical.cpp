@@ -24,6 +24,8 @@ using namespace radmesh;
 namespace {
 const std::string kData = RADMESH_TEST_DATA;
 
+constexpr double kMiB = 1024.0 * 1024.0, kGiB = 1024.0 * kMiB;
+
 Mesh coarse_mesh(const Scene& s, double edge, DiscontinuityMode mode = DiscontinuityMode::contacts) {
   MeshingOptions o;
   o.max_edge = edge;
@@ -353,12 +355,13 @@ TEST(HierarchicalStress, MemoryLimitIsAClearErrorBeforeAnyCrash) {
   // The Cornell box from 200 mm roots (311 of them, 78072 facing root
   // pairs, about 3.5 MiB of first links) needs about 30 MiB of links at
   // epsilon 0.001: a limit below the first links is refused before linking,
-  // one between them stops the refinement with the count it reached.
+  // one between them (on top of what the process holds already) stops the
+  // refinement with the count it reached.
   const Scene s = read_obj_scene(kData + "/cornell_box/cornell_box.obj");
   const Mesh coarse = coarse_mesh(s, 200.0);
   SolveOptions tiny, small;
   tiny.max_memory_gb = 1e-6;
-  small.max_memory_gb = 8.0 / 1024.0;  // 8 MiB
+  small.max_memory_gb = (resident_memory_bytes() + 8.0 * kMiB) / kGiB;
   for (ClusterMode mode : {ClusterMode::off, ClusterMode::volume, ClusterMode::shape}) {
     HierarchicalOptions ho;
     ho.clusters = mode;
@@ -377,6 +380,32 @@ TEST(HierarchicalStress, MemoryLimitIsAClearErrorBeforeAnyCrash) {
     EXPECT_NE(later.find("refinement reached"), std::string::npos) << later;
     EXPECT_NE(later.find("--epsilon"), std::string::npos) << later;
   }
+}
+
+TEST(HierarchicalStress, MemoryLimitCountsTheWholeProcess) {
+  // A small solve (its links and terms well under a MiB) under a limit of
+  // what the process holds plus 64 MiB fits; with 128 MiB more held
+  // elsewhere in the process (a caller's data, a mesh) it is refused with
+  // a message that says what the process holds, where a count of the
+  // solver's own structures alone let it pass.
+  if (resident_memory_bytes() <= 0.0) GTEST_SKIP() << "this system does not report resident memory";
+  const Scene s = read_obj_scene(kData + "/box_on_floor/box_on_floor.obj");
+  const Mesh coarse = coarse_mesh(s, 1.0);
+  HierarchicalOptions ho;
+  ho.epsilon = 0.01;
+  SolveOptions o;
+  o.max_memory_gb = (resident_memory_bytes() + 64.0 * kMiB) / kGiB;
+  EXPECT_NO_THROW(solve_hierarchical(s, coarse, o, ho));
+  const std::vector<char> held(static_cast<size_t>(128.0 * kMiB), 1);
+  try {
+    solve_hierarchical(s, coarse, o, ho);
+    ADD_FAILURE() << "no error";
+  } catch (const NumericalError& e) {
+    const std::string m = e.what();
+    EXPECT_NE(m.find("the process holds"), std::string::npos) << m;
+    EXPECT_NE(m.find("--max-memory"), std::string::npos) << m;
+  }
+  EXPECT_EQ(held[held.size() / 2], 1);
 }
 
 TEST(Hierarchical, SolverObjectStepsToTheOneOffResult) {
