@@ -211,9 +211,8 @@ namespace {
 // Does the segment (a, b) pass through the inside of a patch? It does when a
 // and b lie strictly on opposite sides of the patch's plane (beyond eps) and
 // the crossing point is inside the polygon. Touching a plane, or starting on
-// a patch, does not count.
-// The patches' boxes in a BoxTree: a segment meets the few patches its box
-// overlaps, not every patch of the scene.
+// a patch, does not count. The patches sit in a BoxTree walked along the
+// segment: it meets the few patches near it, not every patch of the scene.
 class Blockers {
 public:
   Blockers(const std::vector<Poly>& polys, double eps) : polys_(polys), eps_(eps), tree_(boxes_of(polys)) {}
