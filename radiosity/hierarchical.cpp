@@ -446,16 +446,6 @@ private:
   // them) and the resident memory now (all the rest: the element tree, the
   // mesh, the visibility structure, the allocator's slack). The own count
   // alone let the 128 x 128 box field peak at 14.1 GB under a 12 GiB limit.
-  // Between a generation's blocks of pairs, the resident memory alone (one
-  // read of /proc): a generation of millions of pairs ran 40% past the
-  // limit before the check after it (32 x 32 box field, --max-memory 1).
-  void check_resident() {
-    if (resident_memory_bytes() > limit_) check_memory();
-  }
-  // For the messages of the checks before any linking.
-  std::string held_text() const {
-    return held_before_ > 0.0 ? " on top of the " + format_number(held_before_ / kGiB) + " GiB the process holds" : "";
-  }
   void check_memory() {
     const long long links = count_links();
     const double own = static_cast<double>(links) * kLinkBytes + static_cast<double>(next_id_) * kLinkIdBytes +
@@ -469,6 +459,16 @@ private:
                            " links; with them the process needs " + format_number(bytes / kGiB) + " GiB (its links, leaf terms and clusters " +
                            format_number(own / kGiB) + "), more than the " + format_number(limit_ / kGiB) +
                            " GiB allowed; raise --epsilon or --min-area, or raise --max-memory");
+  }
+  // Between blocks of link pairs and of leaf terms (in_blocks), the
+  // resident memory alone (one read of /proc), so that a generation of
+  // millions of pairs or a round's terms cannot run far past the limit.
+  void check_resident() {
+    if (resident_memory_bytes() > limit_) check_memory();
+  }
+  // For the messages of the checks before any linking.
+  std::string held_text() const {
+    return held_before_ > 0.0 ? " on top of the " + format_number(held_before_ / kGiB) + " GiB the process holds" : "";
   }
 
   // Largest difference between the point form factors to q at p's corners
