@@ -75,6 +75,16 @@ std::vector<Poly> make_polys(const Scene& scene) {
   return polys;
 }
 
+// Each patch's bounding box, in patch order (for BoxTree).
+std::vector<Box3> poly_boxes(const std::vector<Poly>& polys) {
+  std::vector<Box3> boxes(polys.size());
+  for (size_t p = 0; p < polys.size(); ++p) {
+    boxes[p].lo = polys[p].lo;
+    boxes[p].hi = polys[p].hi;
+  }
+  return boxes;
+}
+
 // Where polygon `o` meets the plane of `t`: segments (pairs of points).
 std::vector<std::pair<Vec3, Vec3>> slice(const Poly& o, const Poly& t, double eps) {
   const EK::Plane_3 plane(to_exact(t.origin), EK::Vector_3(t.normal.x, t.normal.y, t.normal.z));
@@ -172,11 +182,7 @@ std::vector<DiscontinuitySegment> contact_segments(const Scene& scene) {
   const double eps = 1e-9 * scene.diagonal();
   const std::vector<Poly> polys = make_polys(scene);
   std::vector<DiscontinuitySegment> out;
-  std::vector<Box3> boxes(polys.size());
-  for (size_t p = 0; p < polys.size(); ++p) {
-    boxes[p].lo = polys[p].lo;
-    boxes[p].hi = polys[p].hi;
-  }
+  const std::vector<Box3> boxes = poly_boxes(polys);
   const BoxTree tree(boxes);
   std::vector<int> near;
   for (size_t p = 0; p < polys.size(); ++p) {
@@ -215,7 +221,7 @@ namespace {
 // segment: it meets the few patches near it, not every patch of the scene.
 class Blockers {
 public:
-  Blockers(const std::vector<Poly>& polys, double eps) : polys_(polys), eps_(eps), tree_(boxes_of(polys)) {}
+  Blockers(const std::vector<Poly>& polys, double eps) : polys_(polys), eps_(eps), tree_(poly_boxes(polys)) {}
   bool blocked(const Vec3& a, const Vec3& b) const {
     return !tree_.where([&](const Box3& box) { return segment_meets_box(a, b, box); }, [&](int i) {
       const Poly& t = polys_[static_cast<size_t>(i)];
@@ -243,14 +249,6 @@ private:
       if (t0 > t1) return false;
     }
     return true;
-  }
-  static std::vector<Box3> boxes_of(const std::vector<Poly>& polys) {
-    std::vector<Box3> boxes(polys.size());
-    for (size_t p = 0; p < polys.size(); ++p) {
-      boxes[p].lo = polys[p].lo;
-      boxes[p].hi = polys[p].hi;
-    }
-    return boxes;
   }
   const std::vector<Poly>& polys_;
   double eps_;
