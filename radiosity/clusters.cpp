@@ -367,12 +367,12 @@ void ClusterTree::form_factors(int c, const Vec3& x, const Vec3& n, double visib
   }
 }
 
-int ClusterTree::root_at_area(int c, double u) const {
+int ClusterTree::position_at_area(int c, double u) const {
   const Cluster& cl = cluster(c);
   const double lo = cumulative_[static_cast<size_t>(cl.begin)], hi = cumulative_[static_cast<size_t>(cl.end)];
   const double a = lo + u * (hi - lo);
   const auto it = std::upper_bound(cumulative_.begin() + cl.begin + 1, cumulative_.begin() + cl.end, a);
-  return order_[static_cast<size_t>(it - cumulative_.begin() - 1)];
+  return static_cast<int>(it - cumulative_.begin() - 1);
 }
 
 }  // namespace radmesh

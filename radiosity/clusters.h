@@ -111,8 +111,9 @@ public:
   void form_factors(int c, const Vec3& x, const Vec3& n, double visible, std::vector<std::pair<int, double>>& out,
                     double& f_sum, const float* per_group = nullptr) const;
 
-  // The root of cluster c holding area fraction u in [0, 1) of it.
-  int root_at_area(int c, double u) const;
+  // The position (root_at(position)) of the root of cluster c holding
+  // area fraction u in [0, 1) of it.
+  int position_at_area(int c, double u) const;
 
 private:
   // Lays out the clusters of `tree` (children lists of node codes, -2 - t
