@@ -35,21 +35,23 @@ double max3(const Rgb& c) { return std::max({c.x, c.y, c.z}); }
 
 struct Link {
   int source = -1;
-  // An element-to-element link's number (store_element_link), which its
-  // leaf terms on both sides refer to; -1 where a cluster ends the link.
-  int id = -1;
-  // Single precision: 24 bytes a link instead of 40 (a box field of 10^5
-  // faces has 10^8 links); a visible fraction of at most 4096 rays is exact.
+  // One field for two uses, which no link has both of (20 bytes a link
+  // instead of 24; a box field of 10^5 faces has 10^8 links):
+  // - an element-to-element link: its number (store_element_link), which its
+  //   leaf terms on both sides refer to;
+  // - a link with a cluster end: where its visible fraction per normal group
+  //   of that end starts in the solver's group_visible_ (-1: `visible` for
+  //   every group). The end is the receiver when it is a cluster, else the
+  //   source.
+  int slot = -1;
+  // Single precision (40 bytes a link before); a visible fraction of at
+  // most 4096 rays is exact.
   float f = 0.0f;         // F(receiver -> source) without occlusion
   float visible = 1.0f;   // fraction of the shadow rays that got through
   float spread = 0.0f;    // how much the point form factor varies over the receiver (oracle)
-  // A partly visible link with a cluster end: where its visible fraction per
-  // normal group of that end starts in the solver's group_visible_ (-1:
-  // `visible` for every group). The end is the receiver when it is a
-  // cluster, else the source.
-  int group_visible = -1;
   bool partial() const { return visible > 0.0 && visible < 1.0; }
 };
+static_assert(sizeof(Link) == 20);
 
 class Solver {
 public:
@@ -425,9 +427,9 @@ private:
   // what they send (sender_terms).
   void store_element_link(int p, Link l) {
     if (free_ids_.empty()) {
-      l.id = next_id_++;
+      l.slot = next_id_++;
     } else {
-      l.id = free_ids_.back();
+      l.slot = free_ids_.back();
       free_ids_.pop_back();
     }
     sent_dirty_[static_cast<size_t>(l.source)] = 1;
@@ -435,7 +437,7 @@ private:
     dirty_[static_cast<size_t>(p)] = 1;
   }
   void release_element_link(const Link& l) {
-    free_ids_.push_back(l.id);
+    free_ids_.push_back(l.slot);
     sent_dirty_[static_cast<size_t>(l.source)] = 1;
   }
 
@@ -691,11 +693,11 @@ private:
     // of the transport.
     for (size_t p = 0; p < n; ++p)
       for (const Link& l : links_[p]) {
-        if (l.id < 0) continue;
-        const size_t id = static_cast<size_t>(l.id);
+        if (l.source < 0) continue;  // a cluster sends it
+        const size_t id = static_cast<size_t>(l.slot);
         if (received_[id] > 0.0 && !(inv_sent_[id] > 0.0)) {
           const float w = static_cast<float>(received_[id]);
-          sent_[static_cast<size_t>(l.source)].push_back({l.id, w});
+          sent_[static_cast<size_t>(l.source)].push_back({l.slot, w});
           inv_sent_[id] = w;
         }
       }
@@ -793,7 +795,7 @@ private:
                            : l->visible;
       const double f = f0 * v;
       if (f <= 0.0) continue;
-      add(l->id, f);
+      add(l->slot, f);
       F_sum_[x] += f;
     }
     double exact = 0.0, approx = 0.0;
@@ -844,7 +846,7 @@ private:
     if (node_open_[y] < 0.0f) node_open_[y] = static_cast<float>(openness_of(static_cast<int>(y)));
     for (size_t k = 0; k < path.size(); ++k) {
       const float w = static_cast<float>(t.area * f[k] * path[k].second->visible) * node_open_[y];
-      if (w > 0.0f) sent.push_back({path[k].second->id, w});
+      if (w > 0.0f) sent.push_back({path[k].second->slot, w});
     }
     sent.shrink_to_fit();
   }
@@ -1663,9 +1665,9 @@ private:
     }
     return visible;
   }
-  // Per-group visible fractions of a link (see Link::group_visible), or null.
+  // Per-group visible fractions of a link with a cluster end (see Link::slot), or null.
   const float* group_visible(const Link& l) const {
-    return l.group_visible >= 0 ? group_visible_.data() + l.group_visible : nullptr;
+    return l.slot >= 0 ? group_visible_.data() + l.slot : nullptr;
   }
 
   // The pair's kernel error factor (F bound x size over gap), or a negative
@@ -1803,7 +1805,7 @@ private:
           if (!(l.f > 0.0)) continue;
           if (l.partial()) {
             const ClusterTree::Cluster& end = ct_.cluster(cluster_of(p < 0 ? p : q));
-            l.group_visible = static_cast<int>(group_visible_.size());
+            l.slot = static_cast<int>(group_visible_.size());
             group_visible_.insert(group_visible_.end(), per_group[i].begin(),
                                   per_group[i].begin() + (end.group_end - end.group_begin));
           }
