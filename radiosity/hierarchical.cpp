@@ -1579,21 +1579,22 @@ private:
   // triangles and patches, read by root number, cost cache misses (on the
   // 32 x 32 box field the draws took a quarter of the run).
   void sample_node(int code, SplitMix& rng, Vec3& x, Vec3& n, int& patch, int& root) const {
+    const std::array<Vec3, 3>* v = nullptr;
     if (code >= 0) {
       const Triangle& t = tri_[static_cast<size_t>(code)];
-      const double a = rng.uniform(), b = rng.uniform();
-      x = triangle_point(t.v[0], t.v[1], t.v[2], a, b);
+      v = &t.v;
       n = t.normal;
       patch = node_patch(code);
       root = code;
-      return;
+    } else {
+      const RootSample& s = root_samples_[static_cast<size_t>(ct_.position_at_area(cluster_of(code), rng.uniform()))];
+      v = &s.v;
+      n = s.normal;
+      patch = s.patch;
+      root = s.root;
     }
-    const RootSample& s = root_samples_[static_cast<size_t>(ct_.position_at_area(cluster_of(code), rng.uniform()))];
     const double a = rng.uniform(), b = rng.uniform();
-    x = triangle_point(s.v[0], s.v[1], s.v[2], a, b);
-    n = s.normal;
-    patch = s.patch;
-    root = s.root;
+    x = triangle_point((*v)[0], (*v)[1], (*v)[2], a, b);
   }
 
   // Visible fraction between two nodes, at least one a cluster: shadow rays
@@ -1900,7 +1901,7 @@ private:
   std::vector<RootSample> root_samples_;
   std::vector<float> group_visible_;  // per partly visible cluster link, per group of its cluster end
   std::vector<std::vector<Link>> clinks_;  // per receiving cluster
-  // A group's term in 8 bytes (they were 16, a ninth of the 32 x 32 box
+  // A group's term in 8 bytes (they were 16, an eighth of the 32 x 32 box
   // field's peak): the source (an element node, or a group -2 - g) and the
   // direction bin of the source seen from the group (0 with one bin) as
   // source x 8 + bin, and F in single precision (its sums, FG_, are taken
