@@ -1501,6 +1501,13 @@ private:
   // centroid with its mean normal, over the cluster's links.
   void cluster_terms() {
     if (ct_.empty()) return;
+    // A term's source is an element node or a group (-2 - g): both must
+    // fit GroupTerm's packing, checked once for the round.
+    const size_t sources = std::max(out_.tree.nodes().size(), ct_.group_count() + 2);
+    if (sources > static_cast<size_t>(kMaxTermSource))
+      throw NumericalError(scene_.source + ": " + std::to_string(out_.tree.nodes().size()) + " element nodes and " +
+                           std::to_string(ct_.group_count()) + " cluster groups, more than a cluster term can name (" +
+                           std::to_string(kMaxTermSource) + ")");
     tbb::parallel_for(tbb::blocked_range<size_t>(0, ct_.size(), 16), [&](const tbb::blocked_range<size_t>& r) {
       for (size_t c = r.begin(); c != r.end(); ++c) {
         const ClusterTree::Cluster& cl = ct_.cluster(static_cast<int>(c));
@@ -1511,10 +1518,6 @@ private:
           for (int k = 0; k < bins_; ++k) FG_[bin_index(g, k)] = 0.0;
           const ClusterTree::Group& gr = ct_.group(g);
           auto add = [&](int q, const Vec3& towards, double f) {
-            if (q > kMaxTermSource || q < -kMaxTermSource)
-              throw NumericalError(scene_.source + ": " + (q < 0 ? "cluster group " : "element node ") +
-                                   std::to_string(q < 0 ? -2 - q : q) + " is past the largest source a cluster term holds (" +
-                                   std::to_string(kMaxTermSource) + ")");
             const int bin = bins_ > 1 ? direction_bin(towards) : 0;
             const float fs = static_cast<float>(f);
             terms.push_back({q * 8 + bin, fs});
