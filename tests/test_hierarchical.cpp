@@ -351,6 +351,41 @@ TEST(Hierarchical, BaumCriterionSplitsWhereVertexValuesDiffer) {
   EXPECT_GT(within_budget, 0);
 }
 
+TEST(Hierarchical, NoRoundForMarginalRefinementsAndItMovesNoPatchPastThem) {
+  // A round for links that are all over the oracle's threshold by at most
+  // marginal_refinement x is not made: refining one changes its receiver by
+  // about its error. So no patch mean may move by more than that factor
+  // times the threshold (epsilon x the largest reflected radiosity), and
+  // the skipped links are reported.
+  const Scene s = read_obj_scene(kData + "/cornell_box/cornell_box.obj");
+  const Mesh m = coarse_mesh(s, 200.0);
+  HierarchicalOptions every;
+  every.marginal_refinement = 1.0;
+  const HierarchicalSolution all = solve_hierarchical(s, m, {}, every);
+  const HierarchicalSolution h = solve_hierarchical(s, m, {}, {});
+  auto skipped = [](const HierarchicalSolution& x) {
+    return std::count_if(x.solution.stats.skips.begin(), x.solution.stats.skips.end(),
+                         [](const std::string& k) { return k.rfind("refinement: ", 0) == 0; });
+  };
+  std::printf("[hierarchical] marginal refinement: %d rounds, %lld links, %d leaves; every link refined: %d rounds, %lld links, %d leaves\n",
+              h.stats.rounds, h.stats.links, h.stats.leaves, all.stats.rounds, all.stats.links, all.stats.leaves);
+  EXPECT_EQ(skipped(all), 0);
+  ASSERT_EQ(skipped(h), 1);  // the Cornell box's third round is such a round
+  EXPECT_LT(h.stats.rounds, all.stats.rounds);
+  EXPECT_LT(h.stats.links, all.stats.links);
+  double top = 0.0;  // the largest reflected radiosity, as the oracle's scale
+  for (size_t n = 0; n < all.node_radiosity.size(); ++n) {
+    const Patch& patch = s.patches[static_cast<size_t>(all.tree.node(static_cast<int>(n)).patch)];
+    top = std::max(top, all.node_radiosity[n].x - s.material_of(patch).emission.x);
+  }
+  const HierarchicalOptions defaults;
+  const auto mh = patch_mean_radiosity(s, h.mesh, h.solution.element);
+  const auto ma = patch_mean_radiosity(s, all.mesh, all.solution.element);
+  for (size_t p = 0; p < s.patches.size(); ++p)
+    EXPECT_LE(std::abs(mh[p].x - ma[p].x), defaults.marginal_refinement * defaults.epsilon * top) << s.patches[p].name;
+  EXPECT_LT(std::abs(relative_imbalance(h.solution.stats)), 1e-4);
+}
+
 TEST(HierarchicalStress, MemoryLimitIsAClearErrorBeforeAnyCrash) {
   // The Cornell box from 200 mm roots (311 of them, 78072 facing root
   // pairs, about 3.5 MiB of first links) needs about 30 MiB of links at
