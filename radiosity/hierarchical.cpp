@@ -136,14 +136,11 @@ public:
     report("refine", 0.0);
     long long refined = 0;
     const Wanted wanted = st.rounds >= 2 ? wanted_refinement() : Wanted{-1, 0.0};
-    const double threshold = hopt_.epsilon * scale_;
-    if (wanted.links >= 0 && wanted.worst <= hopt_.marginal_refinement * threshold) {
-      if (wanted.links > 0)
-        out_.solution.stats.skips.push_back(
-            "refinement: " + std::to_string(wanted.links) + " links over the oracle's threshold by at most " +
-            format_number(wanted.worst / threshold) + "x (marginal_refinement " + format_number(hopt_.marginal_refinement) +
-            ") were not refined: a round for them changes their receivers by about what the oracle leaves on every link");
+    if (wanted.links >= 0 && wanted.worst <= hopt_.marginal_refinement) {
+      left_ = wanted;
+      report_left();
     } else {
+      left_ = Wanted{};
       refined = refine_links();
     }
     // Where the field is gathered at the vertices, Baum's splits only add
@@ -545,7 +542,6 @@ private:
     return true;
   }
 
-  // Refines every link the oracle now flags (with the current radiosity).
   // What the oracle would refine now: how many links, and the largest
   // error among them. step() makes no round for links that are all over
   // the threshold by at most HierarchicalOptions::marginal_refinement x:
@@ -562,29 +558,43 @@ private:
   // links were made with the emission as the scale.
   struct Wanted {
     long long links = 0;
-    double worst = 0.0;
+    double worst = 0.0;  // the largest error over the threshold
   };
+  Wanted left_;  // the marginal links step() last left unrefined (none while it refines)
+  // Says so among the skips: at each publish (which starts them anew) and
+  // when step() leaves them, the last count standing.
+  void report_left() {
+    auto& skips = out_.solution.stats.skips;
+    const std::string tag = "refinement: ";
+    std::erase_if(skips, [&](const std::string& k) { return k.rfind(tag, 0) == 0; });
+    if (left_.links > 0)
+      skips.push_back(tag + std::to_string(left_.links) + " links over the oracle's threshold by at most " +
+                      format_number(left_.worst) + "x (marginal_refinement " +
+                      format_number(hopt_.marginal_refinement) +
+                      ") were not refined: a round for them changes their receivers by about what the oracle leaves on every link");
+  }
   Wanted wanted_refinement() const {
     const double threshold = hopt_.epsilon * scale_;
     Wanted w;
     auto add = [&](double e) {
       if (!(e > threshold)) return;
       ++w.links;
-      w.worst = std::max(w.worst, e);
+      w.worst = std::max(w.worst, e / threshold);
     };
     for (size_t p = 0; p < links_.size(); ++p)
-      for (const Link& l : links_[p]) {
-        const int r = static_cast<int>(p);
-        if (l.source < 0)
-          add(cluster_link_error(r, l));
-        else if (splittable(r) || splittable(l.source))
-          add(link_error(r, l));
-      }
+      for (const Link& l : links_[p]) add(refinement_error(static_cast<int>(p), l));
     for (size_t c = 0; c < clinks_.size(); ++c)
       for (const Link& l : clinks_[c]) add(cluster_link_error(cluster_code(static_cast<int>(c)), l));
     return w;
   }
+  // A receiver node's link's error for refinement: 0 for an element link
+  // whose two ends may not be split.
+  double refinement_error(int p, const Link& l) const {
+    if (l.source < 0) return cluster_link_error(p, l);
+    return splittable(p) || splittable(l.source) ? link_error(p, l) : 0.0;
+  }
 
+  // Refines every link the oracle now flags (with the current radiosity).
   long long refine_links() {
     long long refined = 0;
     std::vector<std::pair<int, int>> next;
@@ -593,9 +603,7 @@ private:
     for (size_t p = 0; p < n; ++p) {
       std::vector<Link> keep, redo;
       for (const Link& l : links_[p]) {
-        const bool again = l.source >= 0 ? wants_refinement(static_cast<int>(p), l) &&
-                                               (splittable(static_cast<int>(p)) || splittable(l.source))
-                                         : wants_cluster_refinement(static_cast<int>(p), l);
+        const bool again = refinement_error(static_cast<int>(p), l) > hopt_.epsilon * scale_;
         (again ? redo : keep).push_back(l);
       }
       if (redo.empty()) continue;
@@ -1135,6 +1143,7 @@ private:
     st.seconds_form_factors = o.stats.seconds_link;
     st.seconds_solve = o.stats.seconds_solve;
     report_visibility_skips(st, "node");
+    report_left();
   }
 
   // Per leaf, the fraction of its radiosity x area the solve carries to
