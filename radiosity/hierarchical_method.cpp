@@ -97,6 +97,11 @@ Method make_hierarchical_method() {
        "also split a leaf whose vertex values differ by more than this fraction of the largest reflected "
        "radiosity (Baum's criterion; 0 = off)",
        d.baum_relative, 0.0, 1.0, {}},
+      {"marginal_refinement", Kind::real, "",
+       "after the first refinement round, make a round only where a link the oracle would refine is over its "
+       "threshold by more than this factor (those left are counted in the summary's skips; 1 = refine every link "
+       "over the threshold)",
+       d.marginal_refinement, 1.0, 1e6, {}},
       {"clusters", Kind::choice, "",
        "what sits above the initial mesh's triangles: volume (a box hierarchy of clusters with oriented normal "
        "groups, links grow about linearly), shape (Tanaka and Noma's hierarchical shape approximation: octree "
@@ -124,6 +129,7 @@ Method make_hierarchical_method() {
     ho.tvertex = parse_tvertex_mode(o.text("tvertex"));
     ho.min_area = o.number("min_area");
     ho.baum_relative = o.number("baum");
+    ho.marginal_refinement = o.number("marginal_refinement");
     ho.clusters = parse_cluster_mode(o.text("clusters"));
     ho.keep_links = o.number("export_links") != 0.0;
     std::function<void(const HierarchicalSolution&, int)> on_round;
