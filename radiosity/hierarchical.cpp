@@ -549,8 +549,9 @@ private:
   // or the scale a little, and refining one changes its receiver by about
   // its error, what the oracle leaves on every other link, while a round
   // costs a pass over every link and leaf (a re-link, terms, sweeps and a
-  // publish). On the 32 x 32 box field the third round refined 91 k of
-  // 10.5 M links, all within 2x, and with the fourth took 0.21 of the run;
+  // publish). On the 32 x 32 box field the third round would refine
+  // 103,906 of 10.4 M links, all within 1.5x, and with the fourth took 0.21
+  // of the run;
   // without them no patch mean moved by more than 0.46% (per-patch error
   // against a fine solve unchanged, median 0.61%); the Cornell box's third
   // round, 2,022 links, went too (L2 0.4415% -> 0.4392%, worst patch mean
