@@ -926,12 +926,6 @@ private:
   void solve() {
     const ElementTree& tree = out_.tree;
     const size_t n = tree.nodes().size();
-    // The link lists do not change until the next refinement: their growth's
-    // slack is given back before the leaf terms and sweeps, when every other
-    // structure is alive too (on the 32 x 32 box field 92 MB of 300 MB of
-    // lists; peak 1,527 -> 1,447 MB, identical results).
-    for (auto& l : links_) l.shrink_to_fit();
-    for (auto& l : clinks_) l.shrink_to_fit();
     leaf_terms();
     check_memory();
     link_values();
