@@ -135,14 +135,12 @@ public:
     const auto t2 = std::chrono::steady_clock::now();
     report("refine", 0.0);
     long long refined = 0;
-    const Wanted wanted = st.rounds >= 2 ? wanted_refinement() : Wanted{-1, 0.0};
-    if (wanted.links >= 0 && wanted.worst <= hopt_.marginal_refinement) {
-      left_ = wanted;
-      report_left();
-    } else {
+    left_ = st.rounds >= 2 ? wanted_refinement() : Wanted{};
+    if (st.rounds < 2 || left_.worst > hopt_.marginal_refinement) {
       left_ = Wanted{};
       refined = refine_links();
     }
+    report_left();
     // Where the field is gathered at the vertices, Baum's splits only add
     // display vertices: they wait until no link is refined any more, then
     // make the last round (display_round).
@@ -551,17 +549,15 @@ private:
   // costs a pass over every link and leaf (a re-link, terms, sweeps and a
   // publish). On the 32 x 32 box field the third round would refine
   // 103,906 of 10.4 M links, all within 1.5x, and with the fourth took 0.21
-  // of the run;
-  // without them no patch mean moved by more than 0.46% (per-patch error
-  // against a fine solve unchanged, median 0.61%); the Cornell box's third
-  // round, 2,022 links, went too (L2 0.4415% -> 0.4392%, worst patch mean
-  // 0.384% -> 0.394%). Not asked in the first refinement round, whose
-  // links were made with the emission as the scale.
+  // of the run; without them no patch mean moved by more than 0.46%
+  // (per-patch error against a fine solve unchanged, median 0.61%); the
+  // Cornell box's third round, 2,022 links, went too (L2 0.4415% ->
+  // 0.4392%, worst patch mean 0.384% -> 0.394%). Not asked in the first
+  // refinement round, whose links were made with the emission as the scale.
   struct Wanted {
     long long links = 0;
     double worst = 0.0;  // the largest error over the threshold
   };
-  Wanted left_;  // the marginal links step() last left unrefined (none while it refines)
   // Says so among the skips: at each publish (which starts them anew) and
   // when step() leaves them, the last count standing.
   void report_left() {
@@ -1966,6 +1962,7 @@ private:
     int patch, root;
   };
   std::vector<RootSample> root_samples_;
+  Wanted left_;  // the marginal links step() last left unrefined (none while it refines)
   std::vector<float> group_visible_;  // per partly visible cluster link, per group of its cluster end
   std::vector<std::vector<Link>> clinks_;  // per receiving cluster
   // A group's term in 8 bytes (they were 16, an eighth of the 32 x 32 box
