@@ -688,9 +688,17 @@ private:
     F_sum_.resize(n, 0.0);
     F_approx_.resize(n, 0.0);
     fix_exact_.resize(n, 1.0);
-    fix_approx_.resize(n, 1.0);
     node_open_.resize(n, -1.0f);
-    std::vector<int> todo, send_todo;
+    node_terms_.resize(n);
+    node_F_.resize(n, 0.0);
+    node_H_.resize(n, Rgb(0.0));
+    std::vector<int> todo, send_todo, node_todo;
+    for (size_t x = 0; x < n; ++x)
+      if (dirty_[x]) node_todo.push_back(static_cast<int>(x));
+    in_blocks(node_todo, [&](size_t x) { node_cluster_terms(x); });
+    node_gatherers_.clear();
+    for (size_t x = 0; x < n; ++x)
+      if (!node_terms_[x].empty()) node_gatherers_.push_back(static_cast<int>(x));
     for (size_t x = 0; x < n; ++x) {
       bool send_changed = false;
       for (int a = static_cast<int>(x), d = 0; a >= 0 && d <= kSenderDepth && !send_changed; a = tree.node(a).parent, ++d)
@@ -761,7 +769,8 @@ private:
     cluster_terms();
     scale_rows();
     out_.stats.leaf_terms = 0;
-    for (size_t x = 0; x < n; ++x) out_.stats.leaf_terms += static_cast<long long>(terms_[x].size() + sent_[x].size());
+    for (size_t x = 0; x < n; ++x)
+      out_.stats.leaf_terms += static_cast<long long>(terms_[x].size() + sent_[x].size() + node_terms_[x].size());
     for (const auto& t : gterms_) out_.stats.leaf_terms += static_cast<long long>(t.size());
   }
 
@@ -788,7 +797,7 @@ private:
     F_sum_[x] = 0.0;
     F_approx_[x] = 0.0;
     fix_exact_[x] = 1.0;
-    fix_approx_[x] = 1.0;
+    for (int a = static_cast<int>(x); a >= 0; a = tree.node(a).parent) F_approx_[x] += node_F_[static_cast<size_t>(a)];
     thread_local std::vector<const Link*> path;  // per thread: this runs once per leaf
     path.clear();
     size_t own = 0;  // the leaf's own links come first
@@ -823,18 +832,11 @@ private:
       if (l->visible > 0.0 && l->source >= 0) sources.push_back(&tri_[static_cast<size_t>(l->source)]);
     unoccluded.resize(sources.size());
     form_factors(pts, sources.data(), sources.size(), unoccluded.data());
-    thread_local std::vector<std::pair<int, double>> group_terms;
-    auto add = [&](int q, double f) { terms_[x].push_back({q, static_cast<float>(f)}); };
     size_t next = 0;
     for (size_t k = 0; k < path.size(); ++k) {
       const Link* l = path[k];
       if (l->visible <= 0.0) continue;  // hidden: kept as a link, never gathered
-      if (l->source < 0) {  // a cluster: its normal groups, seen from the leaf's centroid
-        group_terms.clear();
-        ct_.form_factors(cluster_of(l->source), c, t.normal, l->visible, group_terms, F_approx_[x], group_visible(*l));
-        for (const auto& [q, f] : group_terms) add(q, f);
-        continue;
-      }
+      if (l->source < 0) continue;      // a cluster: its receiver's node terms
       const double f0 = unoccluded[next++];
       // An ancestor's partly visible link that may matter here: the leaf's
       // own visible fraction.
@@ -851,16 +853,45 @@ private:
                            : l->visible;
       const double f = f0 * v;
       if (f <= 0.0) continue;
-      add(l->slot, f);
+      terms_[x].push_back({l->slot, static_cast<float>(f)});
       F_sum_[x] += f;
     }
-    double exact = 0.0, approx = 0.0;
+    double exact = 0.0;
     // Exactly the room they take: built by push_back, the lists held up to
     // twice that (0.8 GB more on the 64 x 64 box field's 214 M terms).
     terms_[x].shrink_to_fit();
-    for (const Term& k : terms_[x]) (k.q >= 0 ? exact : approx) += k.f;
+    for (const Term& k : terms_[x]) exact += k.f;
     if (exact > 0.0) fix_exact_[x] = F_sum_[x] / exact;
-    if (approx > 0.0) fix_approx_[x] = F_approx_[x] / approx;
+  }
+
+  // Node x's terms for the links it receives from clusters: per normal
+  // group of the source, F at x's centroid, gathered once per sweep for all
+  // the leaves below (node_H_). The oracle bounds the kernel's spread over
+  // x for these links as for any other, so evaluating it at every leaf's
+  // centroid instead bought nothing: on the 32 x 32 box field per-patch
+  // errors against a fine solve were the same (median 0.60%, 95th
+  // percentile 2.24% against 2.25%), the Cornell box's bench figures equal
+  // to four digits, but each leaf held a term per group of each of its
+  // ancestors' cluster links, half of all the terms there.
+  void node_cluster_terms(size_t x) {
+    auto& terms = node_terms_[x];
+    terms.clear();
+    node_F_[x] = 0.0;
+    node_H_[x] = Rgb(0.0);  // gather_clusters sets it again while it has terms
+    const Triangle& t = tri_[x];
+    thread_local std::vector<std::pair<int, double>> found;
+    for (const Link& l : links_[x]) {
+      if (l.source >= 0 || l.visible <= 0.0) continue;
+      found.clear();
+      double unused = 0.0;
+      ct_.form_factors(cluster_of(l.source), t.centroid(), t.normal, l.visible, found, unused, group_visible(l));
+      for (const auto& [q, f] : found) {
+        const float fs = static_cast<float>(f);
+        terms.push_back({q, fs});
+        node_F_[x] += fs;  // the floats' own sum: rows stay exact
+      }
+    }
+    terms.shrink_to_fit();
   }
 
   // Node y's sending weights: (link, A_y F(y -> receiver) x visibility,
@@ -1163,16 +1194,20 @@ private:
       // bin), with its descendants' (parents have the larger group
       // numbers); over the group's mean weight where it is used.
       std::vector<double> receiving(ct_.group_count() * bins_, 0.0);
+      // A node's receiving area for its node terms: its leaves' area x row scale.
+      std::vector<double> node_receiving(n, 0.0);
       for (size_t x = 0; x < n; ++x) {
         if (!tree.is_leaf(static_cast<int>(x))) continue;
         const int root = tree.node(static_cast<int>(x)).root;
         const int g = ct_.root_group(root);
         if (g >= 0)
           for (int k = 0; k < bins_; ++k) receiving[bin_index(g, k)] += tri_[x].area * row_scale_[x] * seen_open(root, k);
-        for (const Term& t : terms_[x])
-          if (t.q < 0)
-            by_group[static_cast<size_t>(-2 - t.q)] += tri_[x].area * row_scale_[x] * term_f(x, t) / sending_area(-2 - t.q);
+        for (int a = static_cast<int>(x); a >= 0; a = tree.node(a).parent)
+          if (!node_terms_[static_cast<size_t>(a)].empty()) node_receiving[static_cast<size_t>(a)] += tri_[x].area * row_scale_[x];
       }
+      for (int a : node_gatherers_)
+        for (const Term& t : node_terms_[static_cast<size_t>(a)])
+          by_group[static_cast<size_t>(-2 - t.q)] += node_receiving[static_cast<size_t>(a)] * t.f / sending_area(-2 - t.q);
       for (size_t g = 0; g < ct_.group_count(); ++g) {
         const int up = ct_.group(static_cast<int>(g)).up;
         if (up >= 0)
@@ -1259,14 +1294,9 @@ private:
   // root's groups push down) scaled by row_scale_.
   Rgb gathered(size_t leaf) const {
     Rgb exact(0.0), approx(0.0);
-    for (const Term& t : terms_[leaf]) {
-      const double c = t.f;
-      if (t.q >= 0)
-        exact += c * link_value_[static_cast<size_t>(t.q)];
-      else
-        approx += c * GB_[static_cast<size_t>(-2 - t.q)];
-    }
-    return fix_exact_[leaf] * exact + row_scale_[leaf] * (fix_approx_[leaf] * approx + pushed(static_cast<int>(leaf)));
+    for (const Term& t : terms_[leaf]) exact += static_cast<double>(t.f) * link_value_[static_cast<size_t>(t.q)];
+    for (int a = static_cast<int>(leaf); a >= 0; a = out_.tree.node(a).parent) approx += node_H_[static_cast<size_t>(a)];
+    return fix_exact_[leaf] * exact + row_scale_[leaf] * (approx + pushed(static_cast<int>(leaf)));
   }
   // The approximate part of a leaf's form factors, before row_scale_.
   double approx_row_sum(size_t leaf) const {
@@ -1625,6 +1655,14 @@ private:
         for (const GroupTerm& t : gterms_[g]) HG_[bin_index(gi, t.bin())] += static_cast<double>(t.f) * value(t.q());
       }
     });
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, node_gatherers_.size(), 64), [&](const tbb::blocked_range<size_t>& r) {
+      for (size_t i = r.begin(); i != r.end(); ++i) {
+        const size_t a = static_cast<size_t>(node_gatherers_[i]);
+        Rgb h(0.0);
+        for (const Term& t : node_terms_[a]) h += static_cast<double>(t.f) * GB_[static_cast<size_t>(-2 - t.q)];
+        node_H_[a] = h;
+      }
+    });
     for (int g = static_cast<int>(ct_.group_count()) - 1; g >= 0; --g) {
       const int up = ct_.group(g).up;
       for (int k = 0; k < bins_; ++k)
@@ -1924,24 +1962,28 @@ private:
   bool done_ = false;          // the stopping rule was met: step() changes nothing more
   int extrapolations_ = 0;     // Aitken steps of the sweeps, all rounds
   std::vector<double> F_sum_;     // per leaf: its exact form factors (element sources)
-  std::vector<double> F_approx_;  // per leaf: its form factors to big clusters' groups
-  // Per leaf: (link id or group code, F x visibility at the leaf), F in
-  // float, and per leaf what its float terms of each kind are scaled by so
-  // that they sum to F_sum_ and F_approx_ (taken in double): the sweeps
-  // read half the bytes, and the rows still sum as the double terms do (the
-  // furnace stays exact to rounding). In double the terms were 0.73 GB of
-  // the 20,487-face sphere room's 1.15 GB peak; in float the peak is 0.87
-  // GB there and 1.29 GB (from 1.71) at 81,927 faces, object means equal to
-  // six digits.
+  std::vector<double> F_approx_;  // per leaf: its form factors to big clusters' groups (its path's node_F_)
+  // Per leaf: (link id, F x visibility at the leaf) over its own and its
+  // ancestors' element links, F in float, and per leaf what its float
+  // terms are scaled by so that they sum to F_sum_ (taken in double): the
+  // sweeps read half the bytes, and the rows still sum as the double terms
+  // do (the furnace stays exact to rounding). In double the terms were 0.73
+  // GB of the 20,487-face sphere room's 1.15 GB peak; in float the peak is
+  // 0.87 GB there and 1.29 GB (from 1.71) at 81,927 faces, object means
+  // equal to six digits. Per node with links from clusters: (group code
+  // -2 - g, F at its centroid) in node_terms_ (see node_cluster_terms),
+  // their sum in double node_F_, what they gather in node_H_.
   struct Term {
     int q;
     float f;
   };
   std::vector<std::vector<Term>> terms_;
-  std::vector<double> fix_exact_, fix_approx_;
-  double term_f(size_t leaf, const Term& t) const {
-    return static_cast<double>(t.f) * (t.q >= 0 ? fix_exact_[leaf] : fix_approx_[leaf]);
-  }
+  std::vector<double> fix_exact_;
+  double term_f(size_t leaf, const Term& t) const { return static_cast<double>(t.f) * fix_exact_[leaf]; }
+  std::vector<std::vector<Term>> node_terms_;
+  std::vector<double> node_F_;
+  std::vector<Rgb> node_H_;
+  std::vector<int> node_gatherers_;  // the nodes whose node_terms_ are not empty
   // Per node: (link id, A F(node -> receiver) x visibility), in float: it
   // only shares a link's transport out, and its sums are taken in double.
   std::vector<std::vector<std::pair<int, float>>> sent_;
