@@ -721,46 +721,50 @@ private:
       out_.stats.rays_cast += c.cast;
       out_.stats.rays_skipped += c.skipped;
     }
-    // The element links leaving each node: (receiver, link).
-    std::vector<int> out_begin(n + 1, 0);
-    std::vector<std::pair<int, const Link*>> out;
-    for (size_t p = 0; p < n; ++p)
-      for (const Link& l : links_[p])
-        if (l.source >= 0 && l.visible > 0.0) ++out_begin[static_cast<size_t>(l.source) + 1];
-    for (size_t x = 0; x < n; ++x) out_begin[x + 1] += out_begin[x];
-    out.resize(static_cast<size_t>(out_begin[n]));
     {
-      std::vector<int> at(out_begin.begin(), out_begin.end() - 1);
+      // The element links leaving each node: (receiver, position in its
+      // list), 8 bytes a link (with a pointer, 16: on the 64 x 64 box
+      // field the peak came while this list was held).
+      std::vector<int> out_begin(n + 1, 0);
+      std::vector<std::pair<int, int>> out;
       for (size_t p = 0; p < n; ++p)
         for (const Link& l : links_[p])
+          if (l.source >= 0 && l.visible > 0.0) ++out_begin[static_cast<size_t>(l.source) + 1];
+      for (size_t x = 0; x < n; ++x) out_begin[x + 1] += out_begin[x];
+      out.resize(static_cast<size_t>(out_begin[n]));
+      std::vector<int> at(out_begin.begin(), out_begin.end() - 1);
+      for (size_t p = 0; p < n; ++p)
+        for (size_t k = 0; k < links_[p].size(); ++k) {
+          const Link& l = links_[p][k];
           if (l.source >= 0 && l.visible > 0.0)
-            out[static_cast<size_t>(at[static_cast<size_t>(l.source)]++)] = {static_cast<int>(p), &l};
+            out[static_cast<size_t>(at[static_cast<size_t>(l.source)]++)] = {static_cast<int>(p), static_cast<int>(k)};
+        }
+      at = {};
+      in_blocks(send_todo, [&](size_t y) { sender_terms(y, out_begin, out); });
     }
-    in_blocks(send_todo, [&](size_t y) { sender_terms(y, out_begin, out); });
     std::fill(dirty_.begin(), dirty_.end(), 0);
     std::fill(sent_dirty_.begin(), sent_dirty_.end(), 0);
-    // Per link: what its receiving leaves gather of it (area x F) and what
-    // its sending leaves send (the weights' sum), in leaf order.
+    // Per link: what its sending leaves send (the weights' sum).
     const size_t ids = static_cast<size_t>(next_id_);
-    received_.assign(ids, 0.0);
     inv_sent_.assign(ids, 0.0);
-    for (size_t x = 0; x < n; ++x) {
-      for (const Term& t : terms_[x])
-        if (t.q >= 0) received_[static_cast<size_t>(t.q)] += tri_[x].area * term_f(x, t);
+    for (size_t x = 0; x < n; ++x)
       for (const auto& [id, w] : sent_[x]) inv_sent_[static_cast<size_t>(id)] += w;
-    }
     // A link received but sent by no piece (all of them see the receiver
     // from behind at their centroids: where the receiver's plane cuts the
     // source) carries its source's plain mean: the source node itself sends,
     // weighted by what is received (area x F, the pieces' unit, should a
     // piece later send too). On the Cornell box 588 of 494,000 links, 2e-4
-    // of the transport.
+    // of the transport. What such a link's leaves receive is summed, negated,
+    // in its own empty place in inv_sent_ (no array per link for it).
+    for (size_t x = 0; x < n; ++x)
+      for (const Term& t : terms_[x])
+        if (inv_sent_[static_cast<size_t>(t.q)] <= 0.0) inv_sent_[static_cast<size_t>(t.q)] -= tri_[x].area * term_f(x, t);
     for (size_t p = 0; p < n; ++p)
       for (const Link& l : links_[p]) {
         if (l.source < 0) continue;  // a cluster sends it
         const size_t id = static_cast<size_t>(l.slot);
-        if (received_[id] > 0.0 && !(inv_sent_[id] > 0.0)) {
-          const float w = static_cast<float>(received_[id]);
+        if (inv_sent_[id] < 0.0) {
+          const float w = static_cast<float>(-inv_sent_[id]);
           sent_[static_cast<size_t>(l.source)].push_back({l.slot, w});
           inv_sent_[id] = w;
         }
@@ -894,6 +898,16 @@ private:
     terms.shrink_to_fit();
   }
 
+  // Per element link number: what its receiving leaves gather of it (area
+  // x F). Made where it is read (leaf_terms, sent_rows) and not kept: 8
+  // bytes a link held through the sweeps for nothing.
+  std::vector<double> received_sums() const {
+    std::vector<double> received(static_cast<size_t>(next_id_), 0.0);
+    for (size_t x = 0; x < terms_.size(); ++x)
+      for (const Term& t : terms_[x]) received[static_cast<size_t>(t.q)] += tri_[x].area * term_f(x, t);
+    return received;
+  }
+
   // Node y's sending weights: (link, A_y F(y -> receiver) x visibility,
   // the point form factor at y's centroid) over the element links it sends
   // for. A link's source sends through its descendants kSenderDepth levels
@@ -902,7 +916,7 @@ private:
   // only share a link's transport out among its pieces (link_values), so
   // one point each does: on the Cornell box, full quadrature there gave the
   // same means to 0.01% and took 1.3x the solve time.
-  void sender_terms(size_t y, const std::vector<int>& out_begin, const std::vector<std::pair<int, const Link*>>& out) {
+  void sender_terms(size_t y, const std::vector<int>& out_begin, const std::vector<std::pair<int, int>>& out) {
     auto& sent = sent_[y];
     sent.clear();
     const bool leaf = out_.tree.is_leaf(static_cast<int>(y));
@@ -910,8 +924,10 @@ private:
     path.clear();
     for (int a = static_cast<int>(y), d = 0; a >= 0 && d <= kSenderDepth; a = out_.tree.node(a).parent, ++d)
       if (d == kSenderDepth || leaf)
-        for (int k = out_begin[static_cast<size_t>(a)]; k < out_begin[static_cast<size_t>(a) + 1]; ++k)
-          path.push_back(out[static_cast<size_t>(k)]);
+        for (int k = out_begin[static_cast<size_t>(a)]; k < out_begin[static_cast<size_t>(a) + 1]; ++k) {
+          const auto [p, at] = out[static_cast<size_t>(k)];
+          path.emplace_back(p, &links_[static_cast<size_t>(p)][static_cast<size_t>(at)]);
+        }
     if (path.empty()) return;
     const Triangle& t = tri_[y];
     // The point form factors from y's centroid to all the receivers in one
@@ -1224,9 +1240,10 @@ private:
             by_group[static_cast<size_t>(-2 - q)] += received / sending_area(-2 - q);
         }
     }
+    const std::vector<double> received = received_sums();
     for (size_t c = 0; c < n; ++c)
       for (const auto& [id, w] : sent_[c])
-        by_node[c] += received_[static_cast<size_t>(id)] * w * inv_sent_[static_cast<size_t>(id)] / tri_[c].area;
+        by_node[c] += received[static_cast<size_t>(id)] * w * inv_sent_[static_cast<size_t>(id)] / tri_[c].area;
     std::vector<double> row(n, 0.0);
     for (size_t y = 0; y < n; ++y) {
       if (!tree.is_leaf(static_cast<int>(y))) continue;
@@ -1945,8 +1962,8 @@ private:
   // A link's memory: the Link in its receiver's list, with the vector's slack.
   static constexpr double kLinkBytes = 1.5 * sizeof(Link);
   static constexpr int kSenderDepth = 2;
-  // Per link number: its value, sent-weight norm and received sum.
-  static constexpr double kLinkIdBytes = sizeof(Rgb) + 2 * sizeof(double);
+  // Per link number: its value and sent-weight norm.
+  static constexpr double kLinkIdBytes = sizeof(Rgb) + sizeof(double);
   static constexpr double kGiB = 1024.0 * 1024.0 * 1024.0;
   // The radiosity the oracle's epsilon is relative to: the largest emission
   // for the first linking, then the largest reflected radiosity (B - E) of
@@ -1993,7 +2010,6 @@ private:
   std::vector<int> free_ids_;             // numbers of removed links, to use again
   std::vector<Rgb> link_value_;           // per link id: its source leaves' radiosity, weighted by sent_
   std::vector<double> inv_sent_;          // per link id: 1 / the sum of its sent_ weights (0: none)
-  std::vector<double> received_;          // per link id: the sum of area x F over its receiving leaves
   std::vector<std::vector<Link>> links_;  // per receiver node
   std::vector<char> dirty_;               // per node: links changed since the last leaf_terms (new nodes too)
   // Clusters (ClusterMode volume or shape; all empty otherwise).
