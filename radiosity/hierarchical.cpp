@@ -873,10 +873,10 @@ private:
   // the leaves below (node_H_). The oracle bounds the kernel's spread over
   // x for these links as for any other, so evaluating it at every leaf's
   // centroid instead bought nothing: on the 32 x 32 box field per-patch
-  // errors against a fine solve were the same (median 0.60%, 95th
-  // percentile 2.24% against 2.25%), the Cornell box's bench figures equal
-  // to four digits, but each leaf held a term per group of each of its
-  // ancestors' cluster links, half of all the terms there.
+  // errors against a fine solve were the same (median 0.605% against
+  // 0.603%, 95th percentile 2.25% against 2.24%), the Cornell box's bench
+  // figures equal to four digits, but each leaf held a term per group of
+  // each of its ancestors' cluster links, half of all the terms there.
   void node_cluster_terms(size_t x) {
     auto& terms = node_terms_[x];
     terms.clear();
@@ -1306,9 +1306,10 @@ private:
       for (int k = 0; k < bins_; ++k) h += seen_open(r, k) * HGacc_[bin_index(g, k)];
     return h;
   }
-  // What a leaf gathers: its exact terms (element links, >= 0), then its
-  // approximate ones (big clusters' groups at its centroid, < 0, and what its
-  // root's groups push down) scaled by row_scale_.
+  // What a leaf gathers: its exact terms (element links), then its
+  // approximate part (what the nodes on its path gathered from big
+  // clusters' groups, node_H_, and what its root's groups push down)
+  // scaled by row_scale_.
   Rgb gathered(size_t leaf) const {
     Rgb exact(0.0), approx(0.0);
     for (const Term& t : terms_[leaf]) exact += static_cast<double>(t.f) * link_value_[static_cast<size_t>(t.q)];
