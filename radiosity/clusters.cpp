@@ -351,7 +351,7 @@ Rgb ClusterTree::mean(int c, const std::vector<Rgb>& group_radiosity) const {
 }
 
 void ClusterTree::form_factors(int c, const Vec3& x, const Vec3& n, double visible,
-                               std::vector<std::pair<int, double>>& out, double& f_sum, const float* per_group) const {
+                               std::vector<std::pair<int, double>>& out, const float* per_group) const {
   const Cluster& cl = cluster(c);
   for (int g = cl.group_begin; g < cl.group_end; ++g) {
     const Group& gr = groups_[static_cast<size_t>(g)];
@@ -363,7 +363,6 @@ void ClusterTree::form_factors(int c, const Vec3& x, const Vec3& n, double visib
     if (!(seen > 0.0)) continue;
     const double f = seen * out_cos * in_cos / (std::numbers::pi * d2 * d2);
     out.push_back({-2 - g, f});
-    f_sum += f;
   }
 }
 

@@ -104,12 +104,12 @@ public:
 
   // Form factors from point x with normal n to the groups of cluster c
   // (max(0, s . r) max(0, -n . r) / (pi |r|^4) each), times `visible`,
-  // appended as (-2 - group, F) and summed into f_sum. With n = s / area of
+  // appended as (-2 - group, F). With n = s / area of
   // a receiving group, area x F is the same both ways between two groups.
   // With `per_group`, group g of c is seen through per_group[g - first
   // group of c] instead of `visible`.
   void form_factors(int c, const Vec3& x, const Vec3& n, double visible, std::vector<std::pair<int, double>>& out,
-                    double& f_sum, const float* per_group = nullptr) const;
+                    const float* per_group = nullptr) const;
 
   // The position (root_at(position)) of the root of cluster c holding
   // area fraction u in [0, 1) of it.

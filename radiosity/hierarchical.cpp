@@ -887,8 +887,7 @@ private:
     for (const Link& l : links_[x]) {
       if (l.source >= 0 || l.visible <= 0.0) continue;
       found.clear();
-      double unused = 0.0;
-      ct_.form_factors(cluster_of(l.source), t.centroid(), t.normal, l.visible, found, unused, group_visible(l));
+      ct_.form_factors(cluster_of(l.source), t.centroid(), t.normal, l.visible, found, group_visible(l));
       for (const auto& [q, f] : found) {
         const float fs = static_cast<float>(f);
         terms.push_back({q, fs});
@@ -1635,8 +1634,7 @@ private:
             const double visible = seen ? seen[g - cl.group_begin] : l.visible;
             if (l.source < 0) {
               found.clear();
-              double fsum = 0.0;
-              ct_.form_factors(cluster_of(l.source), gr.centroid, n, visible, found, fsum);
+              ct_.form_factors(cluster_of(l.source), gr.centroid, n, visible, found);
               for (const auto& [q, f] : found) add(q, ct_.group(-2 - q).centroid - gr.centroid, f);
             } else {
               // An element source as a point (its area at its centroid), the
