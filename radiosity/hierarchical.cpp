@@ -1710,6 +1710,9 @@ private:
     const double a = rng.uniform(), b = rng.uniform();
     x = triangle_point((*v)[0], (*v)[1], (*v)[2], a, b);
   }
+  // Advances `rng` past what sample_node(code, ...) would draw, without
+  // drawing: the pair's other draws stay what they were.
+  static void skip_node(int code, SplitMix& rng) { rng.skip(code >= 0 ? 2 : 3); }
 
   // Visible fraction between two nodes, at least one a cluster: shadow rays
   // between area-uniform points of both, weighted by the point kernel
@@ -1745,10 +1748,19 @@ private:
     SplitMix rng(pair_seed(code_key(a), code_key(b)));
     double weight = 0.0, open = 0.0;
     int used = 0;
+    // A point of a whose plane leaves all of b's bounding sphere behind it
+    // faces no point of b: b's point is not drawn (a quarter of the draws on
+    // a box field), only skipped in the stream.
+    const Vec3 centre_b = code_centre(b);
+    const double radius_b = code_radius(b);
     for (int k = 0; k < 4 * rays && used < rays && (used > 0 || k < rays); ++k) {
       Vec3 x, nx, y, ny;
       int px = -1, py = -1, rx = -1, ry = -1;
       sample_node(a, rng, x, nx, px, rx);
+      if (glm::dot(nx, centre_b - x) <= -radius_b) {
+        skip_node(b, rng);
+        continue;
+      }
       sample_node(b, rng, y, ny, py, ry);
       const Vec3 r = y - x;
       const double cx = glm::dot(nx, r), cy = -glm::dot(ny, r);

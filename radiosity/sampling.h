@@ -20,6 +20,8 @@ public:
     return z ^ (z >> 31);
   }
   double uniform() { return static_cast<double>(next() >> 11) * 0x1.0p-53; }
+  // The stream as after n calls of next(), without making their values.
+  void skip(uint64_t n) { s_ += n * 0x9E3779B97F4A7C15ULL; }
 
 private:
   uint64_t s_;

@@ -3,6 +3,7 @@
 #include "bench/mesh_writers.h"
 #include "meshing/box_tree.h"
 #include "meshing/errors.h"
+#include "radiosity/sampling.h"
 
 #include <gtest/gtest.h>
 
@@ -473,6 +474,18 @@ TEST(Clusters, OneAndTwoThreadsGiveIdenticalResults) {
     ASSERT_EQ(a.solution.element.size(), b.solution.element.size());
     for (size_t t = 0; t < a.solution.element.size(); ++t)
       ASSERT_EQ(a.solution.element[t], b.solution.element[t]) << to_string(mode) << " " << t;
+  }
+}
+
+// A cluster pair's draws skip the points they need not make (sample_node's
+// caller): the stream after skip(n) must be the stream after n draws, or
+// the pair's later rays would move.
+TEST(Clusters, SkippingDrawsLeavesTheStreamWhereDrawingWould) {
+  for (uint64_t n : {0u, 1u, 2u, 3u, 17u}) {
+    SplitMix drawn(12345), skipped(12345);
+    for (uint64_t k = 0; k < n; ++k) drawn.next();
+    skipped.skip(n);
+    for (int k = 0; k < 4; ++k) EXPECT_EQ(drawn.next(), skipped.next()) << n;
   }
 }
 
