@@ -41,12 +41,9 @@ std::array<double, 2> ElementTree::barycentric(int root, int vertex) const {
 }
 
 int ElementTree::make_midpoint(int root, int a, int b) {
-  const auto key = std::make_pair(std::min(a, b), std::max(a, b));
-  if (auto it = midpoints_.find(key); it != midpoints_.end()) return it->second;
   const auto ba = barycentric(root, a), bb = barycentric(root, b);
   const double u = 0.5 * (ba[0] + bb[0]), v = 0.5 * (ba[1] + bb[1]);  // exact: dyadic
   const auto& c = nodes_[static_cast<size_t>(root)].v;
-  Made m;
   // On an edge of the root (u = 0, v = 0 or u + v = 1): a parameter along
   // that initial edge, oriented from its smaller vertex id, so that both
   // roots sharing the edge would compute the same point.
@@ -59,6 +56,9 @@ int ElementTree::make_midpoint(int root, int a, int b) {
   } else if (u + v == 1.0) {
     p = c[1], q = c[2], t = v;
   }
+  const MidpointKey key{p >= 0 ? -1 : root, std::min(a, b), std::max(a, b)};
+  if (auto it = midpoints_.find(key); it != midpoints_.end()) return it->second;
+  Made m;
   Vec3 x;
   if (p >= 0) {
     if (p > q) {
@@ -129,15 +129,22 @@ Vec3 ElementTree::centroid(int n) const {
          3.0;
 }
 
-int ElementTree::midpoint(int a, int b) const {
-  auto it = midpoints_.find({std::min(a, b), std::max(a, b)});
+int ElementTree::midpoint(int root, int a, int b) const {
+  int owner = -1;
+  if (root >= 0) {
+    const auto ba = barycentric(root, a), bb = barycentric(root, b);
+    const bool on_edge = (ba[1] == 0.0 && bb[1] == 0.0) || (ba[0] == 0.0 && bb[0] == 0.0) ||
+                         (ba[0] + ba[1] == 1.0 && bb[0] + bb[1] == 1.0);
+    if (!on_edge) owner = root;
+  }
+  auto it = midpoints_.find({owner, std::min(a, b), std::max(a, b)});
   return it == midpoints_.end() ? -1 : it->second;
 }
 
-std::vector<int> ElementTree::edge_points(int a, int b) const {
+std::vector<int> ElementTree::edge_points(int a, int b, int root) const {
   std::vector<int> out;
   std::function<void(int, int)> walk = [&](int x, int y) {
-    const int m = midpoint(x, y);
+    const int m = midpoint(root, x, y);
     if (m < 0) return;
     walk(x, m);
     out.push_back(m);
@@ -154,8 +161,10 @@ int ElementTree::split_until_conforming() {
     for (int n = 0; n < static_cast<int>(nodes_.size()); ++n) {
       if (!is_leaf(n)) continue;
       const auto v = nodes_[static_cast<size_t>(n)].v;
+      const int root = nodes_[static_cast<size_t>(n)].root;
       bool hanging = false;
-      for (int k = 0; k < 3 && !hanging; ++k) hanging = midpoint(v[static_cast<size_t>(k)], v[static_cast<size_t>((k + 1) % 3)]) >= 0;
+      for (int k = 0; k < 3 && !hanging; ++k)
+        hanging = midpoint(root, v[static_cast<size_t>(k)], v[static_cast<size_t>((k + 1) % 3)]) >= 0;
       if (hanging) {
         split(n);
         ++splits;
@@ -180,7 +189,7 @@ Mesh ElementTree::conforming_mesh(std::vector<int>* leaf_of) const {
     // then has its opposite once, and the fan has no area.
     for (int k = 0; k < 3; ++k) {
       const int a = node.v[static_cast<size_t>(k)], b = node.v[static_cast<size_t>((k + 1) % 3)];
-      const std::vector<int> m = edge_points(a, b);
+      const std::vector<int> m = edge_points(a, b, node.root);
       if (m.empty()) continue;
       int prev = b;
       for (size_t i = m.size(); i-- > 0;) {
@@ -194,7 +203,7 @@ Mesh ElementTree::conforming_mesh(std::vector<int>* leaf_of) const {
   // Feature edges of the initial mesh, cut at the vertices splits put on them.
   for (const auto& e : features_) {
     int prev = e[0];
-    for (int m : edge_points(e[0], e[1])) {
+    for (int m : edge_points(e[0], e[1], -1)) {
       out.feature_edges.push_back({std::min(prev, m), std::max(prev, m)});
       prev = m;
     }

@@ -9,6 +9,7 @@
 
 #include <array>
 #include <map>
+#include <tuple>
 #include <utility>
 #include <vector>
 
@@ -50,11 +51,13 @@ public:
   double area(int n) const;
   Vec3 centroid(int n) const;
 
-  // The midpoint vertex of edge (a, b), or -1 when it was not split.
-  int midpoint(int a, int b) const;
-  // The vertices strictly inside edge (a, b) made by splits (T-vertices),
-  // in order from a to b.
-  std::vector<int> edge_points(int a, int b) const;
+  // The midpoint vertex of edge (a, b) of a node of root `root` (-1: an
+  // edge of the initial mesh), or -1 when it was not split.
+  int midpoint(int root, int a, int b) const;
+  // The vertices strictly inside edge (a, b) of a node of root `root` (-1:
+  // an edge of the initial mesh) made by splits (T-vertices), in order
+  // from a to b.
+  std::vector<int> edge_points(int a, int b, int root) const;
 
   // The conventional closure: splits leaves until no leaf edge has a
   // T-vertex. Returns the number of splits it made.
@@ -81,7 +84,13 @@ private:
   int initial_vertices_ = 0;
   std::vector<Vec3> positions_;
   std::vector<Made> made_;  // per vertex made by a split (index - initial_vertices_)
-  std::map<std::pair<int, int>, int> midpoints_;  // (min id, max id) -> vertex
+  // A midpoint's key: its edge's ends (min id, max id) and, for a point
+  // inside a root, that root (-1 for one on an initial edge, which the
+  // roots sharing that edge share). Two roots on the same three corners
+  // (the two sides of a panel, two blocks' faces in contact) share their
+  // edges' points but not their insides.
+  using MidpointKey = std::tuple<int, int, int>;
+  std::map<MidpointKey, int> midpoints_;
 };
 
 }  // namespace radmesh

@@ -1117,7 +1117,7 @@ private:
       const auto& tri = o.mesh.triangles[static_cast<size_t>(t)];
       for (int k = 0; k < 3; ++k) {
         const int a = tri[static_cast<size_t>(k)], b = tri[static_cast<size_t>((k + 1) % 3)];
-        std::vector<int> chain = o.tree.edge_points(a, b);
+        std::vector<int> chain = o.tree.edge_points(a, b, o.tree.node(o.leaf_of[static_cast<size_t>(t)]).root);
         if (chain.empty()) continue;
         chain.insert(chain.begin(), a);
         chain.push_back(b);

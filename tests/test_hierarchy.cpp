@@ -51,7 +51,7 @@ void check_conforming(const ElementTree& tree, const Mesh& initial, const Mesh& 
     for (int k = 0; k < 3; ++k) ++initial_count[key(t[static_cast<size_t>(k)], t[static_cast<size_t>((k + 1) % 3)])];
   for (const auto& [e, c] : initial_count) {
     int prev = e.first;
-    for (int m : tree.edge_points(e.first, e.second)) {
+    for (int m : tree.edge_points(e.first, e.second, -1)) {
       expected[key(prev, m)] = c;
       prev = m;
     }
@@ -82,7 +82,7 @@ void check_conforming(const ElementTree& tree, const Mesh& initial, const Mesh& 
   for (const auto& [e, patches] : initial_patch_edges)
     for (int p : patches)
       if (std::count(patches.begin(), patches.end(), p) == 1)
-        boundary_pieces[p] += static_cast<int>(tree.edge_points(e.first, e.second).size()) + 1;
+        boundary_pieces[p] += static_cast<int>(tree.edge_points(e.first, e.second, -1).size()) + 1;
   for (const auto& [p, tris] : by_patch) {
     SurfaceMesh sm;
     std::map<int, SurfaceMesh::Vertex_index> vid;
