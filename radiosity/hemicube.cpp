@@ -72,6 +72,9 @@ struct Clip {
   double x, y, z;  // camera coordinates
 };
 
+// Depths (1 / distance) this close, relative, are one surface's.
+constexpr double kDepthTie = 1e-9;
+
 bool before(const Clip& p, const Clip& q) { return std::tie(p.x, p.y, p.z) < std::tie(q.x, q.y, q.z); }
 
 // Sutherland-Hodgman against the half-space a x + b y + c z >= 0. An edge's
@@ -163,7 +166,12 @@ void Hemicube::render_face(int f, const std::vector<HemicubeTriangle>& triangles
           if (e0 < 0.0 || e1 < 0.0 || e2 < 0.0) continue;
           const double depth = (e0 * w[v0] + e1 * w[v1] + e2 * w[v2]) / area;
           const size_t pix = static_cast<size_t>(y) * F.width + x;
-          if (depth > F.depth[pix]) {
+          // Nearer wins; at a tie (within rounding) a front side beats a
+          // back: the two sides of a panel are one quad written twice, and
+          // whichever came first used to hide the lit side.
+          const double held = F.depth[pix];
+          const bool tie = std::abs(depth - held) <= kDepthTie * held;
+          if (tie ? (id != kBack && F.id[pix] == kBack) : depth > held) {
             F.depth[pix] = depth;
             F.id[pix] = id;
           }

@@ -107,6 +107,24 @@ TEST(Hemicube, BackFacesHideButDoNotReceive) {
   EXPECT_GT(cube.form_factor(Hemicube::kBack), 0.5);
 }
 
+TEST(Hemicube, TheLitSideOfATwoSidedPanelIsSeenWhicheverComesFirst) {
+  // A panel one above the source, its two sides one quad written twice
+  // (the back first, then the front, and the other way): the front gets
+  // Howell's C-11 factor both times, the back nothing. The back drawn
+  // first used to win the tie of equal depths and hide the front.
+  for (bool back_first : {true, false}) {
+    std::vector<HemicubeTriangle> target, back;
+    add_quad(target, {0, 0, 1}, {0, 1, 1}, {1, 1, 1}, {1, 0, 1}, {0, 0, -1}, 1);
+    add_quad(back, {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}, {0, 0, 1}, 2);
+    if (back_first)
+      target.insert(target.begin(), back.begin(), back.end());
+    else
+      target.insert(target.end(), back.begin(), back.end());
+    const double f = square_form_factor(target, 256);
+    EXPECT_NEAR(f / 0.1998248, 1.0, 5e-3) << back_first;
+  }
+}
+
 // ---- layout ------------------------------------------------------------------
 
 TEST(PixmapLayout, TexelAreasAddUpToThePatchesAndCoplanarNeighboursShareAGrid) {
