@@ -11,7 +11,7 @@ install(TARGETS radmesh RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
 install(DIRECTORY meshing radiosity io DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/radmesh
         FILES_MATCHING PATTERN "*.h"
         PATTERN "x_display.h" EXCLUDE PATTERN "vtk_file.h" EXCLUDE PATTERN "vtk_render.h" EXCLUDE
-        PATTERN "scene_sources.h" EXCLUDE)  # private to io/ and bench/
+        PATTERN "scene_sources.h" EXCLUDE PATTERN "json_parse.h" EXCLUDE)  # private to io/ (and bench/)
 install(FILES radmesh.h ${PROJECT_BINARY_DIR}/generated/radmesh_version.h
         DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/radmesh)
 

@@ -10,6 +10,7 @@
 // the glTF JSON itself (assimp 5.2 drops KHR_materials_emissive_strength and
 // rounds factors to float).
 
+#include "io/json_parse.h"
 #include "io/scene_sources.h"
 #include "meshing/errors.h"
 
@@ -158,7 +159,7 @@ Json read_gltf_json(const std::string& path, bool binary) {
     text.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
   }
   try {
-    return Json::parse(text);
+    return parse_json_bounded(text, path);
   } catch (const Json::exception& e) {
     std::string m = e.what();
     const size_t close = m.find("] ");

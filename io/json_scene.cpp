@@ -3,6 +3,7 @@
 //   materials.NAME.reflectance [r, g, b], materials.NAME.emission [r, g, b]
 //   objects[i].file, objects[i].material, objects[i].transform.{scale, rotate_deg, translate}
 
+#include "io/json_parse.h"
 #include "io/obj_reader.h"
 #include "io/scene_sources.h"
 #include "meshing/errors.h"
@@ -190,7 +191,7 @@ Scene read_json_scene(const std::string& path, const SceneOptions& options) {
   if (!in) throw IoError(path + ": cannot open for reading");
   Json doc;
   try {
-    doc = Json::parse(in);
+    doc = parse_json_bounded(in, path);
   } catch (const Json::exception& e) {  // a syntax error, or a number beyond double (out_of_range.406)
     std::string m = e.what();
     const size_t close = m.find("] ");

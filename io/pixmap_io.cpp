@@ -4,6 +4,7 @@
 #include "io/pixmap_io.h"
 
 #include "io/atomic_file.h"
+#include "io/json_parse.h"
 #include "io/summary.h"
 #include "io/vtk_file.h"
 #include "meshing/errors.h"
@@ -139,7 +140,7 @@ PixmapState read_pixmap_state(const std::string& dir) {
   if (!in) throw IoError(json_path + ": cannot open (is " + dir + " the -o directory of a pixmap run?)");
   nlohmann::json doc;
   try {
-    doc = nlohmann::json::parse(in);
+    doc = parse_json_bounded(in, json_path);
   } catch (const nlohmann::json::exception& e) {
     throw InputError(json_path + ": not valid JSON: " + e.what());
   }

@@ -2,6 +2,7 @@
 // transforms, paths and materials, every error's message, the bundled bunny,
 // and loading a million triangles.
 
+#include "io/json_parse.h"
 #include "io/scene_reader.h"
 #include "meshing/errors.h"
 #include "bench/mesh_writers.h"
@@ -460,6 +461,20 @@ INSTANTIATE_TEST_SUITE_P(
                       "parse error at line 2, column 3"},
         JsonErrorCase{"not_object", "[1, 2]", "expected an object with \"materials\" and \"objects\", got [1,2]"}),
     [](const auto& info) { return std::string(info.param.name); });
+
+TEST(JsonScene, NestingPastTheBoundIsAnErrorNotACrash) {
+  // 100,000 levels overflowed the stack when the parsed value was printed
+  // or destroyed; the parse now stops at kMaxJsonDepth. At the bound
+  // itself the file parses and is refused for what it holds.
+  const fs::path dir = fresh_dir("deep");
+  auto nested = [](int depth) { return std::string(static_cast<size_t>(depth), '[') + std::string(static_cast<size_t>(depth), ']'); };
+  write_text(dir / "deep.json", nested(100000));
+  std::string msg = message_of<InputError>([&] { read_scene((dir / "deep.json").string()); });
+  EXPECT_TRUE(contains(msg, (dir / "deep.json").string() + ": JSON nested more than 256 levels deep")) << msg;
+  write_text(dir / "bound.json", nested(kMaxJsonDepth));
+  msg = message_of<InputError>([&] { read_scene((dir / "bound.json").string()); });
+  EXPECT_TRUE(contains(msg, "expected an object with \"materials\" and \"objects\"")) << msg;
+}
 
 TEST(JsonScene, MissingFileIsAnIoErrorNamingTheResolvedPath) {
   const fs::path dir = fresh_dir("missing");
