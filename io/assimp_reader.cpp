@@ -353,8 +353,11 @@ void check_ply_header(const std::string& path) {
     throw InputError(path + ": PLY header line " + std::to_string(line) + ": " + what);
   };
   bool binary = false, ended = false;
-  double bytes_needed = 0.0, element_count = 0.0, element_bytes = 0.0;
-  auto close_element = [&] { bytes_needed += element_count * element_bytes; };
+  double bytes_needed = 0.0, element_count = 0.0, element_bytes = 0.0, elements = 0.0;
+  auto close_element = [&] {
+    bytes_needed += element_count * element_bytes;
+    elements += element_count;
+  };
   std::string line;
   size_t read = 0;
   int ln = 0;
@@ -403,6 +406,62 @@ void check_ply_header(const std::string& path) {
     throw InputError(path + ": the PLY header declares elements needing at least " +
                      std::to_string(static_cast<long long>(std::min(bytes_needed, 9e18))) + " bytes, but the file has " +
                      std::to_string(static_cast<long long>(body)) + " after its header (truncated, or a wrong count)");
+  if (binary) return;
+  // An ASCII body has one line per element: fewer lines is a truncated
+  // file (assimp reads what is there and reports something else).
+  double lines = 0.0;
+  while (lines < elements && std::getline(in, line))
+    if (line.find_first_not_of(" \t\r") != std::string::npos) ++lines;
+  if (lines < elements)
+    throw InputError(path + ": the PLY header declares " + std::to_string(static_cast<long long>(elements)) +
+                     " elements, but the file has " + std::to_string(static_cast<long long>(lines)) +
+                     " lines after its header (truncated, or a wrong count)");
+}
+
+// A binary STL must be as long as its facet count says, and an ASCII STL
+// (a file starting with "solid" that is not a binary STL of its size) must
+// close every facet and end with "endsolid": assimp reads a truncated one
+// up to its last whole facet without a word.
+void check_stl(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::error_code ec;
+  const auto size = fs::file_size(path, ec);
+  char header[84] = {};
+  in.read(header, sizeof header);
+  const auto got = static_cast<size_t>(in.gcount());
+  uint32_t count = 0;
+  if (got == sizeof header) std::memcpy(&count, header + 80, 4);
+  if (!ec && got == sizeof header && size == 84 + 50 * static_cast<uintmax_t>(count)) return;  // binary
+  if (std::string(header, std::min<size_t>(got, 5)) != "solid") {
+    if (ec || got < sizeof header)
+      throw InputError(path + ": " + std::to_string(got) + " bytes: too short for a binary STL (84-byte header)");
+    throw InputError(path + ": a binary STL stating " + std::to_string(count) + " facets needs " +
+                     std::to_string(84 + 50 * static_cast<uintmax_t>(count)) + " bytes, the file has " +
+                     std::to_string(size) + " (truncated, or not an STL file)");
+  }
+  in.clear();
+  in.seekg(0);
+  std::string line, last;
+  int ln = 0, open_at = 0;
+  while (std::getline(in, line)) {
+    ++ln;
+    std::istringstream words(line);
+    std::string head;
+    if (!(words >> head)) continue;
+    last = head;
+    if (head == "facet") {
+      if (open_at > 0)
+        throw InputError(path + ": line " + std::to_string(ln) + ": 'facet' before the facet of line " +
+                         std::to_string(open_at) + " has its 'endfacet'");
+      open_at = ln;
+    } else if (head == "endfacet") {
+      open_at = 0;
+    }
+  }
+  if (open_at > 0)
+    throw InputError(path + ": the facet of line " + std::to_string(open_at) +
+                     " has no 'endfacet' (truncated file)");
+  if (last != "endsolid") throw InputError(path + ": no 'endsolid' at the end (truncated file)");
 }
 
 }  // namespace
@@ -412,6 +471,7 @@ SceneSource read_assimp_source(const std::string& path, bool check_materials) {
   const std::string ext = lower_extension(path);
   const bool gltf = ext == ".gltf" || ext == ".glb";
   if (ext == ".ply") check_ply_header(path);
+  if (ext == ".stl") check_stl(path);
 
   SceneSource source;
   GltfMaterials gm;

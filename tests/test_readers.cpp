@@ -517,6 +517,19 @@ TEST_P(FileErrors, MessageNamesTheFileAndTheElement) {
   " \"type\": \"SCALAR\"}]" materials ", \"meshes\": [{\"name\": \"tri\", \"primitives\": [{\"attributes\": "     \
   "{\"POSITION\": 0}, \"indices\": 1" material "}]}], \"nodes\": [{\"mesh\": 0}], \"scenes\": [{\"nodes\": [0]}]}"
 
+TEST(FileErrors, BinaryStlShorterThanItsFacetCountIsRefused) {
+  const fs::path dir = fresh_dir("stl_binary_short");
+  std::string bytes(84 + 50 * 2, '\0');  // a header, 2 facets stated, their 100 bytes...
+  bytes[80] = 2;
+  bytes.resize(bytes.size() - 30);        // ...of which 30 are missing
+  write_text(dir / "mesh.stl", bytes);
+  const std::string msg = message_of<InputError>([&] { read_scene((dir / "mesh.stl").string()); });
+  EXPECT_TRUE(contains(msg, (dir / "mesh.stl").string() +
+                                ": a binary STL stating 2 facets needs 184 bytes, the file has 154 (truncated, or not "
+                                "an STL file)"))
+      << msg;
+}
+
 INSTANTIATE_TEST_SUITE_P(
     AllCases, FileErrors,
     ::testing::Values(
@@ -528,6 +541,19 @@ INSTANTIATE_TEST_SUITE_P(
                       "solid s\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 1 0\nendloop\n"
                       "endfacet\nendsolid s\n",
                       ": STL files carry no materials"},
+        // Truncated text files: assimp read them up to the break without a
+        // word (STL) or reported a coincident face (PLY).
+        FileErrorCase{"stl_ascii_truncated", "mesh.stl",
+                      "solid s\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 1 0\nendloop\n"
+                      "endfacet\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\n",
+                      ": the facet of line 9 has no 'endfacet' (truncated file)"},
+        FileErrorCase{"stl_ascii_no_endsolid", "mesh.stl",
+                      "solid s\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 1 0\nendloop\n"
+                      "endfacet\n",
+                      ": no 'endsolid' at the end (truncated file)"},
+        FileErrorCase{"ply_ascii_truncated", "mesh.ply", PLY_HEAD(3, 2) "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n",
+                      ": the PLY header declares 5 elements, but the file has 4 lines after its header (truncated, "
+                      "or a wrong count)"},
         FileErrorCase{"ply_index", "mesh.ply", PLY_HEAD(3, 1) "0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n",
                       ": Validation failed: aiMesh::mFaces[0]::mIndices[2] is out of range"},
         FileErrorCase{"off_index", "mesh.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 9\n",
