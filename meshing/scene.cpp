@@ -64,6 +64,12 @@ std::string fmt(const Vec3& v) { return format_number(v.x) + " " + format_number
 // far inside double range.
 constexpr double kMaxCoordinate = 1e50;
 
+// Emission beyond this is refused: radiosity (up to 1000 x the emission
+// where reflectance nears 1), power (times areas up to 1e100) and the sums
+// over the scene stay inside double range. Ke 1e308 used to give null
+// energies in the summary and a radiosity of 1e308 where 2e308 was due.
+constexpr double kMaxEmission = 1e50;
+
 bool finite(const Vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
 
 void check_material(const Material& m) {
@@ -76,8 +82,9 @@ void check_material(const Material& m) {
       throw InputError(at(m.reflectance_line) + "reflectance (Kd) " + fmt(m.reflectance) +
                        " is outside [0, 1) (a reflectance of 1 or more makes the system singular)");
     const double e = m.emission[c];
-    if (!std::isfinite(e) || e < 0.0)
-      throw InputError(at(m.emission_line) + "emission (Ke) " + fmt(m.emission) + " must be finite and >= 0");
+    if (!std::isfinite(e) || e < 0.0 || e > kMaxEmission)
+      throw InputError(at(m.emission_line) + "emission (Ke) " + fmt(m.emission) + " must be finite, >= 0 and at most " +
+                       format_number(kMaxEmission));
   }
 }
 

@@ -194,7 +194,7 @@ TEST(Scene, FacesWhoseEdgesCrossAreRefusedAndSimpleOnesAreNot) {
 // welder's cell index (undefined behaviour); and fuzz_obj_reader: an mtllib
 // name longer than the system allows threw std::filesystem_error, an
 // internal error. Both are now InputErrors that say what is wrong.
-TEST(Scene, HugeCoordinatesAndOverlongLibraryNamesAreInputErrors) {
+TEST(Scene, HugeCoordinatesAndEmissionAndOverlongLibraryNamesAreInputErrors) {
   RawFace f;
   f.name = "far";
   f.material = 0;
@@ -205,6 +205,14 @@ TEST(Scene, HugeCoordinatesAndOverlongLibraryNamesAreInputErrors) {
   m.emission = Rgb(1.0);
   const std::string far = message_of<InputError>([&] { build_scene({f}, {m}, "test"); });
   EXPECT_TRUE(contains(far, "is beyond +-1e+50")) << far;
+  // An emission whose radiosity and power would overflow: Ke 1e308 gave
+  // null energies and a radiosity of 1e308 where 2e308 was due.
+  f.points = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+  m.emission = Rgb(1.0, 1e308, 1.0);
+  const std::string bright = message_of<InputError>([&] { build_scene({f}, {m}, "test"); });
+  EXPECT_TRUE(contains(bright, "emission (Ke) 1 1e+308 1 must be finite, >= 0 and at most 1e+50")) << bright;
+  m.emission = Rgb(1e50);
+  EXPECT_NO_THROW(build_scene({f}, {m}, "test"));
 
   const fs::path dir = fs::temp_directory_path() / ("radmesh_long_mtllib_" + std::to_string(::getpid()));
   fs::create_directories(dir);
