@@ -47,6 +47,7 @@ nlohmann::json make_summary(const RunInfo& info, const Scene& scene, const Mesh&
                    {"shadow_segments", info.mesh_report.shadow_segments},
                    {"line_crossings", info.mesh_report.crossings},
                    {"rounding_crossings", info.mesh_report.rounding_crossings},
+                   {"thin_faces_unrefined", info.mesh_report.thin_faces_unrefined},
                    {"feature_edges", mesh.feature_edges.size()}};
   json seconds = json::object();
   double total = 0.0;

@@ -73,6 +73,7 @@ struct MeshReport {
   int shadow_segments = 0;     // D1/D2 segments inserted as constraints
   int crossings = 0;           // exact crossings between lines, where both were split
   int rounding_crossings = 0;  // crossings CGAL still found after rounding (0 expected)
+  int thin_faces_unrefined = 0;  // faces narrower than the separation floor, left as their outline's triangulation
   ShadowReport shadow;         // what the shadow-line pass did and skipped
   std::vector<DiscontinuitySegment> discontinuities;  // the lines inserted, for export
 };

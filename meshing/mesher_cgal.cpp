@@ -242,6 +242,7 @@ public:
       report->shadow_segments = shadow_count_;
       report->crossings = crossings_;
       report->rounding_crossings = 0;
+      report->thin_faces_unrefined = static_cast<int>(thin_.size());
       for (const auto& [p, n] : rounding_crossings_) report->rounding_crossings += n;
       report->shadow = shadow_report_;
       report->discontinuities = discontinuities_;
@@ -671,23 +672,58 @@ private:
     };
     mark_domain(cdt, on_boundary);
 
+    // A sliver, narrower than the separation floor (its width: twice its
+    // area over its perimeter) and over 100 times longer than wide, is left
+    // as the triangulation of its outline and lines: the mesher would cut
+    // its long edges about a width apart (see the budget below), and light
+    // does not vary across it. The element hierarchy still splits it.
+    double perimeter = 0.0;
+    for (size_t s : my_segments)
+      perimeter += glm::length(positions_[static_cast<size_t>(segments_[s].b)] - positions_[static_cast<size_t>(segments_[s].a)]);
+    const double width = 2.0 * scene_.patch_area(p) / perimeter;
+    if (refine && width < opt_.min_separation_fraction * opt_.max_edge && perimeter > 200.0 * width) {
+      refine = false;
+      thin_.insert(p);
+    }
     if (refine) {
       const double s = std::sin(opt_.min_angle * std::numbers::pi / 180.0);
       Mesher mesher(cdt, Criteria(s * s, opt_.max_edge, opt_.min_separation_fraction * opt_.max_edge));
+      // What the edge length asks for: the points there are, the constrained
+      // edges (outline and lines) cut at --max-edge, the inside filled. The
+      // mesher splits a constrained edge while a point lies in its diametral
+      // circle, so the two long edges of a sliver w wide are cut about w
+      // apart: a face 0.8 long and 1e-7 wide went on for minutes towards
+      // 16 M points. A thousand times what is asked for stops it.
+      double constrained = 0.0, area = 0.0;
+      for (auto e = cdt.finite_edges_begin(); e != cdt.finite_edges_end(); ++e)
+        if (cdt.is_constrained(*e)) {
+          const auto [p0, p1] = edge_points(*e);
+          constrained += std::sqrt(CGAL::squared_distance(p0, p1));
+        }
+      for (auto f = cdt.finite_faces_begin(); f != cdt.finite_faces_end(); ++f)
+        if (f->is_in_domain()) area += std::abs(cdt.triangle(f).area());
+      const double h = opt_.max_edge;
+      const double asked = static_cast<double>(cdt.number_of_vertices()) + constrained / h + area / (0.43 * h * h);
+      const double budget = std::min(point_budget_, 1000.0 * asked + 1e5);
       mesher.init(true);
       // Step by step, so that a patch whose lines and points lie far closer
       // together than the edge length (a vertex moved a millimetre off a
-      // plane makes near-coincident shadow lines) stops at the bound with
-      // an error instead of meshing for minutes.
+      // plane makes near-coincident shadow lines, a sliver face its own two
+      // edges) stops at the bound with an error instead of meshing for
+      // minutes.
       double points = 0.0;
       while (mesher.step_by_step_refine_mesh())
-        if (++points > point_budget_) {
+        if (++points > budget) {
           std::ostringstream m;
           m << where(patch.file, patch.line) << "face '" << patch.name << "': refining its mesh to --max-edge "
-            << format_number(opt_.max_edge) << " takes more than " << format_number(opt_.max_elements)
-            << " elements in all (the bound), far more than the edge length asks for: lines or vertices on it lie "
-               "much closer together than the edge length (near-coincident faces or shadow lines); check the "
-               "geometry near it, or try --discontinuity contacts or off";
+            << format_number(h) << " takes more than " << format_number(std::floor(budget)) << " points"
+            << (budget < point_budget_ ? " (1000 x the " + format_number(std::ceil(asked)) +
+                                             " its size and edges ask for, + 100000)"
+                                       : " (what the other faces leave of " + format_number(opt_.max_elements) +
+                                             " elements in all)")
+            << ": lines, edges or vertices on it lie much closer together than the edge length (a sliver face, "
+               "near-coincident faces or shadow lines); check the geometry near it, or try --discontinuity "
+               "contacts or off";
           throw GeometryError(m.str());
         }
       mark_domain(cdt, on_boundary);
@@ -806,6 +842,7 @@ private:
   int contact_count_ = 0, shadow_count_ = 0, crossings_ = 0;
   std::map<int, int> rounding_crossings_;
   double point_budget_ = 0.0;  // points the mesher may add to the patch being meshed
+  std::set<int> thin_;         // patches too thin to refine (mesh_patch)
   struct Steiner {
     int id;
     Point2 q;

@@ -130,6 +130,37 @@ TEST(Mesh, HolesAndConcaveOutlines) {
   EXPECT_NEAR(ell, 3.0, 1e-12);
 }
 
+TEST(Mesh, ASliverIsLeftAsItsOutlineAndMeshesAtOnce) {
+  // A unit floor and a needle 0.8 long and 1e-7 wide standing over it. The
+  // mesher split the needle's two long edges wherever a point of the other
+  // lay in an edge's diametral circle, down to about the width: it ran for
+  // minutes towards 16 M points. The needle is now the triangulation of
+  // its outline (cut at --max-edge where outlines are shared: about 1.6 /
+  // 0.1 points, as many triangles less two), counted, and the floor is
+  // meshed as before.
+  std::vector<RawFace> faces(2);
+  faces[0].name = "floor";
+  faces[0].points = {{0, 0, 0}, {0, 0, 1}, {1, 0, 1}, {1, 0, 0}};
+  faces[1].name = "needle";
+  faces[0].material = faces[1].material = 0;
+  faces[1].points = {{0.1, 0.3, 0.5}, {0.9, 0.3, 0.5}, {0.5, 0.3, 0.5 + 1e-7}};
+  Material white;
+  white.name = "white";
+  white.reflectance = Rgb(0.5);
+  white.emission = Rgb(1.0);
+  const Scene s = build_scene(faces, {white}, "needle");
+  MeshingOptions o;
+  o.max_edge = 0.1;
+  MeshReport report;
+  const Mesh m = mesh_scene(s, o, &report);
+  int needle = 0, floor = 0;
+  for (int t = 0; t < m.triangle_count(); ++t) ++(m.patch[static_cast<size_t>(t)] == 1 ? needle : floor);
+  EXPECT_EQ(report.thin_faces_unrefined, 1);
+  EXPECT_GE(needle, 1);
+  EXPECT_LE(needle, 16);
+  EXPECT_GT(floor, 100);  // 1 / 0.1^2 squares' worth: refined as ever
+}
+
 TEST(Mesh, SameInputSameMesh) {
   const Scene s = read_obj_scene(kData + "/cornell_box/cornell_box.obj");
   const Mesh a = mesh_scene(s, {});
