@@ -246,7 +246,6 @@ FieldEvaluator::~FieldEvaluator() = default;
 
 Vec3 FieldEvaluator::evaluation_point(const Vec3& x, int patch, const Vec3& inward, FieldReport& report) const {
   const Impl& m = *impl_;
-  if (inward == Vec3(0.0)) return x;
   const double diagonal = m.diagonal;
   for (int q = 0; q < static_cast<int>(m.scene.patches.size()); ++q)
     if (q != patch && m.occlusion.distance(q, x) <= 1e-9 * diagonal) {
@@ -255,7 +254,17 @@ Vec3 FieldEvaluator::evaluation_point(const Vec3& x, int patch, const Vec3& inwa
       // near enough that the value is the side's limit: 1e-5 of the scene's
       // size, at most a tenth of the way to the centroid of the triangles.
       const double length = glm::length(inward);
-      return x + std::min(1e-5 * diagonal / length, 0.1) * inward;
+      if (length > 0.0) return x + std::min(1e-5 * diagonal / length, 0.1) * inward;
+      // No area around the vertex in its patch (a T-vertex on a crease that
+      // only zero-area triangles use): off q within the patch's plane, to
+      // the side the patch lies on. Gathered on the crease itself, such
+      // vertices of a non-convex furnace came out 41% low.
+      const Vec3& n = m.scene.patches[static_cast<size_t>(patch)].normal;
+      const Vec3& nq = m.scene.patches[static_cast<size_t>(q)].normal;
+      const Vec3 across = nq - glm::dot(nq, n) * n;
+      if (!(glm::length(across) > 1e-6)) return x;  // q lies in the patch's plane
+      const Vec3 step = 1e-5 * diagonal * glm::normalize(across);
+      return m.occlusion.distance(patch, x + step) <= m.occlusion.distance(patch, x - step) ? x + step : x - step;
     }
   return x;
 }
