@@ -487,6 +487,8 @@ SceneSource read_assimp_source(const std::string& path, bool check_materials) {
     if (e.empty()) e = "assimp cannot read it";
     if (e.find("mIndices") != std::string::npos && e.find("out of range") != std::string::npos)
       e += " (a face's vertex index is out of range: a bad index, or a truncated file)";
+    if (e.find("mIndices is nullptr") != std::string::npos)
+      e += " (a face with no vertices: fewer faces than the header states, a truncated file or a wrong count)";
     throw InputError(path + ": " + e);
   }
   if (!errors.messages().empty()) throw InputError(path + ": " + errors.messages().front());

@@ -242,7 +242,7 @@ SceneSource read_obj_source(const std::string& path) {
     size_t offset = 0;
     for (size_t f = 0; f < shape.mesh.num_face_vertices.size(); ++f, ++face_no) {
       RawFace face;
-      face.name = shape.name;
+      face.name = shape.name.empty() ? fs::path(path).stem().string() : shape.name;  // no o/g: the file's stem
       face.material = shape.mesh.material_ids[f];
       face.file = path;
       face.line = face_no < scan.face_lines.size() ? scan.face_lines[face_no] : 0;

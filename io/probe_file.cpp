@@ -2,6 +2,7 @@
 
 #include "io/atomic_file.h"
 #include "io/scene_sources.h"
+#include "io/summary.h"
 #include "meshing/errors.h"
 
 #include <cmath>
@@ -57,8 +58,8 @@ void write_probe_csv(const std::string& path, const Scene& scene, const std::vec
     for (size_t k = 0; k < probes.size(); ++k) {
       const Probe& p = probes[k];
       const ProbeResult& r = results[k];
-      out << p.label << ',' << p.point.x << ',' << p.point.y << ',' << p.point.z << ',' << p.normal.x << ','
-          << p.normal.y << ',' << p.normal.z << ',' << scene.patches[static_cast<size_t>(r.patch)].name << ','
+      out << csv_field(p.label) << ',' << p.point.x << ',' << p.point.y << ',' << p.point.z << ',' << p.normal.x << ','
+          << p.normal.y << ',' << p.normal.z << ',' << csv_field(scene.patches[static_cast<size_t>(r.patch)].name) << ','
           << r.radiosity.x << ',' << r.radiosity.y << ',' << r.radiosity.z << '\n';
     }
   });

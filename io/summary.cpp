@@ -200,8 +200,6 @@ nlohmann::json make_summary(const RunInfo& info, const Scene& scene, const Mesh&
   return doc;
 }
 
-namespace {
-// A CSV field: quoted (quotes doubled) when it holds a comma, a quote or a line break.
 std::string csv_field(const std::string& text) {
   if (text.find_first_of(",\"\r\n") == std::string::npos) return text;
   std::string out = "\"";
@@ -211,7 +209,6 @@ std::string csv_field(const std::string& text) {
   }
   return out + "\"";
 }
-}  // namespace
 
 bool patches_in_summary(const Scene& scene) { return scene.patches.size() <= kSummaryPatches; }
 

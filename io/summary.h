@@ -56,4 +56,8 @@ void write_quality_csv(const std::string& path, const std::vector<std::string>& 
 // Writes JSON atomically (tmp + rename). Throws IoError.
 void write_json(const std::string& path, const nlohmann::json& doc);
 
+// A CSV field: quoted (quotes doubled) when it holds a comma, a quote or a
+// line break (patch, material and probe names in patches.csv, probes.csv).
+std::string csv_field(const std::string& text);
+
 }  // namespace radmesh

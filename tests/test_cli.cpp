@@ -66,7 +66,7 @@ TEST(Cli, RunWritesVtuSummaryAndProbes) {
   const fs::path probes = out.string() + "_probes.txt";
   {
     std::ofstream p(probes);
-    p << "# label x y z nx ny nz\ncentre 0.5 0.5 1 0 0 -1\n";
+    p << "# label x y z nx ny nz\ncentre,top 0.5 0.5 1 0 0 -1\n";  // a comma: quoted in the CSV
   }
   const Result r = run_cli("run " + kData + "/parallel_plates/parallel_plates.obj -o " + out.string() +
                            " --method matrix --max-edge 0.25 --probe " + probes.string());
@@ -93,6 +93,7 @@ TEST(Cli, RunWritesVtuSummaryAndProbes) {
   std::getline(csv, header);
   std::getline(csv, row);
   EXPECT_EQ(header, "label,x,y,z,nx,ny,nz,patch,r,g,b");
+  EXPECT_EQ(row.substr(0, 13), "\"centre,top\",") << row;
   const double r_value = std::stod(row.substr(row.rfind(',', row.rfind(',', row.rfind(',') - 1) - 1) + 1));
   const double A = 0.5, c = 1.0, a = A / c;
   const double corner = 2 * (a / std::sqrt(1 + a * a) * std::atan(a / std::sqrt(1 + a * a))) / (2 * M_PI);

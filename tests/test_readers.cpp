@@ -554,6 +554,9 @@ INSTANTIATE_TEST_SUITE_P(
         FileErrorCase{"ply_ascii_truncated", "mesh.ply", PLY_HEAD(3, 2) "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n",
                       ": the PLY header declares 5 elements, but the file has 4 lines after its header (truncated, "
                       "or a wrong count)"},
+        FileErrorCase{"off_fewer_faces_than_stated", "mesh.off", "OFF\n3 2 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n",
+                      ": Validation failed: aiMesh::mFaces[1].mIndices is nullptr (a face with no vertices: fewer "
+                      "faces than the header states, a truncated file or a wrong count)"},
         FileErrorCase{"ply_index", "mesh.ply", PLY_HEAD(3, 1) "0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n",
                       ": Validation failed: aiMesh::mFaces[0]::mIndices[2] is out of range"},
         FileErrorCase{"off_index", "mesh.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 9\n",

@@ -131,6 +131,18 @@ TEST(Scene, ZeroAreaFaceIsDroppedAndCounted) {
   EXPECT_TRUE(contains(s.report.warnings[0], "zero_area.obj:9")) << s.report.warnings[0];
 }
 
+TEST(Scene, FacesWithoutAnObjectNameAreNamedAfterTheFile) {
+  // No o or g line: the patch takes the file's stem (it was named '').
+  const fs::path dir = fs::temp_directory_path() / ("radmesh_unnamed_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  std::ofstream(dir / "plain.mtl") << "newmtl m\nKd 0.5 0.5 0.5\nKe 1 1 1\n";
+  std::ofstream(dir / "plain.obj") << "mtllib plain.mtl\nusemtl m\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+  const Scene s = read_obj_scene((dir / "plain.obj").string());
+  ASSERT_EQ(s.patches.size(), 1u);
+  EXPECT_EQ(s.patches[0].name, "plain");
+  fs::remove_all(dir);
+}
+
 TEST(Scene, HolesAreOrientedAgainstTheOuterLoop) {
   RawFace f;
   f.name = "plate";
