@@ -33,6 +33,14 @@ Mesh coarse_mesh(const Scene& s, double edge, DiscontinuityMode mode = Discontin
   return mesh_scene(s, o);
 }
 
+void add_face(std::vector<RawFace>& faces, const std::string& name, int material, std::vector<Vec3> pts) {
+  RawFace f;
+  f.name = name;
+  f.material = material;
+  f.points = std::move(pts);
+  faces.push_back(f);
+}
+
 double relative_imbalance(const SolveStats& st) {
   return (st.power_emitted.x - st.power_absorbed.x - st.power_escaped.x) / st.power_emitted.x;
 }
@@ -265,11 +273,7 @@ TEST(HierarchicalStress, ThinPolygonsAndRefinementAtContactLines) {
   // the minimum area next to the box's contact lines and along the strip.
   std::vector<RawFace> faces;
   auto quad = [&](const std::string& name, int material, std::vector<Vec3> pts) {
-    RawFace f;
-    f.name = name;
-    f.material = material;
-    f.points = std::move(pts);
-    faces.push_back(f);
+    add_face(faces, name, material, std::move(pts));
   };
   quad("floor", 0, {{0, 0, 0}, {0, 0, 4}, {4, 0, 4}, {4, 0, 0}});
   quad("strip", 0, {{0.5, 1.5, 2.0}, {0.5, 1.5, 2.004}, {3.5, 1.5, 2.004}, {3.5, 1.5, 2.0}});  // 3 x 0.003 (aspect 1000), faces up
@@ -312,11 +316,7 @@ TEST(Hierarchical, TwoSidedPanelAndBlocksInContactShareCornersButNotInsides) {
   // solve stopped with "vertex ... is inside another root").
   std::vector<RawFace> faces;
   auto quad = [&](const std::string& name, int material, std::vector<Vec3> pts) {
-    RawFace f;
-    f.name = name;
-    f.material = material;
-    f.points = std::move(pts);
-    faces.push_back(f);
+    add_face(faces, name, material, std::move(pts));
   };
   auto block = [&](const std::string& name, Vec3 lo, Vec3 hi) {  // faces out
     quad(name, 0, {{lo.x, lo.y, lo.z}, {lo.x, hi.y, lo.z}, {hi.x, hi.y, lo.z}, {hi.x, lo.y, lo.z}});
