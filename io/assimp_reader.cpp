@@ -36,6 +36,7 @@
 #include <regex>
 #include <vector>
 #include <sstream>
+#include <string_view>
 #include <map>
 
 namespace radmesh::detail {
@@ -441,14 +442,16 @@ void check_stl(const std::string& path) {
   }
   in.clear();
   in.seekg(0);
-  std::string line, last;
+  std::string line;
   int ln = 0, open_at = 0;
-  while (std::getline(in, line)) {
+  bool ended = false;  // the last non-blank line starts with "endsolid"
+  while (std::getline(in, line)) {  // no stream per line: a million facets are 7 M lines
     ++ln;
-    std::istringstream words(line);
-    std::string head;
-    if (!(words >> head)) continue;
-    last = head;
+    const size_t b = line.find_first_not_of(" \t\r");
+    if (b == std::string::npos) continue;
+    const size_t e = line.find_first_of(" \t\r", b);
+    const std::string_view head = std::string_view(line).substr(b, e == std::string::npos ? std::string::npos : e - b);
+    ended = head == "endsolid";
     if (head == "facet") {
       if (open_at > 0)
         throw InputError(path + ": line " + std::to_string(ln) + ": 'facet' before the facet of line " +
@@ -461,7 +464,7 @@ void check_stl(const std::string& path) {
   if (open_at > 0)
     throw InputError(path + ": the facet of line " + std::to_string(open_at) +
                      " has no 'endfacet' (truncated file)");
-  if (last != "endsolid") throw InputError(path + ": no 'endsolid' at the end (truncated file)");
+  if (!ended) throw InputError(path + ": no 'endsolid' at the end (truncated file)");
 }
 
 }  // namespace
