@@ -354,11 +354,11 @@ void check_ply_header(const std::string& path) {
     throw InputError(path + ": PLY header line " + std::to_string(line) + ": " + what);
   };
   bool binary = false, ended = false;
-  double bytes_needed = 0.0, element_count = 0.0, element_bytes = 0.0, elements = 0.0;
-  auto close_element = [&] {
-    bytes_needed += element_count * element_bytes;
-    elements += element_count;
-  };
+  double bytes_needed = 0.0, element_count = 0.0, element_bytes = 0.0;
+  // Per element: its count and, per property, whether it is a list (the
+  // ASCII body is checked against them below).
+  std::vector<std::pair<double, std::vector<char>>> layout;
+  auto close_element = [&] { bytes_needed += element_count * element_bytes; };
   std::string line;
   size_t read = 0;
   int ln = 0;
@@ -388,12 +388,15 @@ void check_ply_header(const std::string& path) {
       close_element();
       element_count = count;
       element_bytes = 0.0;
+      layout.push_back({count, {}});
     } else if (head == "property") {
       const bool list = w.size() == 5 && w[1] == "list";
       if (!(list || w.size() == 3)) bad(ln, "expected 'property TYPE NAME' or 'property list TYPE TYPE NAME'");
       for (size_t i = list ? 2 : 1; i + 1 < w.size(); ++i)
         if (!kTypeBytes.count(w[i])) bad(ln, "unknown property type '" + shown(w[i]) + "'");
       element_bytes += binary ? kTypeBytes.at(w[list ? 2 : 1]) : 2.0;
+      if (layout.empty()) bad(ln, "'property' before any 'element'");
+      layout.back().second.push_back(list ? 1 : 0);
     } else if (head == "end_header") {
       ended = true;
     } else {
@@ -409,14 +412,45 @@ void check_ply_header(const std::string& path) {
                      std::to_string(static_cast<long long>(body)) + " after its header (truncated, or a wrong count)");
   if (binary) return;
   // An ASCII body has one line per element: fewer lines is a truncated
-  // file (assimp reads what is there and reports something else).
-  double lines = 0.0;
-  while (lines < elements && std::getline(in, line))
-    if (line.find_first_not_of(" \t\r") != std::string::npos) ++lines;
-  if (lines < elements)
-    throw InputError(path + ": the PLY header declares " + std::to_string(static_cast<long long>(elements)) +
-                     " elements, but the file has " + std::to_string(static_cast<long long>(lines)) +
-                     " lines after its header (truncated, or a wrong count)");
+  // file (assimp reads what is there and reports something else), and a
+  // list's count cannot exceed the values left on its line (assimp 5.2
+  // allocated 413 M indices for one face whose count was a long run of
+  // digits, 4.9 GB and 20 s, found by fuzzing).
+  double elements = 0.0, lines = 0.0;
+  for (const auto& e : layout) elements += e.first;
+  std::vector<std::string_view> tokens;
+  for (const auto& [count, props] : layout)
+    for (double k = 0.0; k < count; ++k) {
+      do {
+        if (!std::getline(in, line))
+          throw InputError(path + ": the PLY header declares " + std::to_string(static_cast<long long>(elements)) +
+                           " elements, but the file has " + std::to_string(static_cast<long long>(lines)) +
+                           " lines after its header (truncated, or a wrong count)");
+        ++ln;
+      } while (line.find_first_not_of(" \t\r") == std::string::npos);
+      ++lines;
+      tokens.clear();
+      for (size_t b = line.find_first_not_of(" \t\r"); b != std::string::npos; b = line.find_first_not_of(" \t\r", b)) {
+        const size_t e = line.find_first_of(" \t\r", b);
+        tokens.push_back(std::string_view(line).substr(b, e == std::string::npos ? std::string::npos : e - b));
+        b = e;
+      }
+      size_t at = 0;
+      for (const char list : props) {
+        if (at >= tokens.size()) break;  // too few values: assimp's own message names them
+        if (!list) {
+          ++at;
+          continue;
+        }
+        const std::string n(tokens[at++]);
+        char* end = nullptr;
+        const double values = std::strtod(n.c_str(), &end);
+        if (*end != '\0' || !(values >= 0.0) || values > static_cast<double>(tokens.size() - at))
+          throw InputError(path + ": line " + std::to_string(ln) + ": a list of '" + shown(n) + "' values, but the line has " +
+                           std::to_string(tokens.size() - at) + " more");
+        at += static_cast<size_t>(values);
+      }
+    }
 }
 
 // A binary STL must be as long as its facet count says, and an ASCII STL

@@ -554,6 +554,11 @@ INSTANTIATE_TEST_SUITE_P(
         FileErrorCase{"ply_ascii_truncated", "mesh.ply", PLY_HEAD(3, 2) "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n",
                       ": the PLY header declares 5 elements, but the file has 4 lines after its header (truncated, "
                       "or a wrong count)"},
+        // Found by fuzz_assimp_reader: assimp allocated 413 M indices for
+        // this count (4.9 GB, 20 s) before refusing it.
+        FileErrorCase{"ply_list_count_beyond_its_line", "mesh.ply",
+                      PLY_HEAD(3, 1) "0 0 0\n1 0 0\n0 1 0\n30000000000000000000 0 1 2\n",
+                      ": line 13: a list of '30000000000000000000' values, but the line has 3 more"},
         FileErrorCase{"off_fewer_faces_than_stated", "mesh.off", "OFF\n3 2 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n",
                       ": Validation failed: aiMesh::mFaces[1].mIndices is nullptr (a face with no vertices: fewer "
                       "faces than the header states, a truncated file or a wrong count)"},
