@@ -56,7 +56,7 @@ int ElementTree::make_midpoint(int root, int a, int b) {
   } else if (u + v == 1.0) {
     p = c[1], q = c[2], t = v;
   }
-  const MidpointKey key{p >= 0 ? -1 : root, std::min(a, b), std::max(a, b)};
+  const MidpointKey key = midpoint_key(root, a, b, ba, bb);
   if (auto it = midpoints_.find(key); it != midpoints_.end()) return it->second;
   Made m;
   Vec3 x;
@@ -129,15 +129,19 @@ Vec3 ElementTree::centroid(int n) const {
          3.0;
 }
 
+ElementTree::MidpointKey ElementTree::midpoint_key(int root, int a, int b, const std::array<double, 2>& ba,
+                                                  const std::array<double, 2>& bb) {
+  // Both ends on one edge of the root (v = 0, u = 0 or u + v = 1 at both:
+  // exact, the coordinates are dyadic): the midpoint is on that edge.
+  const bool on_edge = (ba[1] == 0.0 && bb[1] == 0.0) || (ba[0] == 0.0 && bb[0] == 0.0) ||
+                       (ba[0] + ba[1] == 1.0 && bb[0] + bb[1] == 1.0);
+  return {on_edge ? -1 : root, std::min(a, b), std::max(a, b)};
+}
+
 int ElementTree::midpoint(int root, int a, int b) const {
-  int owner = -1;
-  if (root >= 0) {
-    const auto ba = barycentric(root, a), bb = barycentric(root, b);
-    const bool on_edge = (ba[1] == 0.0 && bb[1] == 0.0) || (ba[0] == 0.0 && bb[0] == 0.0) ||
-                         (ba[0] + ba[1] == 1.0 && bb[0] + bb[1] == 1.0);
-    if (!on_edge) owner = root;
-  }
-  auto it = midpoints_.find({owner, std::min(a, b), std::max(a, b)});
+  const MidpointKey key = root >= 0 ? midpoint_key(root, a, b, barycentric(root, a), barycentric(root, b))
+                                    : MidpointKey{-1, std::min(a, b), std::max(a, b)};
+  auto it = midpoints_.find(key);
   return it == midpoints_.end() ? -1 : it->second;
 }
 

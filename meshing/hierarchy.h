@@ -90,6 +90,10 @@ private:
   // (the two sides of a panel, two blocks' faces in contact) share their
   // edges' points but not their insides.
   using MidpointKey = std::tuple<int, int, int>;
+  // The key of the midpoint of (a, b) of root `root`, from their
+  // barycentric coordinates ba, bb in it.
+  static MidpointKey midpoint_key(int root, int a, int b, const std::array<double, 2>& ba,
+                                  const std::array<double, 2>& bb);
   std::map<MidpointKey, int> midpoints_;
 };
 

@@ -1749,8 +1749,8 @@ private:
     double weight = 0.0, open = 0.0;
     int used = 0;
     // A point of a whose plane leaves all of b's bounding sphere behind it
-    // faces no point of b: b's point is not drawn (a quarter of the draws on
-    // a box field), only skipped in the stream.
+    // faces no point of b: b's point is not drawn, only skipped in the
+    // stream.
     const Vec3 centre_b = code_centre(b);
     const double radius_b = code_radius(b);
     for (int k = 0; k < 4 * rays && used < rays && (used > 0 || k < rays); ++k) {
