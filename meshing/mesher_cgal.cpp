@@ -680,7 +680,8 @@ private:
     double perimeter = 0.0;
     for (size_t s : my_segments)
       perimeter += glm::length(positions_[static_cast<size_t>(segments_[s].b)] - positions_[static_cast<size_t>(segments_[s].a)]);
-    const double width = 2.0 * scene_.patch_area(p) / perimeter;
+    const double patch_area = scene_.patch_area(p);
+    const double width = 2.0 * patch_area / perimeter;
     if (refine && width < opt_.min_separation_fraction * opt_.max_edge && perimeter > 200.0 * width) {
       refine = false;
       thin_.insert(p);
@@ -694,16 +695,15 @@ private:
       // circle, so the two long edges of a sliver w wide are cut about w
       // apart: a face 0.8 long and 1e-7 wide went on for minutes towards
       // 16 M points. A thousand times what is asked for stops it.
-      double constrained = 0.0, area = 0.0;
+      double constrained = 0.0;
       for (auto e = cdt.finite_edges_begin(); e != cdt.finite_edges_end(); ++e)
         if (cdt.is_constrained(*e)) {
           const auto [p0, p1] = edge_points(*e);
           constrained += std::sqrt(CGAL::squared_distance(p0, p1));
         }
-      for (auto f = cdt.finite_faces_begin(); f != cdt.finite_faces_end(); ++f)
-        if (f->is_in_domain()) area += std::abs(cdt.triangle(f).area());
       const double h = opt_.max_edge;
-      const double asked = static_cast<double>(cdt.number_of_vertices()) + constrained / h + area / (0.43 * h * h);
+      const double asked =
+          static_cast<double>(cdt.number_of_vertices()) + constrained / h + patch_area / (0.43 * h * h);
       const double budget = std::min(point_budget_, 1000.0 * asked + 1e5);
       mesher.init(true);
       // Step by step, so that a patch whose lines and points lie far closer
