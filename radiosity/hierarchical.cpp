@@ -1769,7 +1769,7 @@ private:
       const double w = cx * cy / (d2 * d2);
       if (!(w > 0.0)) continue;
       ++used;
-      const bool through = visibility_.visible(x, y, px, py);
+      const bool through = visibility_.visible(x, nx, y, ny, px, py);
       weight += w;
       if (through) open += w;
       seen.emplace_back(end_is_a ? rx : ry, w, through);

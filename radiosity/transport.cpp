@@ -60,8 +60,8 @@ const Visibility& VisibilityEstimator::rays() const {
 
 VisibilityEstimator::~VisibilityEstimator() = default;
 
-bool VisibilityEstimator::visible(const Vec3& x, const Vec3& y, int pa, int pb) const {
-  return !impl_->embree || impl_->embree->visible(x, y, pa, pb);
+bool VisibilityEstimator::visible(const Vec3& x, const Vec3& nx, const Vec3& y, const Vec3& ny, int pa, int pb) const {
+  return !impl_->embree || impl_->embree->visible_off_surfaces(x, nx, y, ny, pa, pb);
 }
 
 bool VisibilityEstimator::convex_enclosure() const { return impl_->occlusion.convex_enclosure(); }
@@ -103,7 +103,7 @@ double VisibilityEstimator::visible_fraction(const Triangle& a, int pa, uint64_t
     const double yu = ((t % side) + rng.uniform()) / side;
     ys[static_cast<size_t>(k)] = triangle_point(tj.v[0], tj.v[1], tj.v[2], yu, yv);
   }
-  impl_->embree->visible(xs.data(), ys.data(), xs.size(), pi, pj, seen.data());
+  impl_->embree->visible_off_surfaces(xs.data(), ti.normal, ys.data(), tj.normal, xs.size(), pi, pj, seen.data());
   int open = 0, facing = 0, open_facing = 0;
   for (size_t k = 0; k < xs.size(); ++k) {
     const Vec3& x = xs[k];

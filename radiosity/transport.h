@@ -78,9 +78,11 @@ public:
                           RayCount& count, int side = 0, bool test_shaft = true) const;
   int side() const { return side_; }
 
-  // The open segment (x, y) is clear of every patch but pa and pb (always
-  // in a convex enclosure). Thread-safe.
-  bool visible(const Vec3& x, const Vec3& y, int pa, int pb) const;
+  // The segment between x (on a surface facing nx) and y (on one facing
+  // ny), its ends lifted off their surfaces (Visibility::visible_off_surfaces),
+  // is clear of every patch but pa and pb (always in a convex enclosure).
+  // Thread-safe.
+  bool visible(const Vec3& x, const Vec3& nx, const Vec3& y, const Vec3& ny, int pa, int pb) const;
 
   // Embree's scene, built on the first call even in a convex enclosure
   // (where visible_fraction needs none). Thread-safe.

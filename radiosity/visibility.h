@@ -27,6 +27,21 @@ public:
   // call to Embree, which traces nearby rays together. Thread-safe.
   void visible(const Vec3* from, const Vec3* to, size_t n, int ignore_a, int ignore_b, unsigned char* seen) const;
 
+  // Segments between points on two surfaces: from[i] on one facing
+  // from_normal, to[i] on one facing to_normal (unit normals). Each end is
+  // lifted off its surface along its normal by kLift times the scene's
+  // diagonal, and the whole segment between the lifted ends is tested. A
+  // patch standing on either surface next to an end (a box's wall on the
+  // floor) thus blocks the segment however near the end it stands; the open
+  // segment of visible() starts 1e-6 of its length past the end, and on a
+  // field of open-bottomed boxes a floor point 7e-7 from a wall saw the
+  // ceiling under the box that way.
+  static constexpr double kLift = 1e-6;
+  void visible_off_surfaces(const Vec3* from, const Vec3& from_normal, const Vec3* to, const Vec3& to_normal, size_t n,
+                            int ignore_a, int ignore_b, unsigned char* seen) const;
+  bool visible_off_surfaces(const Vec3& from, const Vec3& from_normal, const Vec3& to, const Vec3& to_normal,
+                            int ignore_a, int ignore_b) const;
+
   // The patch first hit by the ray from `from` along `direction` (any
   // length) between 1e-7 and 1 times `reach` times the direction's length
   // (a patch lying on `from` is not hit), ignoring patch `ignore`; -1 when

@@ -46,6 +46,7 @@ struct Visibility::Impl {
   RTCScene scene = nullptr;
   std::vector<int> prim_patch;
   Vec3 origin{0.0};  // geometry is stored relative to this point (float precision)
+  double lift = 0.0;  // how far visible_off_surfaces lifts a segment's ends off their surfaces
 
   ~Impl() {
     if (scene) rtcReleaseScene(scene);
@@ -66,6 +67,10 @@ Visibility::Visibility(const Scene& scene) : impl_(std::make_unique<Impl>()) {
     hi = glm::max(hi, p);
   }
   m.origin = mesh.positions.empty() ? Vec3(0.0) : 0.5 * (lo + hi);
+  // About 17 float steps at the scene's edge: the lifted end lies off its
+  // surface (and off a patch coinciding with it, as a two-sided panel's
+  // back) in the float coordinates Embree traces in.
+  m.lift = mesh.positions.empty() ? 0.0 : kLift * glm::length(hi - lo);
 
   m.scene = rtcNewScene(m.device);
   rtcSetSceneFlags(m.scene, RTC_SCENE_FLAG_ROBUST | RTC_SCENE_FLAG_CONTEXT_FILTER_FUNCTION);
@@ -139,15 +144,48 @@ bool Visibility::visible(const Vec3& from, const Vec3& to, int ignore_a, int ign
   return ray.tfar >= 0.0f;  // Embree sets tfar to -inf when occluded
 }
 
-void Visibility::visible(const Vec3* from, const Vec3* to, size_t n, int ignore_a, int ignore_b, unsigned char* seen) const {
-  const Impl& m = *impl_;
-  QueryContext ctx = make_context(m.prim_patch, ignore_a, ignore_b);
+namespace {
+
+// n rays traced together into seen[i] (1: nothing hit), each made by ray(i).
+template <class MakeRay>
+void trace_coherent(const RTCScene scene, QueryContext& ctx, size_t n, MakeRay&& ray, unsigned char* seen) {
   ctx.base.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
   thread_local std::vector<RTCRay> rays;
   rays.resize(n);
-  for (size_t i = 0; i < n; ++i) rays[i] = make_ray(from[i], m.origin, to[i] - from[i], 1e-6f, 1.0f - 1e-6f);
-  rtcOccluded1M(m.scene, &ctx.base, rays.data(), static_cast<unsigned>(n), sizeof(RTCRay));
+  for (size_t i = 0; i < n; ++i) rays[i] = ray(i);
+  rtcOccluded1M(scene, &ctx.base, rays.data(), static_cast<unsigned>(n), sizeof(RTCRay));
   for (size_t i = 0; i < n; ++i) seen[i] = rays[i].tfar >= 0.0f ? 1 : 0;
+}
+
+}  // namespace
+
+void Visibility::visible(const Vec3* from, const Vec3* to, size_t n, int ignore_a, int ignore_b, unsigned char* seen) const {
+  const Impl& m = *impl_;
+  QueryContext ctx = make_context(m.prim_patch, ignore_a, ignore_b);
+  trace_coherent(
+      m.scene, ctx, n, [&](size_t i) { return make_ray(from[i], m.origin, to[i] - from[i], 1e-6f, 1.0f - 1e-6f); },
+      seen);
+}
+
+bool Visibility::visible_off_surfaces(const Vec3& from, const Vec3& from_normal, const Vec3& to, const Vec3& to_normal,
+                                      int ignore_a, int ignore_b) const {
+  unsigned char seen = 0;
+  visible_off_surfaces(&from, from_normal, &to, to_normal, 1, ignore_a, ignore_b, &seen);
+  return seen != 0;
+}
+
+void Visibility::visible_off_surfaces(const Vec3* from, const Vec3& from_normal, const Vec3* to, const Vec3& to_normal,
+                                      size_t n, int ignore_a, int ignore_b, unsigned char* seen) const {
+  const Impl& m = *impl_;
+  QueryContext ctx = make_context(m.prim_patch, ignore_a, ignore_b);
+  const Vec3 up_from = m.lift * from_normal, up_to = m.lift * to_normal;
+  trace_coherent(
+      m.scene, ctx, n,
+      [&](size_t i) {
+        const Vec3 a = from[i] + up_from;
+        return make_ray(a, m.origin, to[i] + up_to - a, 0.0f, 1.0f);
+      },
+      seen);
 }
 
 int Visibility::first_hit(const Vec3& from, const Vec3& direction, double reach, int ignore) const {

@@ -409,8 +409,9 @@ TEST(Clusters, FloorShutInUnderABoxStaysDark) {
     EXPECT_NEAR(shut_area, k * k * size * size, 1e-9) << to_string(mode);
     EXPECT_GT(floor_top, 0.1) << to_string(mode);
     // Without the sharing: volume 4.5e-4 of the floor's brightest, shape
-    // 0.08; with it 8e-5 and 0.
-    EXPECT_LE(brightest, 2e-4 * floor_top) << to_string(mode);
+    // 0.08; with it 8e-5 and 0, and 0 and 0 once rays from right beside a
+    // box's wall no longer slipped past its foot (visible_off_surfaces).
+    EXPECT_LE(brightest, 1e-6 * floor_top) << to_string(mode);
   }
 }
 

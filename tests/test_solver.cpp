@@ -329,3 +329,38 @@ TEST(Visibility, RaysThatCannotCarryLightDoNotCount) {
     EXPECT_GT(v, 0.95) << i;
   }
 }
+
+TEST(Visibility, AWallStandingOnTheReceiverBlocksRaysFromRightBesideIt) {
+  // Receiver A: the floor x in [0, 1], z in [-1, 0] at y = 0, facing up. A
+  // wall stands on it along z = 0, 1 high; source B hangs beyond the wall,
+  // x in [0, 1], z in [0.5, 1.5] at y = 0.5, facing down. Every segment
+  // from A to B crosses the wall below y = 0.5. The receiving element is a
+  // sliver of A along the wall's foot, 1e-4 wide: with its rays starting
+  // 1e-6 of their length past their ends, 1.7% of them (those from
+  // within 1.3e-6 of the wall) got through.
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() / "radmesh_test_visibility_wall_foot";
+  fs::create_directories(dir);
+  {
+    std::ofstream(dir / "scene.mtl") << "newmtl grey\nKd 0.5 0.5 0.5\n";
+    std::ofstream obj(dir / "scene.obj");
+    obj << "mtllib scene.mtl\nusemtl grey\n"
+        << "v 0 0 -1\nv 0 0 0\nv 1 0 0\nv 1 0 -1\n"              // A
+        << "v 0 0.5 0.5\nv 1 0.5 0.5\nv 1 0.5 1.5\nv 0 0.5 1.5\n"  // B
+        << "v -1 0 0\nv -1 1 0\nv 2 1 0\nv 2 0 0\n"              // the wall
+        << "o a\nf 1 2 3 4\no b\nf 5 6 7 8\no wall\nf 9 10 11 12\n";
+  }
+  const Scene s = read_obj_scene((dir / "scene.obj").string());
+  fs::remove_all(dir);
+  const int a = test::patch_named(s, "a"), b = test::patch_named(s, "b");
+  ASSERT_GE(a, 0);
+  ASSERT_GE(b, 0);
+  ASSERT_GT(s.patches[static_cast<size_t>(a)].normal.y, 0.99);
+  ASSERT_LT(s.patches[static_cast<size_t>(b)].normal.y, -0.99);
+  const VisibilityEstimator visibility(s, 16);
+  const Triangle sliver = make_triangle(Vec3(0, 0, 0), Vec3(0.5, 0, -1e-4), Vec3(1, 0, 0), Vec3(0, 1, 0));
+  const Triangle tb = make_triangle(Vec3(0, 0.5, 0.5), Vec3(1, 0.5, 0.5), Vec3(1, 0.5, 1.5), Vec3(0, -1, 0));
+  RayCount count;
+  EXPECT_EQ(visibility.visible_fraction(sliver, a, 0, tb, b, 1, count, 64), 0.0);
+  EXPECT_EQ(count.cast, 64 * 64);
+}
