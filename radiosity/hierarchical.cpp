@@ -1359,7 +1359,7 @@ private:
   // approximate part alone, a closed furnace with a floating block, where
   // no cluster link is made, kept leaf rows of 0.986-1.038 and cell values
   // of 4.95-5.16 against the exact 5, now 4.987-5.005). Per leaf with an
-  // uncertain part, kEnclosureRays cosine-distributed rays from its
+  // uncertain part, Visibility::enclosed's cosine-distributed rays from its
   // centroid: when every one meets the front of a patch, the leaf is
   // enclosed (nothing it sees is open sky or the back of a one-sided patch)
   // and the uncertain part is scaled so that the row sums to 1; otherwise
@@ -1371,42 +1371,11 @@ private:
   // uncertain part's to fill (with a cap of 4, a ceiling lit only
   // indirectly came out 2.7% high against a finer solve; with 1.2, every
   // object of that room within 0.6%).
-  static constexpr int kEnclosureRays = 64;
   static constexpr double kMaxRowScale = 1.2;
   bool enclosed(size_t leaf) const {
     const Triangle& t = tri_[leaf];
-    const Vec3 c = t.centroid();
-    const Hemisphere h(t.normal);
-    const int patch = node_patch(static_cast<int>(leaf));
-    SplitMix rng(pair_seed(static_cast<uint64_t>(leaf), 0xE17C105EULL));
-    constexpr int side = 8;
-    static_assert(side * side == kEnclosureRays);
-    for (int k = 0; k < kEnclosureRays; ++k)
-      if (ray_end(c, h.direction(k, side, rng), patch) != RayEnd::front) return false;
-    return true;
-  }
-  // Cosine-distributed directions about a unit normal: stratum k of a
-  // side x side grid (two draws of rng).
-  struct Hemisphere {
-    Vec3 n, u, v;
-    explicit Hemisphere(const Vec3& normal) : n(normal) {
-      const Vec3 a = std::abs(n.x) < 0.9 ? Vec3(1, 0, 0) : Vec3(0, 1, 0);
-      u = glm::normalize(glm::cross(n, a));
-      v = glm::cross(n, u);
-    }
-    Vec3 direction(int k, int side, SplitMix& rng) const {
-      const double r1 = ((k / side) + rng.uniform()) / side, r2 = ((k % side) + rng.uniform()) / side;
-      const double r = std::sqrt(r1), phi = 2.0 * std::numbers::pi * r2;
-      return r * std::cos(phi) * u + r * std::sin(phi) * v + std::sqrt(std::max(0.0, 1.0 - r1)) * n;
-    }
-  };
-  // Where a ray from x (on `patch`) along d ends: nowhere (it leaves the
-  // scene), on the front of a patch, or on the back of one (or edge on).
-  enum class RayEnd { nowhere, front, back };
-  RayEnd ray_end(const Vec3& x, const Vec3& d, int patch) const {
-    const int hit = visibility_.rays().first_hit(x, d, 4.0 * diagonal_, patch);
-    if (hit < 0) return RayEnd::nowhere;
-    return glm::dot(scene_.patches[static_cast<size_t>(hit)].normal, d) < 0.0 ? RayEnd::front : RayEnd::back;
+    return visibility_.rays().enclosed(t.centroid(), t.normal, node_patch(static_cast<int>(leaf)),
+                                       pair_seed(static_cast<uint64_t>(leaf), 0xE17C105EULL));
   }
   void scale_rows() {
     const size_t n = B_.size();
@@ -1583,7 +1552,7 @@ private:
       return 1.0;
     }
     const Triangle& t = tri_[static_cast<size_t>(m)];
-    const Hemisphere h(t.normal);
+    const CosineHemisphere h(t.normal);
     SplitMix rng(pair_seed(static_cast<uint64_t>(m), 0x0BE11E55ULL));
     constexpr int side = 4;
     static_assert(side * side == kOpennessRays);
@@ -1595,7 +1564,7 @@ private:
       const Vec3 x = triangle_point(t.v[0], t.v[1], t.v[2], pa, pb);
       const size_t b = static_cast<size_t>(direction_bin(d));
       if (bins) ++rays[b];
-      if (ray_end(x, d, node_patch(m)) == RayEnd::back) continue;
+      if (visibility_.rays().ray_end(x, d, node_patch(m)) == Visibility::RayEnd::back) continue;
       ++open;
       if (!bins || (reach > 0.0 && visibility_.rays().first_hit(x, d, reach, node_patch(m)) >= 0)) continue;
       ++through[b];

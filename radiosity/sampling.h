@@ -4,8 +4,10 @@
 
 #include "meshing/geometry.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <numbers>
 
 namespace radmesh {
 
@@ -28,6 +30,22 @@ private:
 };
 
 inline uint64_t pair_seed(uint64_t a, uint64_t b) { return (a * 0x100000001B3ULL) ^ (b + 0x9E3779B97F4A7C15ULL); }
+
+// Cosine-distributed directions about a unit normal: stratum k of a
+// side x side grid (two draws of rng).
+struct CosineHemisphere {
+  Vec3 n, u, v;
+  explicit CosineHemisphere(const Vec3& normal) : n(normal) {
+    const Vec3 a = std::abs(n.x) < 0.9 ? Vec3(1, 0, 0) : Vec3(0, 1, 0);
+    u = glm::normalize(glm::cross(n, a));
+    v = glm::cross(n, u);
+  }
+  Vec3 direction(int k, int side, SplitMix& rng) const {
+    const double r1 = ((k / side) + rng.uniform()) / side, r2 = ((k % side) + rng.uniform()) / side;
+    const double r = std::sqrt(r1), phi = 2.0 * std::numbers::pi * r2;
+    return r * std::cos(phi) * u + r * std::sin(phi) * v + std::sqrt(std::max(0.0, 1.0 - r1)) * n;
+  }
+};
 
 // Maps the unit square onto triangle (a, b, c), area-uniformly.
 inline Vec3 triangle_point(const Vec3& a, const Vec3& b, const Vec3& c, double u, double v) {

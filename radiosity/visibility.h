@@ -48,6 +48,17 @@ public:
   // it hits nothing. Thread-safe.
   int first_hit(const Vec3& from, const Vec3& direction, double reach, int ignore) const;
 
+  // Where a ray from x (on patch `ignore`) along d ends: nowhere (it leaves
+  // the scene), on the front of a patch, or on the back of one (or edge on).
+  enum class RayEnd { nowhere, front, back };
+  RayEnd ray_end(const Vec3& x, const Vec3& d, int ignore) const;
+  // Whether x (on patch `ignore`, facing `normal`) is enclosed: each of
+  // kEnclosureRays cosine-distributed rays from it (stratified, drawn from
+  // `seed`) meets the front of a patch, none open sky or the back of a
+  // one-sided patch. There its row of form factors sums to 1.
+  static constexpr int kEnclosureRays = 64;
+  bool enclosed(const Vec3& x, const Vec3& normal, int ignore, uint64_t seed) const;
+
 private:
   struct Impl;
   std::unique_ptr<Impl> impl_;

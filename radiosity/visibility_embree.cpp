@@ -4,6 +4,7 @@
 
 #include "meshing/errors.h"
 #include "meshing/mesh.h"
+#include "radiosity/sampling.h"
 
 #include <embree3/rtcore.h>
 
@@ -47,6 +48,8 @@ struct Visibility::Impl {
   std::vector<int> prim_patch;
   Vec3 origin{0.0};  // geometry is stored relative to this point (float precision)
   double lift = 0.0;  // how far visible_off_surfaces lifts a segment's ends off their surfaces
+  double reach = 0.0;         // of ray_end's rays: 4 x the scene's diagonal
+  std::vector<Vec3> normals;  // per patch
 
   ~Impl() {
     if (scene) rtcReleaseScene(scene);
@@ -71,6 +74,8 @@ Visibility::Visibility(const Scene& scene) : impl_(std::make_unique<Impl>()) {
   // surface (and off a patch coinciding with it, as a two-sided panel's
   // back) in the float coordinates Embree traces in.
   m.lift = mesh.positions.empty() ? 0.0 : kLift * glm::length(hi - lo);
+  m.reach = 4.0 * scene.diagonal();
+  for (const Patch& p : scene.patches) m.normals.push_back(p.normal);
 
   m.scene = rtcNewScene(m.device);
   rtcSetSceneFlags(m.scene, RTC_SCENE_FLAG_ROBUST | RTC_SCENE_FLAG_CONTEXT_FILTER_FUNCTION);
@@ -199,6 +204,22 @@ int Visibility::first_hit(const Vec3& from, const Vec3& direction, double reach,
   rtcIntersect1(m.scene, &ctx.base, &rh);
   if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return -1;
   return m.prim_patch[rh.hit.primID];
+}
+
+Visibility::RayEnd Visibility::ray_end(const Vec3& x, const Vec3& d, int ignore) const {
+  const int hit = first_hit(x, d, impl_->reach, ignore);
+  if (hit < 0) return RayEnd::nowhere;
+  return glm::dot(impl_->normals[static_cast<size_t>(hit)], d) < 0.0 ? RayEnd::front : RayEnd::back;
+}
+
+bool Visibility::enclosed(const Vec3& x, const Vec3& normal, int ignore, uint64_t seed) const {
+  const CosineHemisphere h(normal);
+  SplitMix rng(seed);
+  constexpr int side = 8;
+  static_assert(side * side == kEnclosureRays);
+  for (int k = 0; k < kEnclosureRays; ++k)
+    if (ray_end(x, h.direction(k, side, rng), ignore) != RayEnd::front) return false;
+  return true;
 }
 
 }  // namespace radmesh
