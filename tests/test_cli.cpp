@@ -354,7 +354,8 @@ INSTANTIATE_TEST_SUITE_P(
                       BadRun{"run DATA/cornell_box/cornell_box.obj --max-memory 0.000001", "GiB allowed"},
                       BadRun{"mesh DATA/cornell_box/cornell_box.obj --max-shadow-lines -1", "--max-shadow-lines"},
                       BadRun{"run DATA/cornell_box/cornell_box.obj --max-edge 0.0001", "would make at least"},
-                      BadRun{"mesh DATA/cornell_box/cornell_box.obj --max-edge 0.01", "use --max-edge"}),
+                      BadRun{"mesh DATA/cornell_box/cornell_box.obj --max-edge 0.01", "use --max-edge"},
+                      BadRun{"run DATA/cornell_box/cornell_box.obj --max-edge 1e-300", "at least 10^606 elements"}),
     [](const auto& info) {
       std::string name = std::to_string(info.index) + "_";
       for (char ch : std::string(info.param.must_contain))
