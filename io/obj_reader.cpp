@@ -204,20 +204,37 @@ SceneSource read_obj_source(const std::string& path) {
   check_input_file(path, "an OBJ file");
   const ObjScan scan = scan_obj(path);
 
-  tinyobj::ObjReaderConfig config;
-  config.triangulate = false;
-  config.vertex_color = false;
-  tinyobj::ObjReader reader;
-  if (!reader.ParseFromFile(path, config))
-    throw InputError(path + ": " + (reader.Error().empty() ? "cannot parse" : reader.Error()));
+  // Material libraries are found as the scan found them (next to the OBJ,
+  // or at an absolute path): tinyobjloader's own reader prefixes the OBJ's
+  // directory to an absolute path too, and a scene read from another
+  // directory lost its materials ("face has no material").
+  struct LibraryReader : tinyobj::MaterialReader {
+    fs::path dir;
+    bool operator()(const std::string& name, std::vector<tinyobj::material_t>* materials,
+                    std::map<std::string, int>* names, std::string* warn, std::string* err) override {
+      std::ifstream in(dir / name);
+      if (!in) {
+        if (err) *err += "cannot open material library " + (dir / name).string() + "\n";
+        return false;
+      }
+      tinyobj::LoadMtl(names, materials, &in, warn, err);
+      return true;
+    }
+  } library;
+  library.dir = fs::path(path).parent_path();
+  tinyobj::attrib_t attrib;
+  std::vector<tinyobj::shape_t> shapes;
+  std::vector<tinyobj::material_t> tiny_materials;
+  std::string warn, err;
+  std::ifstream obj(path);
+  if (!tinyobj::LoadObj(&attrib, &shapes, &tiny_materials, &warn, &err, &obj, &library, false, false))
+    throw InputError(path + ": " + (err.empty() ? "cannot parse" : err));
 
-  const auto& attrib = reader.GetAttrib();
-  const auto& shapes = reader.GetShapes();
   // Materials in tinyobjloader's order (its faces index them), with the
   // values our own scan read and checked.
   SceneSource source;
   std::vector<Material> materials;
-  for (const auto& m : reader.GetMaterials()) {
+  for (const auto& m : tiny_materials) {
     Material mat;
     mat.name = m.name;
     const auto it = scan.materials.find(m.name);

@@ -92,6 +92,9 @@ using Mesher = CGAL::Delaunay_mesher_2<CDT, Criteria>;
 using Point2 = K::Point_2;
 
 constexpr int kMaxRounds = 5;
+// A face this many times its size from the origin has lost 6 of double's
+// 16 digits to its position (the hint of a failed triangulation).
+constexpr double kFarForItsSize = 1e6;
 
 // One directed boundary segment of a patch loop, between global vertex ids.
 struct Segment {
@@ -787,6 +790,15 @@ private:
       std::ostringstream m;
       m << where(patch.file, patch.line) << "face '" << patch.name
         << "': triangulation produced no triangles (self-intersecting outline?)";
+      // Far from the origin for its size, double precision is the likelier
+      // cause (the Cornell box moved 1e12 away fails here).
+      Box3 box;
+      for (const Vec3& q : scene_.loop_points(patch.outer)) box.add(q);
+      const double size = glm::length(box.hi - box.lo), far = glm::length(0.5 * (box.lo + box.hi));
+      if (far > kFarForItsSize * size)
+        m << "; it lies " << format_number(far) << " from the origin, " << format_number(far / size)
+          << " times its size, where double precision resolves its geometry to only " << format_number(far * 1e-16 / size)
+          << " of its size: move the scene nearer the origin";
       throw GeometryError(m.str());
     }
     return tris;

@@ -1,6 +1,7 @@
 // The initial CGAL mesh: exact areas, conformity between patches, quality.
 
 #include "io/obj_reader.h"
+#include "meshing/errors.h"
 #include "meshing/mesh.h"
 
 #include "tests/test_util.h"
@@ -8,7 +9,10 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <filesystem>
+#include <fstream>
 #include <map>
+#include <sstream>
 
 using namespace radmesh;
 
@@ -177,4 +181,38 @@ TEST(Quality, EquilateralTriangle) {
   const TriangleQuality q = compute_quality(m);
   EXPECT_NEAR(q.min_angle[0], 60.0, 1e-12);
   EXPECT_NEAR(q.aspect_ratio[0], 1.0, 1e-12);
+}
+
+TEST(Mesh, AFaceFarFromTheOriginForItsSizeIsToldToMoveNearer) {
+  // The Cornell box moved 1e12 mm along x: its faces, 1e9 times their
+  // size from the origin, keep too few digits to triangulate, and the
+  // error says so rather than only suspecting the face's outline.
+  std::string text;
+  {
+    std::ifstream in(kData + "/cornell_box/cornell_box.obj");
+    std::string line;
+    while (std::getline(in, line)) {
+      if (line.rfind("v ", 0) == 0) {
+        std::istringstream v(line.substr(2));
+        double x = 0, y = 0, z = 0;
+        v >> x >> y >> z;
+        std::ostringstream out;
+        out.precision(17);
+        out << "v " << x + 1e12 << ' ' << y << ' ' << z;
+        line = out.str();
+      }
+      text += line + "\n";
+    }
+  }
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() / "radmesh_test_far_box";
+  std::filesystem::create_directories(dir);
+  std::filesystem::copy_file(kData + "/cornell_box/cornell_box.mtl", dir / "cornell_box.mtl",
+                             std::filesystem::copy_options::overwrite_existing);
+  std::ofstream(dir / "far.obj") << text;
+  const Scene s = read_obj_scene((dir / "far.obj").string());
+  std::filesystem::remove_all(dir);
+  const std::string m = test::message_of<GeometryError>([&] { mesh_scene(s, {}); });
+  EXPECT_NE(m.find("far.obj:"), std::string::npos) << m;
+  EXPECT_NE(m.find("times its size"), std::string::npos) << m;
+  EXPECT_NE(m.find("move the scene nearer the origin"), std::string::npos) << m;
 }

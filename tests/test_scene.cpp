@@ -143,6 +143,24 @@ TEST(Scene, FacesWithoutAnObjectNameAreNamedAfterTheFile) {
   fs::remove_all(dir);
 }
 
+TEST(Scene, AMaterialLibraryAtAnAbsolutePathIsReadFromAnyDirectory) {
+  // The OBJ names its library by an absolute path and is read by a path
+  // with a directory part: its materials were lost ("face has no material")
+  // when the OBJ's directory was put before the absolute path.
+  const fs::path dir = fs::temp_directory_path() / ("radmesh_absolute_mtl_" + std::to_string(::getpid()));
+  fs::create_directories(dir / "lib");
+  const fs::path library = fs::absolute(dir / "lib" / "m.mtl");
+  std::ofstream(library) << "newmtl m\nKd 0.25 0.5 0.75\nKe 1 1 1\n";
+  std::ofstream(dir / "s.obj") << "mtllib " << library.string() << "\nusemtl m\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+  const Scene s = read_obj_scene((dir / "s.obj").string());
+  ASSERT_EQ(s.patches.size(), 1u);
+  const Material& m = s.material_of(s.patches[0]);
+  EXPECT_EQ(m.name, "m");
+  EXPECT_EQ(m.reflectance, Rgb(0.25, 0.5, 0.75));
+  EXPECT_EQ(m.emission, Rgb(1.0));
+  fs::remove_all(dir);
+}
+
 TEST(Scene, HolesAreOrientedAgainstTheOuterLoop) {
   RawFace f;
   f.name = "plate";
