@@ -688,8 +688,6 @@ private:
     F_sum_.resize(n, 0.0);
     F_approx_.resize(n, 0.0);
     fix_exact_.resize(n, 1.0);
-    partial_from_.resize(n, 0);
-    row_scale_.resize(n, 1.0);
     node_open_.resize(n, -1.0f);
     node_terms_.resize(n);
     node_F_.resize(n, 0.0);
@@ -759,10 +757,8 @@ private:
     // of the transport. What such a link's leaves receive is summed, negated,
     // in its own empty place in inv_sent_ (no array per link for it).
     for (size_t x = 0; x < n; ++x)
-      for (size_t k = 0; k < terms_[x].size(); ++k) {
-        const size_t q = static_cast<size_t>(terms_[x][k].q);
-        if (inv_sent_[q] <= 0.0) inv_sent_[q] -= tri_[x].area * term_f(x, k);
-      }
+      for (const Term& t : terms_[x])
+        if (inv_sent_[static_cast<size_t>(t.q)] <= 0.0) inv_sent_[static_cast<size_t>(t.q)] -= tri_[x].area * term_f(x, t);
     for (size_t p = 0; p < n; ++p)
       for (const Link& l : links_[p]) {
         if (l.source < 0) continue;  // a cluster sends it
@@ -805,7 +801,6 @@ private:
     F_sum_[x] = 0.0;
     F_approx_[x] = 0.0;
     fix_exact_[x] = 1.0;
-    partial_from_[x] = 0;
     for (int a = static_cast<int>(x); a >= 0; a = tree.node(a).parent) F_approx_[x] += node_F_[static_cast<size_t>(a)];
     thread_local std::vector<const Link*> path;  // per thread: this runs once per leaf
     path.clear();
@@ -836,9 +831,7 @@ private:
     // lists kept per thread: this runs once per leaf).
     thread_local std::vector<const Triangle*> sources;
     thread_local std::vector<double> unoccluded;
-    thread_local std::vector<Term> partial;  // terms of partly visible links, kept after the others
     sources.clear();
-    partial.clear();
     for (const Link* l : path)
       if (l->visible > 0.0 && l->source >= 0) sources.push_back(&tri_[static_cast<size_t>(l->source)]);
     unoccluded.resize(sources.size());
@@ -864,11 +857,9 @@ private:
                            : l->visible;
       const double f = f0 * v;
       if (f <= 0.0) continue;
-      (l->visible < 1.0 ? partial : terms_[x]).push_back({l->slot, static_cast<float>(f)});
+      terms_[x].push_back({l->slot, static_cast<float>(f)});
       F_sum_[x] += f;
     }
-    partial_from_[x] = static_cast<int>(terms_[x].size());
-    terms_[x].insert(terms_[x].end(), partial.begin(), partial.end());
     double exact = 0.0;
     // Exactly the room they take: built by push_back, the lists held up to
     // twice that (0.8 GB more on the 64 x 64 box field's 214 M terms).
@@ -912,8 +903,7 @@ private:
   std::vector<double> received_sums() const {
     std::vector<double> received(static_cast<size_t>(next_id_), 0.0);
     for (size_t x = 0; x < terms_.size(); ++x)
-      for (size_t k = 0; k < terms_[x].size(); ++k)
-        received[static_cast<size_t>(terms_[x][k].q)] += tri_[x].area * term_f(x, k);
+      for (const Term& t : terms_[x]) received[static_cast<size_t>(t.q)] += tri_[x].area * term_f(x, t);
     return received;
   }
 
@@ -1315,27 +1305,15 @@ private:
       for (int k = 0; k < bins_; ++k) h += seen_open(r, k) * HGacc_[bin_index(g, k)];
     return h;
   }
-  // What a leaf gathers: its exact terms (element links) of fully
-  // visible links, then its uncertain part scaled by row_scale_: the terms
-  // of partly visible links and the approximate part (what the nodes on
-  // its path gathered from big clusters' groups, node_H_, and what its
-  // root's groups push down).
+  // What a leaf gathers: its exact terms (element links), then its
+  // approximate part (what the nodes on its path gathered from big
+  // clusters' groups, node_H_, and what its root's groups push down)
+  // scaled by row_scale_.
   Rgb gathered(size_t leaf) const {
-    Rgb exact(0.0), partial(0.0), approx(0.0);
-    const std::vector<Term>& terms = terms_[leaf];
-    const size_t from = static_cast<size_t>(partial_from_[leaf]);
-    for (size_t k = 0; k < from; ++k) exact += static_cast<double>(terms[k].f) * link_value_[static_cast<size_t>(terms[k].q)];
-    for (size_t k = from; k < terms.size(); ++k)
-      partial += static_cast<double>(terms[k].f) * link_value_[static_cast<size_t>(terms[k].q)];
+    Rgb exact(0.0), approx(0.0);
+    for (const Term& t : terms_[leaf]) exact += static_cast<double>(t.f) * link_value_[static_cast<size_t>(t.q)];
     for (int a = static_cast<int>(leaf); a >= 0; a = out_.tree.node(a).parent) approx += node_H_[static_cast<size_t>(a)];
-    return fix_exact_[leaf] * exact +
-           row_scale_[leaf] * (fix_exact_[leaf] * partial + approx + pushed(static_cast<int>(leaf)));
-  }
-  // The form factors of a leaf's partly visible links (before row_scale_).
-  double partial_row_sum(size_t leaf) const {
-    double f = 0.0;
-    for (size_t k = static_cast<size_t>(partial_from_[leaf]); k < terms_[leaf].size(); ++k) f += terms_[leaf][k].f;
-    return f * fix_exact_[leaf];
+    return fix_exact_[leaf] * exact + row_scale_[leaf] * (approx + pushed(static_cast<int>(leaf)));
   }
   // The approximate part of a leaf's form factors, before row_scale_.
   double approx_row_sum(size_t leaf) const {
@@ -1348,29 +1326,30 @@ private:
     }
     return f;
   }
-  double row_sum(size_t leaf) const {
-    return F_sum_[leaf] + (row_scale_[leaf] - 1.0) * partial_row_sum(leaf) + row_scale_[leaf] * approx_row_sum(leaf);
-  }
+  double row_sum(size_t leaf) const { return F_sum_[leaf] + row_scale_[leaf] * approx_row_sum(leaf); }
 
-  // A row sums to 1 only as well as its uncertain part estimates it: the
-  // cluster approximations (its approximate part) and the rays that gave
-  // its partly visible links their fractions. Its fully visible terms are
-  // left as they are, and its uncertain part is scaled (with the
-  // approximate part alone, a closed furnace with a floating block, where
-  // no cluster link is made, kept leaf rows of 0.986-1.038 and cell values
-  // of 4.95-5.16 against the exact 5, now 4.987-5.005). Per leaf with an
-  // uncertain part, Visibility::enclosed's cosine-distributed rays from its
-  // centroid: when every one meets the front of a patch, the leaf is
-  // enclosed (nothing it sees is open sky or the back of a one-sided patch)
-  // and the uncertain part is scaled so that the row sums to 1; otherwise
-  // it is scaled only where the row exceeds 1 (no leaf sees more than its
-  // hemisphere), down to 1. The furnace stays exact with clusters, and
-  // rho x row sum stays below 1 for reflectance near 1. The scale is kept
-  // within [0, kMaxRowScale]: the gap rule keeps the group kernel's error
-  // well under 20%, so a larger deficit lies elsewhere and is not the
-  // uncertain part's to fill (with a cap of 4, a ceiling lit only
-  // indirectly came out 2.7% high against a finer solve; with 1.2, every
-  // object of that room within 0.6%).
+  // The cluster approximations keep a row near 1, not at 1; its exact
+  // terms are left as they are, and its approximate part is scaled. Per
+  // leaf with an approximate part, Visibility::enclosed's cosine-
+  // distributed rays from its centroid: when every one meets the front of
+  // a patch, the leaf is enclosed (nothing it sees is open sky or the back
+  // of a one-sided patch) and the approximate part is scaled so that the
+  // row sums to 1; otherwise it is scaled only where the row exceeds 1 (no
+  // leaf sees more than its hemisphere), down to 1. The furnace stays
+  // exact with clusters, and rho x row sum stays below 1 for reflectance
+  // near 1. The scale is kept within [0, kMaxRowScale]: the gap rule keeps
+  // the group kernel's error well under 20%, so a larger deficit lies
+  // elsewhere (the exact terms' visibility) and is not the approximate
+  // part's to fill (with a cap of 4, a ceiling lit only indirectly came
+  // out 2.7% high against a finer solve; with 1.2, every object of that
+  // room within 0.6%). Scaling the partly visible links' terms too (their
+  // fractions come from rays) made a closed furnace with a floating block
+  // uniform (leaf values 4.987-5.005 against 4.95-5.16, exact 5), but lit
+  // rooms came out further from their 128-ray solves than without: the
+  // sphere room's ceiling +0.43% (+0.04%), the 8 x 8 box field's patches
+  // 0.35% rms (0.25%). Not kept. Part of what it filled is absorbed light
+  // (the lamp's back, seen from the ceiling, which 64 rays can miss); the
+  // box faces' excess was not traced.
   static constexpr double kMaxRowScale = 1.2;
   bool enclosed(size_t leaf) const {
     const Triangle& t = tri_[leaf];
@@ -1385,13 +1364,12 @@ private:
       for (size_t x = r.begin(); x != r.end(); ++x) {
         row_scale_[x] = 1.0;
         if (!out_.tree.is_leaf(static_cast<int>(x))) continue;
-        const double partial = partial_row_sum(x);
-        const double uncertain = approx_row_sum(x) + partial;
-        if (!(uncertain > 0.0)) continue;
+        const double approx = approx_row_sum(x);
+        if (!(approx > 0.0)) continue;
         if (enclosed_[x] < 0) enclosed_[x] = enclosed(x) ? 1 : 0;
-        const double sure = F_sum_[x] - partial;
-        if (enclosed_[x] == 1 || sure + uncertain > 1.0)
-          row_scale_[x] = std::clamp((1.0 - sure) / uncertain, 0.0, kMaxRowScale);
+        const double row = F_sum_[x] + approx;
+        if (enclosed_[x] == 1 || row > 1.0)
+          row_scale_[x] = std::clamp((1.0 - F_sum_[x]) / approx, 0.0, kMaxRowScale);
       }
     });
   }
@@ -2006,15 +1984,7 @@ private:
   };
   std::vector<std::vector<Term>> terms_;
   std::vector<double> fix_exact_;
-  // Per leaf: where the terms of its partly visible links begin in
-  // terms_ (they are scaled by row_scale_, see scale_rows).
-  std::vector<int> partial_from_;
-  bool partial_term(size_t leaf, size_t k) const { return k >= static_cast<size_t>(partial_from_[leaf]); }
-  // Term k of a leaf as gathered: F with the float fix, and row_scale_ on
-  // a partly visible link's.
-  double term_f(size_t leaf, size_t k) const {
-    return static_cast<double>(terms_[leaf][k].f) * fix_exact_[leaf] * (partial_term(leaf, k) ? row_scale_[leaf] : 1.0);
-  }
+  double term_f(size_t leaf, const Term& t) const { return static_cast<double>(t.f) * fix_exact_[leaf]; }
   std::vector<std::vector<Term>> node_terms_;
   std::vector<double> node_F_;
   std::vector<Rgb> node_H_;
@@ -2065,7 +2035,7 @@ private:
   std::vector<double> group_open_;        // per group: the area mean of its roots' openness
   std::vector<double> FG_, FGacc_;        // per group x bins_: form factor sum, with its ancestors'
   std::vector<RayCount> leaf_rays_;    // per node: rays its leaf terms cast (gather_terms)
-  std::vector<double> row_scale_;      // per node (leaves): what its uncertain part is scaled by (scale_rows)
+  std::vector<double> row_scale_;      // per node (leaves): what its approximate part is scaled by (scale_rows)
   std::vector<signed char> enclosed_;  // per node: 1 enclosed, 0 not, -1 not yet known
 };
 
