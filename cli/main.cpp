@@ -241,6 +241,7 @@ int run(Params& p, bool solving) {
     rep.end();
     for (const auto& phase : result->seconds) info.seconds.push_back(phase);
     if (!result->report.empty()) rep.note(result->report);
+    for (const std::string& w : result->warnings) rep.note("warning: " + w);
     const FieldReport& f = result->field;
     if (!f.why.empty()) rep.note(f.why);
     if (f.mode == FieldMode::gather)

@@ -107,6 +107,9 @@ struct MethodResult {
   // resume and display them (io/pixmap_io.h); null for other methods.
   std::shared_ptr<const PixmapOutput> pixmaps;
   bool interrupted = false;  // stopped early by SolveCallbacks::cancelled
+  // What the result says is likely wrong with the scene (run_method): no
+  // light reached any surface that reflects.
+  std::vector<std::string> warnings;
 
   const Counter* counter(const std::string& name) const;  // nullptr when absent
 };

@@ -8,6 +8,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
+#include <set>
 
 namespace radmesh {
 
@@ -164,6 +165,34 @@ std::vector<std::pair<OptionSpec, std::vector<std::string>>> all_method_options(
   return out;
 }
 
+namespace {
+
+// The scene emits, yet every element of a surface that reflects (and does
+// not emit) came out black: the usual cause is faces turned the wrong way
+// (a room whose normals all point out, a lamp facing the ceiling). Empty
+// when some such element got light, or when there is none.
+std::string unlit_warning(const Scene& scene, const MethodResult& r) {
+  const auto max3 = [](const Rgb& c) { return std::max({c.x, c.y, c.z}); };
+  bool emits = false;
+  for (const Patch& p : scene.patches) emits = emits || max3(scene.material_of(p).emission) > 0.0;
+  if (!emits) return {};  // the scene's own warning says so
+  std::set<int> reflecting;
+  for (int t = 0; t < r.mesh.triangle_count(); ++t) {
+    const int p = r.mesh.patch[static_cast<size_t>(t)];
+    const Material& m = scene.material_of(scene.patches[static_cast<size_t>(p)]);
+    if (max3(m.emission) > 0.0 || max3(m.reflectance) <= 0.0 || r.mesh.zero_area(t)) continue;
+    if (max3(r.solution.element[static_cast<size_t>(t)]) > 0.0) return {};
+    reflecting.insert(p);
+  }
+  if (reflecting.empty()) return {};
+  return scene.source + ": no light reached any of the " + std::to_string(reflecting.size()) +
+         " faces that reflect: every value but the emitters' is 0. A face is lit on its front, the side from "
+         "which its vertices run counter-clockwise: check that the faces' fronts point into the room and the "
+         "emitters' toward what they light";
+}
+
+}  // namespace
+
 MethodResult run_method(const Method& method, const Scene& scene, const Mesh& mesh, const SolveOptions& options,
                         const OptionValues& given, const SolveCallbacks& callbacks) {
   check_solve_options(options);
@@ -194,6 +223,7 @@ MethodResult run_method(const Method& method, const Scene& scene, const Mesh& me
   }
   // Otherwise the solver's own field stands: automatic falls back to the
   // fit, which is what nodal_method(automatic) gave the solver.
+  if (const std::string w = unlit_warning(scene, r); !w.empty()) r.warnings.push_back(w);
   return r;
 }
 

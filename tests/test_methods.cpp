@@ -170,6 +170,24 @@ TEST_P(Conformance, CornellBoxBalancesEnergy) {
     EXPECT_TRUE(std::isfinite(b.x) && std::isfinite(b.y) && std::isfinite(b.z) && b.x >= 0.0);
 }
 
+TEST_P(Conformance, AnInsideOutRoomIsSaidToBeUnlit) {
+  // The Cornell box mirrored: every face's front now points out of the
+  // room, the lamp's up through the ceiling's back. Nothing reflects any
+  // light, and the result says so (with the count of faces that reflect:
+  // the box's own patches less the lamp and the black front wall); the
+  // box as it is gets no such warning.
+  const Scene scene = read_obj_scene(kData + "/cornell_box/cornell_box.obj");
+  const Scene inside_out = test::transformed(scene, [](const Vec3& v) { return Vec3(-v.x, v.y, v.z); });
+  const MethodResult r = solve(GetParam(), inside_out, 0.25);
+  ASSERT_EQ(r.warnings.size(), 1u);
+  EXPECT_NE(r.warnings[0].find("no light reached any of the " + std::to_string(scene.patches.size() - 2) +
+                               " faces that reflect"),
+            std::string::npos)
+      << r.warnings[0];
+  for (const Rgb& b : r.solution.element) EXPECT_TRUE(b.x == 0.0 || b.x == 50.0) << b.x;
+  EXPECT_TRUE(solve(GetParam(), scene, 0.25).warnings.empty());
+}
+
 TEST_P(Conformance, OneAndTwoThreadsGiveIdenticalResults) {
   const Scene scene = read_obj_scene(kData + "/box_on_floor/box_on_floor.obj");
   SolveOptions one, two;
