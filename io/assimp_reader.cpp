@@ -160,7 +160,7 @@ Json read_gltf_json(const std::string& path, bool binary) {
     text.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
   }
   try {
-    return parse_json_bounded(text, path);
+    return parse_json_bounded(text, path, /*unique_keys=*/false);  // as assimp reads it: the last one stands
   } catch (const Json::exception& e) {
     std::string m = e.what();
     const size_t close = m.find("] ");

@@ -5,8 +5,10 @@
 
 #include <nlohmann/json.hpp>
 
+#include <set>
 #include <string>
 #include <utility>
+#include <vector>
 
 namespace radmesh {
 
@@ -17,16 +19,31 @@ namespace radmesh {
 inline constexpr int kMaxJsonDepth = 256;
 
 // nlohmann::json::parse(in), throwing InputError naming `path` past
-// kMaxJsonDepth levels; its own parse errors are left to the caller.
+// kMaxJsonDepth levels and, with `unique_keys`, at a key written twice in
+// one object (nlohmann keeps the last value silently: a scene with two
+// "materials" lost the first list); its own parse errors are left to the
+// caller.
 template <class Input>
-nlohmann::json parse_json_bounded(Input&& in, const std::string& path) {
-  return nlohmann::json::parse(std::forward<Input>(in),
-                               [&path](int depth, nlohmann::json::parse_event_t, nlohmann::json&) {
-                                 if (depth > kMaxJsonDepth)
-                                   throw InputError(path + ": JSON nested more than " + std::to_string(kMaxJsonDepth) +
-                                                    " levels deep");
-                                 return true;
-                               });
+nlohmann::json parse_json_bounded(Input&& in, const std::string& path, bool unique_keys = true) {
+  std::vector<std::set<std::string>> keys;  // per open object, the keys read so far
+  return nlohmann::json::parse(
+      std::forward<Input>(in), [&](int depth, nlohmann::json::parse_event_t event, nlohmann::json& parsed) {
+        if (depth > kMaxJsonDepth)
+          throw InputError(path + ": JSON nested more than " + std::to_string(kMaxJsonDepth) + " levels deep");
+        if (!unique_keys) return true;
+        using Event = nlohmann::json::parse_event_t;
+        if (event == Event::object_start) {
+          keys.emplace_back();
+        } else if (event == Event::object_end) {
+          if (!keys.empty()) keys.pop_back();
+        } else if (event == Event::key && !keys.empty() && parsed.is_string()) {
+          const std::string& k = parsed.get_ref<const std::string&>();
+          if (!keys.back().insert(k).second)
+            throw InputError(path + ": key '" + k + "' is written twice in one object (at depth " +
+                             std::to_string(keys.size()) + "); only one value can stand");
+        }
+        return true;
+      });
 }
 
 }  // namespace radmesh

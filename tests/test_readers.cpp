@@ -476,6 +476,32 @@ TEST(JsonScene, NestingPastTheBoundIsAnErrorNotACrash) {
   EXPECT_TRUE(contains(msg, "expected an object with \"materials\" and \"objects\"")) << msg;
 }
 
+TEST(JsonScene, AKeyWrittenTwiceInOneObjectIsAnError) {
+  // The last value stood silently: two "materials" lost the first list, a
+  // material's second "reflectance" replaced its first. Keys of different
+  // objects may repeat.
+  const fs::path dir = fresh_dir("duplicate_keys");
+  write_text(dir / "s.json",
+             "{\"materials\": {\"a\": {\"reflectance\": [0.5, 0.5, 0.5]}},\n"
+             " \"objects\": [{\"file\": \"x.ply\", \"material\": \"a\"}],\n"
+             " \"materials\": {\"b\": {\"reflectance\": [0.2, 0.2, 0.2]}}}");
+  std::string msg = message_of<InputError>([&] { read_scene((dir / "s.json").string()); });
+  EXPECT_TRUE(contains(msg, (dir / "s.json").string() + ": key 'materials' is written twice in one object (at depth 1)"))
+      << msg;
+  write_text(dir / "t.json",
+             "{\"materials\": {\"a\": {\"reflectance\": [0.5, 0.5, 0.5], \"reflectance\": [0.2, 0.2, 0.2]}},\n"
+             " \"objects\": []}");
+  msg = message_of<InputError>([&] { read_scene((dir / "t.json").string()); });
+  EXPECT_TRUE(contains(msg, "key 'reflectance' is written twice in one object (at depth 3)")) << msg;
+  // The same key in sibling objects is no repeat: the scene is refused for
+  // its missing file, not for its keys.
+  write_text(dir / "u.json",
+             "{\"materials\": {\"a\": {\"reflectance\": [0.5, 0.5, 0.5]}, \"b\": {\"reflectance\": [0.2, 0.2, 0.2]}},\n"
+             " \"objects\": [{\"file\": \"x.ply\", \"material\": \"a\"}]}");
+  const std::string missing = message_of<IoError>([&] { read_scene((dir / "u.json").string()); });
+  EXPECT_TRUE(contains(missing, "not found")) << missing;
+}
+
 TEST(JsonScene, MissingFileIsAnIoErrorNamingTheResolvedPath) {
   const fs::path dir = fresh_dir("missing");
   write_text(dir / "s.json", "{\"objects\": [{\"file\": \"sub/none.ply\", \"material\": \"m\"}]}");
