@@ -327,6 +327,13 @@ struct Walker {
 // 64 KiB, and every element count within what the rest of the file can hold
 // (at least one byte per value in binary, two per value in ASCII: a digit and
 // a separator). Throws InputError naming the header line.
+template <class Layout>
+double element_total(const Layout& layout) {
+  double n = 0.0;
+  for (const auto& e : layout) n += e.first;
+  return n;
+}
+
 void check_ply_header(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   std::error_code ec;
@@ -353,11 +360,16 @@ void check_ply_header(const std::string& path) {
   auto bad = [&](int line, const std::string& what) {
     throw InputError(path + ": PLY header line " + std::to_string(line) + ": " + what);
   };
-  bool binary = false, ended = false;
+  bool binary = false, big_endian = false, ended = false;
   double bytes_needed = 0.0, element_count = 0.0, element_bytes = 0.0;
-  // Per element: its count and, per property, whether it is a list (the
-  // ASCII body is checked against them below).
-  std::vector<std::pair<double, std::vector<char>>> layout;
+  // Per element: its count and its properties (the body is checked
+  // against them below).
+  struct Property {
+    bool list = false;
+    int bytes = 0;        // binary: a value's (a list's items')
+    int count_bytes = 0;  // binary: a list's count
+  };
+  std::vector<std::pair<double, std::vector<Property>>> layout;
   auto close_element = [&] { bytes_needed += element_count * element_bytes; };
   std::string line;
   size_t read = 0;
@@ -376,6 +388,7 @@ void check_ply_header(const std::string& path) {
       if (w.size() != 3 || (w[1] != "ascii" && w[1] != "binary_little_endian" && w[1] != "binary_big_endian"))
         bad(ln, "expected 'format ascii|binary_little_endian|binary_big_endian 1.0'");
       binary = w[1] != "ascii";
+      big_endian = w[1] == "binary_big_endian";
     } else if (head == "comment" || head == "obj_info") {
     } else if (head == "element") {
       double count = -1.0;
@@ -396,7 +409,7 @@ void check_ply_header(const std::string& path) {
         if (!kTypeBytes.count(w[i])) bad(ln, "unknown property type '" + shown(w[i]) + "'");
       element_bytes += binary ? kTypeBytes.at(w[list ? 2 : 1]) : 2.0;
       if (layout.empty()) bad(ln, "'property' before any 'element'");
-      layout.back().second.push_back(list ? 1 : 0);
+      layout.back().second.push_back({list, kTypeBytes.at(w[list ? 3 : 1]), list ? kTypeBytes.at(w[2]) : 0});
     } else if (head == "end_header") {
       ended = true;
     } else {
@@ -410,14 +423,56 @@ void check_ply_header(const std::string& path) {
     throw InputError(path + ": the PLY header declares elements needing at least " +
                      std::to_string(static_cast<long long>(std::min(bytes_needed, 9e18))) + " bytes, but the file has " +
                      std::to_string(static_cast<long long>(body)) + " after its header (truncated, or a wrong count)");
-  if (binary) return;
+  // Data after the declared elements is a wrong count whose rest assimp
+  // would drop without a word (a header saying 12 faces over a file of
+  // 20 gave a mesh with holes).
+  auto more_than_declared = [&](const std::string& what) {
+    throw InputError(path + ": " + what + " after the " + std::to_string(static_cast<long long>(element_total(layout))) +
+                     " elements its PLY header declares (a wrong count would drop them)");
+  };
+  if (binary) {
+    // The body's length, walking its lists in one pass (a list's count read
+    // in the file's byte order): anything past it is more than declared.
+    double at = static_cast<double>(read);
+    unsigned char count[8] = {};
+    for (const auto& [n, props] : layout) {
+      const bool has_list = std::any_of(props.begin(), props.end(), [](const Property& p) { return p.list; });
+      if (!has_list) {
+        double fixed = 0.0;
+        for (const Property& p : props) fixed += p.bytes;
+        at += n * fixed;
+        if (at > file_size) return;  // short: said above
+        in.seekg(static_cast<std::streamoff>(at));
+        continue;
+      }
+      for (double k = 0.0; k < n; ++k)
+        for (const Property& p : props) {
+          if (!p.list) {
+            in.ignore(p.bytes);
+            at += p.bytes;
+            continue;
+          }
+          if (!in.read(reinterpret_cast<char*>(count), p.count_bytes)) return;  // short: assimp says so
+          uint64_t items = 0;
+          for (int b = 0; b < p.count_bytes; ++b)
+            items |= static_cast<uint64_t>(count[big_endian ? p.count_bytes - 1 - b : b]) << (8 * b);
+          const double skip = static_cast<double>(items) * p.bytes;
+          at += p.count_bytes + skip;
+          if (at > file_size) return;  // short: assimp says so
+          in.ignore(static_cast<std::streamsize>(skip));
+        }
+    }
+    if (file_size > at)
+      more_than_declared(std::to_string(static_cast<long long>(file_size - at)) + " bytes");
+    return;
+  }
   // An ASCII body has one line per element: fewer lines is a truncated
   // file (assimp reads what is there and reports something else), and a
   // list's count cannot exceed the values left on its line (assimp 5.2
   // allocated 413 M indices for one face whose count was a long run of
   // digits, 4.9 GB and 20 s, found by fuzzing).
-  double elements = 0.0, lines = 0.0;
-  for (const auto& e : layout) elements += e.first;
+  const double elements = element_total(layout);
+  double lines = 0.0;
   std::vector<std::string_view> tokens;
   for (const auto& [count, props] : layout)
     for (double k = 0.0; k < count; ++k) {
@@ -436,9 +491,9 @@ void check_ply_header(const std::string& path) {
         b = e;
       }
       size_t at = 0;
-      for (const char list : props) {
+      for (const Property& p : props) {
         if (at >= tokens.size()) break;  // too few values: assimp's own message names them
-        if (!list) {
+        if (!p.list) {
           ++at;
           continue;
         }
@@ -451,6 +506,11 @@ void check_ply_header(const std::string& path) {
         at += static_cast<size_t>(values);
       }
     }
+  while (std::getline(in, line)) {
+    ++ln;
+    if (line.find_first_not_of(" \t\r") != std::string::npos)
+      more_than_declared("line " + std::to_string(ln) + " holds data");
+  }
 }
 
 // A binary STL must be as long as its facet count says, and an ASCII STL

@@ -11,7 +11,10 @@
 
 #include "tests/test_util.h"
 
+#include <array>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -556,6 +559,44 @@ TEST(FileErrors, BinaryStlShorterThanItsFacetCountIsRefused) {
       << msg;
 }
 
+TEST(FileErrors, BinaryPlyLongerThanItsElementsIsRefused) {
+  // Little- and big-endian, two triangles in the body, one declared: the
+  // walk over the lists finds the second's 13 bytes (a count byte, three
+  // 4-byte indices) beyond the declared elements. As declared, both read.
+  for (const bool big : {false, true}) {
+    const fs::path dir = fresh_dir(big ? "ply_binary_long_be" : "ply_binary_long_le");
+    auto body = [big](int faces) {
+      std::string b = std::string("ply\nformat ") + (big ? "binary_big_endian" : "binary_little_endian") +
+                      " 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n"
+                      "element face " + std::to_string(faces) + "\nproperty list uchar int vertex_indices\nend_header\n";
+      auto put = [&](uint32_t v) {
+        for (int k = 0; k < 4; ++k) b += static_cast<char>((v >> (8 * (big ? 3 - k : k))) & 0xFF);
+      };
+      const float xyz[4][3] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 0}};
+      for (const auto& v : xyz)
+        for (const float c : v) {
+          uint32_t u = 0;
+          std::memcpy(&u, &c, 4);
+          put(u);
+        }
+      for (const auto& f : {std::array<uint32_t, 3>{0, 1, 2}, std::array<uint32_t, 3>{1, 3, 2}}) {
+        b += static_cast<char>(3);
+        for (const uint32_t i : f) put(i);
+      }
+      return b;
+    };
+    write_text(dir / "long.ply", body(1));
+    const std::string msg = message_of<InputError>([&] { read_scene((dir / "long.ply").string()); });
+    EXPECT_TRUE(contains(msg, (dir / "long.ply").string() +
+                                  ": 13 bytes after the 5 elements its PLY header declares (a wrong count would drop "
+                                  "them)"))
+        << msg;
+    write_text(dir / "right.ply", body(2));
+    const std::string right = message_of<InputError>([&] { read_scene((dir / "right.ply").string()); });
+    EXPECT_TRUE(contains(right, "PLY files carry no materials")) << right;
+  }
+}
+
 INSTANTIATE_TEST_SUITE_P(
     AllCases, FileErrors,
     ::testing::Values(
@@ -580,6 +621,11 @@ INSTANTIATE_TEST_SUITE_P(
         FileErrorCase{"ply_ascii_truncated", "mesh.ply", PLY_HEAD(3, 2) "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n",
                       ": the PLY header declares 5 elements, but the file has 4 lines after its header (truncated, "
                       "or a wrong count)"},
+        // More than the header declares: assimp dropped the rest silently.
+        FileErrorCase{"ply_ascii_more_than_declared", "mesh.ply",
+                      PLY_HEAD(4, 1) "0 0 0\n1 0 0\n0 1 0\n1 1 0\n3 0 1 2\n3 1 3 2\n\n",
+                      ": line 15 holds data after the 5 elements its PLY header declares (a wrong count would drop "
+                      "them)"},
         // Found by fuzz_assimp_reader: assimp allocated 413 M indices for
         // this count (4.9 GB, 20 s) before refusing it.
         FileErrorCase{"ply_list_count_beyond_its_line", "mesh.ply",
