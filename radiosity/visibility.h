@@ -20,11 +20,10 @@ public:
   Visibility(const Visibility&) = delete;
   Visibility& operator=(const Visibility&) = delete;
 
-  // True when the open segment (from, to) is unobstructed by every patch but
-  // `ignore_a` and `ignore_b` (-1: none). Thread-safe.
-  bool visible(const Vec3& from, const Vec3& to, int ignore_a, int ignore_b) const;
-  // The same for n segments (from[i], to[i]) at once, into seen[i]: one
-  // call to Embree, which traces nearby rays together. Thread-safe.
+  // Whether each open segment (from[i], to[i]) is unobstructed by every
+  // patch but `ignore_a` and `ignore_b` (-1: none), into seen[i], the first
+  // and last 1e-6 of it left out: one call to Embree, which traces nearby
+  // rays together. Thread-safe.
   void visible(const Vec3* from, const Vec3* to, size_t n, int ignore_a, int ignore_b, unsigned char* seen) const;
 
   // Segments between points on two surfaces: from[i] on one facing

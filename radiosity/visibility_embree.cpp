@@ -141,14 +141,6 @@ QueryContext make_context(const std::vector<int>& prim_patch, int ignore_a, int 
 
 }  // namespace
 
-bool Visibility::visible(const Vec3& from, const Vec3& to, int ignore_a, int ignore_b) const {
-  const Impl& m = *impl_;
-  QueryContext ctx = make_context(m.prim_patch, ignore_a, ignore_b);
-  RTCRay ray = make_ray(from, m.origin, to - from, 1e-6f, 1.0f - 1e-6f);
-  rtcOccluded1(m.scene, &ctx.base, &ray);
-  return ray.tfar >= 0.0f;  // Embree sets tfar to -inf when occluded
-}
-
 namespace {
 
 // n rays traced together into seen[i] (1: nothing hit), each made by ray(i).
