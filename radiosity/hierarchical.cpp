@@ -1347,9 +1347,9 @@ private:
   // uniform (leaf values 4.987-5.005 against 4.95-5.16, exact 5), but lit
   // rooms came out further from their 128-ray solves than without: the
   // sphere room's ceiling +0.43% (+0.04%), the 8 x 8 box field's patches
-  // 0.35% rms (0.25%). Not kept. Part of what it filled is absorbed light
-  // (the lamp's back, seen from the ceiling, which 64 rays can miss); the
-  // box faces' excess was not traced.
+  // 0.35% rms (0.25%). Not kept. Part of what it filled is likely
+  // absorbed light (the lamp's back, seen from the ceiling, which 64 rays
+  // can miss); the box faces' excess was not traced.
   static constexpr double kMaxRowScale = 1.2;
   bool enclosed(size_t leaf) const {
     const Triangle& t = tri_[leaf];
