@@ -170,8 +170,10 @@ namespace {
 // The scene emits, yet every element of a surface that reflects (and does
 // not emit) came out black: the usual cause is faces turned the wrong way
 // (a room whose normals all point out, a lamp facing the ceiling). Empty
-// when some such element got light, or when there is none.
+// when some such element got light, or when there is none, or when the
+// run was stopped before it could light anything.
 std::string unlit_warning(const Scene& scene, const MethodResult& r) {
+  if (r.interrupted) return {};
   const auto max3 = [](const Rgb& c) { return std::max({c.x, c.y, c.z}); };
   bool emits = false;
   for (const Patch& p : scene.patches) emits = emits || max3(scene.material_of(p).emission) > 0.0;
