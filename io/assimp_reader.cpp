@@ -424,8 +424,8 @@ void check_ply_header(const std::string& path) {
                      std::to_string(static_cast<long long>(std::min(bytes_needed, 9e18))) + " bytes, but the file has " +
                      std::to_string(static_cast<long long>(body)) + " after its header (truncated, or a wrong count)");
   // Data after the declared elements is a wrong count whose rest assimp
-  // would drop without a word (a header saying 12 faces over a file of
-  // 20 gave a mesh with holes).
+  // drops without a word (a header declaring 1 face over a file of 2 gave
+  // one triangle, half the square).
   auto more_than_declared = [&](const std::string& what) {
     throw InputError(path + ": " + what + " after the " + std::to_string(static_cast<long long>(element_total(layout))) +
                      " elements its PLY header declares (a wrong count would drop them)");

@@ -175,11 +175,7 @@ TEST(Field, AFurnaceWithABlockInsideIsUniformAtEveryVertexEvenOnItsCreases) {
   };
   box({0, 0, 0}, {1, 1, 1}, false);
   box({0.3, 0.2, 0.3}, {0.6, 0.5, 0.6}, true);
-  Material m;
-  m.name = "f";
-  m.reflectance = Rgb(0.8);
-  m.emission = Rgb(1.0);
-  const Scene scene = build_scene(faces, {m}, "furnace with a block");
+  const Scene scene = build_scene(faces, {test::material("f", Rgb(0.8), Rgb(1.0))}, "furnace with a block");
   SolveOptions so;
   so.field = FieldMode::gather;
   const MethodResult r = solve(scene, "hierarchical", 0.35, DiscontinuityMode::contacts, so, {{"epsilon", "0.004"}});

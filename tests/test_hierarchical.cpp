@@ -13,6 +13,8 @@
 
 #include <gtest/gtest.h>
 
+#include "tests/test_util.h"
+
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -337,12 +339,8 @@ TEST(Hierarchical, TwoSidedPanelAndBlocksInContactShareCornersButNotInsides) {
   quad("panel_down", 0, {{0.55, 0.6, 0.2}, {0.95, 0.6, 0.2}, {0.95, 0.6, 0.8}, {0.55, 0.6, 0.8}});
   block("block_a", {0.1, 0.0, 0.3}, {0.3, 0.25, 0.6});
   block("block_b", {0.3, 0.0, 0.3}, {0.5, 0.25, 0.6});
-  Material white, lamp;
-  white.name = "white";
-  white.reflectance = Rgb(0.7);
-  lamp.name = "lamp";
-  lamp.emission = Rgb(25.0);
-  const Scene s = build_scene(faces, {white, lamp}, "two-sided");
+  const Scene s =
+      build_scene(faces, {test::material("white", Rgb(0.7)), test::material("lamp", Rgb(0.0), Rgb(25.0))}, "two-sided");
   const HierarchicalSolution h = solve_hierarchical(s, coarse_mesh(s, 0.2), {}, {});
   // Both sides of the panel were split inside their roots (level 2 and
   // below has points inside a root), so the test reaches the shared corners.

@@ -148,11 +148,7 @@ TEST(Mesh, ASliverIsLeftAsItsOutlineAndMeshesAtOnce) {
   faces[1].name = "needle";
   faces[0].material = faces[1].material = 0;
   faces[1].points = {{0.1, 0.3, 0.5}, {0.9, 0.3, 0.5}, {0.5, 0.3, 0.5 + 1e-7}};
-  Material white;
-  white.name = "white";
-  white.reflectance = Rgb(0.5);
-  white.emission = Rgb(1.0);
-  const Scene s = build_scene(faces, {white}, "needle");
+  const Scene s = build_scene(faces, {test::material("white", Rgb(0.5), Rgb(1.0))}, "needle");
   MeshingOptions o;
   o.max_edge = 0.1;
   MeshReport report;

@@ -294,14 +294,22 @@ TEST(Nodal, LinearFitReproducesALinearFieldAtEveryVertexIncludingTheBoundary) {
 }
 
 namespace {
-// A scene of grey faces from OBJ text (`o` names, `f` lines), read from a
-// file of its own.
-Scene grey_obj_scene(const std::string& name, const std::string& body) {
+// Three grey quads, a receiver "a", a source "b" and a "wall", read from
+// an OBJ file of their own (corners in order: the front is the side they
+// run counter-clockwise seen from).
+using Quad = std::array<Vec3, 4>;
+Scene receiver_source_wall(const std::string& name, const Quad& a, const Quad& b, const Quad& wall) {
   namespace fs = std::filesystem;
   const fs::path dir = fs::temp_directory_path() / ("radmesh_test_" + name);
   fs::create_directories(dir);
   std::ofstream(dir / "scene.mtl") << "newmtl grey\nKd 0.5 0.5 0.5\n";
-  std::ofstream(dir / "scene.obj") << "mtllib scene.mtl\nusemtl grey\n" << body;
+  {
+    std::ofstream obj(dir / "scene.obj");
+    obj << "mtllib scene.mtl\nusemtl grey\n";
+    for (const Quad* q : {&a, &b, &wall})
+      for (const Vec3& v : *q) obj << "v " << v.x << ' ' << v.y << ' ' << v.z << '\n';
+    obj << "o a\nf 1 2 3 4\no b\nf 5 6 7 8\no wall\nf 9 10 11 12\n";
+  }
   const Scene s = read_obj_scene((dir / "scene.obj").string());
   fs::remove_all(dir);
   return s;
@@ -315,11 +323,9 @@ TEST(Visibility, RaysThatCannotCarryLightDoNotCount) {
   // wall at z = 0.25 reaching from below up to y = 0.001 blocks every
   // segment from A's lower half to B but (nearly) none from its upper half.
   // Counting all rays would say half is hidden; only the upper half's count.
-  const Scene s = grey_obj_scene("visibility_facing",
-                                 "v -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\n"                     // A
-                                 "v -1 0 0.5\nv -1 0 1.5\nv 1 0 1.5\nv 1 0 0.5\n"               // B
-                                 "v -2 -2 0.25\nv 2 -2 0.25\nv 2 0.001 0.25\nv -2 0.001 0.25\n"  // the wall
-                                 "o a\nf 1 2 3 4\no b\nf 5 6 7 8\no wall\nf 9 10 11 12\n");
+  const Scene s = receiver_source_wall("visibility_facing", {{{-1, -1, 0}, {1, -1, 0}, {1, 1, 0}, {-1, 1, 0}}},
+                                      {{{-1, 0, 0.5}, {-1, 0, 1.5}, {1, 0, 1.5}, {1, 0, 0.5}}},
+                                      {{{-2, -2, 0.25}, {2, -2, 0.25}, {2, 0.001, 0.25}, {-2, 0.001, 0.25}}});
   const int a = test::patch_named(s, "a"), b = test::patch_named(s, "b");
   ASSERT_GE(a, 0);
   ASSERT_GE(b, 0);
@@ -344,11 +350,9 @@ TEST(Visibility, AWallStandingOnTheReceiverBlocksRaysFromRightBesideIt) {
   // sliver of A along the wall's foot, 1e-4 wide: with its rays starting
   // 1e-6 of their length past their ends, 1.7% of them (those from
   // within 1.3e-6 of the wall) got through.
-  const Scene s = grey_obj_scene("visibility_wall_foot",
-                                 "v 0 0 -1\nv 0 0 0\nv 1 0 0\nv 1 0 -1\n"              // A
-                                 "v 0 0.5 0.5\nv 1 0.5 0.5\nv 1 0.5 1.5\nv 0 0.5 1.5\n"  // B
-                                 "v -1 0 0\nv -1 1 0\nv 2 1 0\nv 2 0 0\n"              // the wall
-                                 "o a\nf 1 2 3 4\no b\nf 5 6 7 8\no wall\nf 9 10 11 12\n");
+  const Scene s = receiver_source_wall("visibility_wall_foot", {{{0, 0, -1}, {0, 0, 0}, {1, 0, 0}, {1, 0, -1}}},
+                                      {{{0, 0.5, 0.5}, {1, 0.5, 0.5}, {1, 0.5, 1.5}, {0, 0.5, 1.5}}},
+                                      {{{-1, 0, 0}, {-1, 1, 0}, {2, 1, 0}, {2, 0, 0}}});
   const int a = test::patch_named(s, "a"), b = test::patch_named(s, "b");
   ASSERT_GE(a, 0);
   ASSERT_GE(b, 0);

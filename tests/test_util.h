@@ -13,6 +13,15 @@
 
 namespace radmesh::test {
 
+// A material made in code (no file): its name, reflectance and emission.
+inline Material material(const std::string& name, const Rgb& reflectance, const Rgb& emission = Rgb(0.0)) {
+  Material m;
+  m.name = name;
+  m.reflectance = reflectance;
+  m.emission = emission;
+  return m;
+}
+
 // Runs f, expects it to throw E, returns the message (a test failure when it
 // throws nothing or something else).
 template <class E, class F>
