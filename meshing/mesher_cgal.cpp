@@ -898,7 +898,9 @@ MeshingOptions resolve_meshing_options(const Scene& scene, MeshingOptions option
 Mesh mesh_scene(const Scene& scene, const MeshingOptions& options, MeshReport* report) {
   const MeshingOptions opt = resolve_meshing_options(scene, options);
   SceneMesher mesher(scene, opt, true);
-  return mesher.run(report);
+  Mesh mesh = mesher.run(report);
+  if (opt.check_coplanar_overlaps) refuse_coplanar_overlaps(scene, mesh);
+  return mesh;
 }
 
 Mesh triangulate_patches(const Scene& scene) {

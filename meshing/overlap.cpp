@@ -1,0 +1,205 @@
+// Faces that lie in one plane, face the same way and overlap: refused.
+
+#include "meshing/box_tree.h"
+#include "meshing/errors.h"
+#include "meshing/mesh.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+
+namespace radmesh {
+
+namespace {
+
+using Point2 = std::array<double, 2>;
+using Polygon2 = std::vector<Point2>;  // counter-clockwise
+
+// Outlines with more vertices than this are tested through their triangles
+// (the separating-axis test costs (n + m)^2).
+constexpr size_t kMaxDirectVertices = 32;
+
+double cross2(const Point2& o, const Point2& a, const Point2& b) {
+  return (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0]);
+}
+
+bool convex(const Polygon2& poly) {
+  for (size_t i = 0; i < poly.size(); ++i)
+    if (cross2(poly[i], poly[(i + 1) % poly.size()], poly[(i + 2) % poly.size()]) < 0.0) return false;
+  return true;
+}
+
+// Whether two convex polygons of one plane reach into each other by more
+// than tol: along every edge normal of either (their separating axes) the
+// projections overlap by more than tol. Polygons that touch or are apart
+// have an axis where they overlap by at most tol; most pairs stop at the
+// first few axes.
+bool overlap_more_than(const Polygon2& a, const Polygon2& b, double tol) {
+  for (const Polygon2* t : {&a, &b})
+    for (size_t e = 0; e < t->size(); ++e) {
+      const Point2& p = (*t)[e];
+      const Point2& q = (*t)[(e + 1) % t->size()];
+      const double nx = q[1] - p[1], ny = p[0] - q[0];
+      double alo = INFINITY, ahi = -INFINITY, blo = INFINITY, bhi = -INFINITY;
+      for (const Point2& v : a) {
+        alo = std::min(alo, v[0] * nx + v[1] * ny);
+        ahi = std::max(ahi, v[0] * nx + v[1] * ny);
+      }
+      for (const Point2& v : b) {
+        blo = std::min(blo, v[0] * nx + v[1] * ny);
+        bhi = std::max(bhi, v[0] * nx + v[1] * ny);
+      }
+      if (!(std::min(ahi, bhi) - std::max(alo, blo) > tol * std::sqrt(nx * nx + ny * ny))) return false;
+    }
+  return true;
+}
+
+// The centroid of the vertices of the part two convex polygons share (a
+// clipped by each edge of b), for the message.
+Point2 shared_point(const Polygon2& a, const Polygon2& b) {
+  Polygon2 poly = a, next;
+  for (size_t e = 0; e < b.size() && !poly.empty(); ++e) {
+    const Point2& p = b[e];
+    const Point2& q = b[(e + 1) % b.size()];
+    next.clear();
+    for (size_t i = 0; i < poly.size(); ++i) {
+      const Point2& u = poly[i];
+      const Point2& v = poly[(i + 1) % poly.size()];
+      const double su = cross2(p, q, u), sv = cross2(p, q, v);
+      if (su >= 0.0) next.push_back(u);
+      if ((su >= 0.0) != (sv >= 0.0)) {
+        const double t = su / (su - sv);
+        next.push_back({u[0] + t * (v[0] - u[0]), u[1] + t * (v[1] - u[1])});
+      }
+    }
+    poly.swap(next);
+  }
+  Point2 c{0.0, 0.0};
+  for (const Point2& p : poly) {
+    c[0] += p[0] / static_cast<double>(poly.size());
+    c[1] += p[1] / static_cast<double>(poly.size());
+  }
+  return c;
+}
+
+// A plane's two in-plane axes, (u, w, n) right-handed: a loop counter-
+// clockwise around n is counter-clockwise in (u, w).
+struct PlaneAxes {
+  Vec3 u, w, n;
+  explicit PlaneAxes(const Vec3& normal)
+      : u(glm::normalize(glm::cross(normal, std::abs(normal.x) < 0.9 ? Vec3(1, 0, 0) : Vec3(0, 1, 0)))),
+        w(glm::cross(normal, u)),
+        n(normal) {}
+  Point2 flat(const Vec3& x) const { return {glm::dot(x, u), glm::dot(x, w)}; }
+  Vec3 lift(const Point2& p, double height) const { return p[0] * u + p[1] * w + height * n; }
+};
+
+}  // namespace
+
+void refuse_coplanar_overlaps(const Scene& scene, const Mesh& mesh) {
+  const size_t np = scene.patches.size();
+  const double tol = kCoplanarOverlapTolerance * scene.diagonal();
+  std::vector<Box3> boxes(np);
+  for (size_t p = 0; p < np; ++p)
+    for (const int v : scene.patches[p].outer) boxes[p].add(scene.vertices[static_cast<size_t>(v)]);
+
+  // Facing the same way, q's outline on p's plane, and p's plane tilted
+  // from q's by less than tol over p's size.
+  auto coplanar = [&](size_t p, size_t q) {
+    const Patch& a = scene.patches[p];
+    const Patch& b = scene.patches[q];
+    if (!(glm::dot(a.normal, b.normal) > 0.0) ||
+        glm::length(glm::cross(a.normal, b.normal)) * glm::length(boxes[p].hi - boxes[p].lo) > tol)
+      return false;
+    const Vec3& origin = scene.vertices[static_cast<size_t>(a.outer[0])];
+    return std::all_of(b.outer.begin(), b.outer.end(), [&](int v) {
+      return std::abs(glm::dot(scene.vertices[static_cast<size_t>(v)] - origin, a.normal)) <= tol;
+    });
+  };
+  auto refuse = [&](size_t p, size_t q, const Vec3& at) {
+    const Patch& first = scene.patches[p];
+    const Patch& second = scene.patches[q];
+    std::string first_at = where(first.file, first.line);
+    first_at.resize(first_at.size() >= 2 ? first_at.size() - 2 : 0);  // without its ": "
+    throw InputError(where(second.file, second.line) + "face '" + second.name + "' and face '" + first.name + "'" +
+                     (first_at.empty() ? "" : " (" + first_at + ")") +
+                     " lie in one plane facing the same way and overlap (around (" + format_number(at.x) + ", " +
+                     format_number(at.y) + ", " + format_number(at.z) +
+                     ")): which of them is lit there is not defined, and the light would count the area twice; "
+                     "cut the overlap out of one of them (a hole in the ceiling where a lamp lies in it), or lift one off "
+                     "the other by more than " +
+                     format_number(tol) + " (" + format_number(kCoplanarOverlapTolerance) + " of the scene size)");
+  };
+  // Per patch: whether it is a convex polygon without holes, small enough
+  // to be tested whole (-1: not known yet).
+  std::vector<signed char> direct(np, -1);
+  auto is_direct = [&](size_t p) {
+    if (direct[p] < 0) {
+      const Patch& patch = scene.patches[p];
+      const PlaneAxes axes(patch.normal);
+      Polygon2 poly;
+      for (const int v : patch.outer) poly.push_back(axes.flat(scene.vertices[static_cast<size_t>(v)]));
+      direct[p] = patch.holes.empty() && patch.outer.size() <= kMaxDirectVertices && convex(poly);
+    }
+    return direct[p] == 1;
+  };
+
+  // Candidates from a box tree over the patches; two convex outlines are
+  // tested whole, any other pair through its triangles below.
+  const BoxTree patch_tree(boxes);
+  std::vector<char> involved(np, 0);
+  bool any = false;
+  for (size_t p = 0; p < np; ++p)
+    patch_tree.overlapping(boxes[p], tol, [&](int qi) {
+      const size_t q = static_cast<size_t>(qi);
+      if (q <= p || !coplanar(p, q)) return true;
+      if (!is_direct(p) || !is_direct(q)) {
+        involved[p] = involved[q] = any = true;
+        return true;
+      }
+      const PlaneAxes axes(scene.patches[p].normal);
+      Polygon2 a, b;
+      for (const int v : scene.patches[p].outer) a.push_back(axes.flat(scene.vertices[static_cast<size_t>(v)]));
+      for (const int v : scene.patches[q].outer) b.push_back(axes.flat(scene.vertices[static_cast<size_t>(v)]));
+      if (overlap_more_than(a, b, tol))
+        refuse(p, q,
+               axes.lift(shared_point(a, b),
+                         glm::dot(scene.vertices[static_cast<size_t>(scene.patches[p].outer[0])], axes.n)));
+      return true;
+    });
+  if (!any) return;
+
+  // The triangles of the patches left, pair by pair where their boxes meet,
+  // in the first patch's plane.
+  std::vector<int> tris;
+  std::vector<Box3> tri_boxes;
+  for (int t = 0; t < mesh.triangle_count(); ++t) {
+    if (!involved[static_cast<size_t>(mesh.patch[static_cast<size_t>(t)])] || mesh.zero_area(t)) continue;
+    Box3 b;
+    for (const int v : mesh.triangles[static_cast<size_t>(t)]) b.add(mesh.positions[static_cast<size_t>(v)]);
+    tris.push_back(t);
+    tri_boxes.push_back(b);
+  }
+  const BoxTree tri_tree(tri_boxes);
+  auto corners = [&](int t) { return mesh.triangles[static_cast<size_t>(t)]; };
+  for (size_t i = 0; i < tris.size(); ++i) {
+    const size_t p = static_cast<size_t>(mesh.patch[static_cast<size_t>(tris[i])]);
+    const PlaneAxes axes(scene.patches[p].normal);
+    auto flat = [&](int t) {
+      Polygon2 f;
+      for (const int v : corners(t)) f.push_back(axes.flat(mesh.positions[static_cast<size_t>(v)]));
+      return f;
+    };
+    const Polygon2 a = flat(tris[i]);
+    tri_tree.overlapping(tri_boxes[i], tol, [&](int j) {
+      const size_t q = static_cast<size_t>(mesh.patch[static_cast<size_t>(tris[static_cast<size_t>(j)])]);
+      if (q <= p || !coplanar(p, q)) return true;
+      const Polygon2 b = flat(tris[static_cast<size_t>(j)]);
+      if (overlap_more_than(a, b, tol))
+        refuse(p, q, axes.lift(shared_point(a, b), glm::dot(mesh.positions[static_cast<size_t>(corners(tris[i])[0])], axes.n)));
+      return true;
+    });
+  }
+}
+
+}  // namespace radmesh
