@@ -40,6 +40,7 @@ nlohmann::json make_summary(const RunInfo& info, const Scene& scene, const Mesh&
                    {"vertices_welded", scene.report.vertices_welded},
                    {"zero_area_faces_dropped", scene.report.zero_area_faces_dropped},
                    {"nonplanar_faces_split", scene.report.nonplanar_faces_split},
+                   {"faces_cut_out", scene.report.faces_cut_out},
                    {"mesh_vertices", mesh.positions.size()},
                    {"elements", mesh.triangles.size()},
                    {"boundary_rounds", info.mesh_report.boundary_rounds},

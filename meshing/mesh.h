@@ -66,8 +66,7 @@ struct MeshingOptions {
   // message naming the size that fits, instead of meshing for hours.
   double max_elements = 2e7;
   // Refuse faces that overlap in one plane facing the same way (see
-  // refuse_coplanar_overlaps). Off only to test the mesher itself on such
-  // input.
+  // meshing/overlap.h). Off only to test the mesher itself on such input.
   bool check_coplanar_overlaps = true;
 };
 
@@ -87,18 +86,6 @@ struct MeshReport {
 // supported; vertices on a patch's boundary edges are shared with every
 // patch that touches that edge, so meshing creates no T-vertex.
 Mesh mesh_scene(const Scene& scene, const MeshingOptions& options, MeshReport* report = nullptr);
-
-// Two patches that lie in one plane (within kCoplanarOverlapTolerance of the
-// scene diagonal), face the same way and overlap by more than that across
-// (a rug modelled on the floor, a face given twice with different
-// vertices): which one is lit is not defined and the light counts the area
-// twice, so mesh_scene refuses them with an InputError naming both faces
-// and a point of the overlap. Faces that meet along an edge, or facing
-// opposite ways (a block's bottom on the floor, a two-sided panel), pass.
-// Candidates come from a box tree over the patches, then over the
-// triangles of those that have one: O(n log n).
-constexpr double kCoplanarOverlapTolerance = 1e-5;
-void refuse_coplanar_overlaps(const Scene& scene, const Mesh& mesh);
 
 // The coarsest triangulation of every patch: its constrained Delaunay
 // triangulation with no point added (holes and concave outlines respected).

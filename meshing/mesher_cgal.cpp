@@ -15,6 +15,7 @@
 #include "meshing/box_tree.h"
 #include "meshing/errors.h"
 #include "meshing/mesh.h"
+#include "meshing/overlap.h"
 
 #include <CGAL/Constrained_Delaunay_triangulation_2.h>
 #include <CGAL/Constrained_triangulation_plus_2.h>

@@ -2,7 +2,7 @@
 
 #include "meshing/box_tree.h"
 #include "meshing/errors.h"
-#include "meshing/mesh.h"
+#include "meshing/overlap.h"
 
 #include <algorithm>
 #include <array>
@@ -94,28 +94,146 @@ struct PlaneAxes {
   Vec3 lift(const Point2& p, double height) const { return p[0] * u + p[1] * w + height * n; }
 };
 
+std::vector<Box3> outline_boxes(const Scene& scene) {
+  std::vector<Box3> boxes(scene.patches.size());
+  for (size_t p = 0; p < boxes.size(); ++p)
+    for (const int v : scene.patches[p].outer) boxes[p].add(scene.vertices[static_cast<size_t>(v)]);
+  return boxes;
+}
+
+// Patches p and q face the same way, q's outline lies on p's plane and p's
+// plane is tilted from q's by less than tol over p's size (its box's
+// diagonal).
+bool coplanar(const Scene& scene, const std::vector<Box3>& boxes, size_t p, size_t q, double tol) {
+  const Patch& a = scene.patches[p];
+  const Patch& b = scene.patches[q];
+  if (!(glm::dot(a.normal, b.normal) > 0.0) ||
+      glm::length(glm::cross(a.normal, b.normal)) * glm::length(boxes[p].hi - boxes[p].lo) > tol)
+    return false;
+  const Vec3& origin = scene.vertices[static_cast<size_t>(a.outer[0])];
+  return std::all_of(b.outer.begin(), b.outer.end(), [&](int v) {
+    return std::abs(glm::dot(scene.vertices[static_cast<size_t>(v)] - origin, a.normal)) <= tol;
+  });
+}
+
+Polygon2 flat_loop(const Scene& scene, const std::vector<int>& loop, const PlaneAxes& axes) {
+  Polygon2 poly;
+  for (const int v : loop) poly.push_back(axes.flat(scene.vertices[static_cast<size_t>(v)]));
+  return poly;
+}
+
+// Crossing number: x strictly inside the polygon (on its edge: either).
+bool inside(const Polygon2& poly, const Point2& x) {
+  bool in = false;
+  for (size_t i = 0, j = poly.size() - 1; i < poly.size(); j = i++) {
+    const Point2& a = poly[i];
+    const Point2& b = poly[j];
+    if ((a[1] > x[1]) != (b[1] > x[1]) && x[0] < a[0] + (x[1] - a[1]) * (b[0] - a[0]) / (b[1] - a[1])) in = !in;
+  }
+  return in;
+}
+
+double point_segment_distance(const Point2& x, const Point2& a, const Point2& b) {
+  const double dx = b[0] - a[0], dy = b[1] - a[1], len2 = dx * dx + dy * dy;
+  const double t = len2 > 0.0 ? std::clamp(((x[0] - a[0]) * dx + (x[1] - a[1]) * dy) / len2, 0.0, 1.0) : 0.0;
+  return std::hypot(x[0] - a[0] - t * dx, x[1] - a[1] - t * dy);
+}
+
+// Whether two segments come within tol of each other (crossing: distance 0).
+bool segments_near(const Point2& a0, const Point2& a1, const Point2& b0, const Point2& b1, double tol) {
+  const double d1 = cross2(a0, a1, b0), d2 = cross2(a0, a1, b1), d3 = cross2(b0, b1, a0), d4 = cross2(b0, b1, a1);
+  if (((d1 < 0.0 && d2 > 0.0) || (d1 > 0.0 && d2 < 0.0)) && ((d3 < 0.0 && d4 > 0.0) || (d3 > 0.0 && d4 < 0.0)))
+    return true;
+  return std::min({point_segment_distance(a0, b0, b1), point_segment_distance(a1, b0, b1),
+                   point_segment_distance(b0, a0, a1), point_segment_distance(b1, a0, a1)}) <= tol;
+}
+
+// Edge pairs a containment test may compare; past this the face is not cut
+// (and the overlap check refuses it).
+constexpr size_t kMaxContainmentPairs = 1 << 20;
+
+// Whether face `in` lies inside face `out` (its outline less its holes)
+// with every edge clear of out's edges by more than tol, and no hole of
+// out inside it.
+bool lies_inside(const Scene& scene, size_t out, size_t in, double tol) {
+  const Patch& o = scene.patches[out];
+  const PlaneAxes axes(o.normal);
+  std::vector<Polygon2> loops = {flat_loop(scene, o.outer, axes)};
+  for (const auto& h : o.holes) loops.push_back(flat_loop(scene, h, axes));
+  const Polygon2 poly = flat_loop(scene, scene.patches[in].outer, axes);
+  size_t pairs = 0;
+  for (const Polygon2& loop : loops) pairs += loop.size() * poly.size();
+  if (pairs > kMaxContainmentPairs) return false;
+  if (!inside(loops[0], poly[0])) return false;
+  for (size_t h = 1; h < loops.size(); ++h)
+    if (inside(loops[h], poly[0]) || inside(poly, loops[h][0])) return false;
+  for (const Polygon2& loop : loops)
+    for (size_t i = 0; i < loop.size(); ++i)
+      for (size_t j = 0; j < poly.size(); ++j)
+        if (segments_near(loop[i], loop[(i + 1) % loop.size()], poly[j], poly[(j + 1) % poly.size()], tol))
+          return false;
+  return true;
+}
+
 }  // namespace
+
+std::vector<std::pair<int, int>> cut_contained_coplanar_faces(Scene& scene, double planarity_tolerance) {
+  std::vector<std::pair<int, int>> cuts;  // in the order made
+  const size_t np = scene.patches.size();
+  const double tol = kCoplanarOverlapTolerance * scene.diagonal();
+  const std::vector<Box3> boxes = outline_boxes(scene);
+  const BoxTree tree(boxes);
+  // Largest first: nothing is cut out of a face before the face itself
+  // has been placed, so the holes it has then are its own (a ring's: the
+  // floor shows through, and the ring is left as it is).
+  std::vector<double> areas(np);
+  std::vector<size_t> order(np);
+  for (size_t p = 0; p < np; ++p) {
+    areas[p] = scene.patch_area(static_cast<int>(p));
+    order[p] = p;
+  }
+  std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) { return areas[a] > areas[b]; });
+  for (const size_t in : order) {
+    if (!scene.patches[in].holes.empty()) continue;
+    const double area = areas[in];
+    int best = -1;
+    double best_area = INFINITY;
+    // Only boxes that, grown by tol, hold in's box are walked: a subtree
+    // whose box does not holds no box that does.
+    const Box3 inner{boxes[in].lo + tol, boxes[in].hi - tol};
+    const auto holds = [&](const Box3& b) {
+      return glm::all(glm::lessThanEqual(b.lo, inner.lo)) && glm::all(glm::greaterThanEqual(b.hi, inner.hi));
+    };
+    tree.where(holds, [&](int o) {
+      const size_t out = static_cast<size_t>(o);
+      if (out == in || !coplanar(scene, boxes, out, in, tol)) return true;
+      // As a hole it must lie in out's plane as build_scene wants holes to
+      // (of out's size: at least its box's diagonal / sqrt 3).
+      const Patch& o_patch = scene.patches[out];
+      const Vec3& origin = scene.vertices[static_cast<size_t>(o_patch.outer[0])];
+      const double off = planarity_tolerance * glm::length(boxes[out].hi - boxes[out].lo) / std::sqrt(3.0);
+      for (const int v : scene.patches[in].outer)
+        if (std::abs(glm::dot(scene.vertices[static_cast<size_t>(v)] - origin, o_patch.normal)) > off) return true;
+      const double a = areas[out];
+      if (a > area && a < best_area && lies_inside(scene, out, in, tol)) {
+        best = o;
+        best_area = a;
+      }
+      return true;
+    });
+    if (best < 0) continue;
+    std::vector<int> hole = scene.patches[in].outer;
+    std::reverse(hole.begin(), hole.end());  // clockwise around the normal
+    scene.patches[static_cast<size_t>(best)].holes.push_back(std::move(hole));
+    cuts.emplace_back(static_cast<int>(in), best);
+  }
+  return cuts;
+}
 
 void refuse_coplanar_overlaps(const Scene& scene, const Mesh& mesh) {
   const size_t np = scene.patches.size();
   const double tol = kCoplanarOverlapTolerance * scene.diagonal();
-  std::vector<Box3> boxes(np);
-  for (size_t p = 0; p < np; ++p)
-    for (const int v : scene.patches[p].outer) boxes[p].add(scene.vertices[static_cast<size_t>(v)]);
-
-  // Facing the same way, q's outline on p's plane, and p's plane tilted
-  // from q's by less than tol over p's size.
-  auto coplanar = [&](size_t p, size_t q) {
-    const Patch& a = scene.patches[p];
-    const Patch& b = scene.patches[q];
-    if (!(glm::dot(a.normal, b.normal) > 0.0) ||
-        glm::length(glm::cross(a.normal, b.normal)) * glm::length(boxes[p].hi - boxes[p].lo) > tol)
-      return false;
-    const Vec3& origin = scene.vertices[static_cast<size_t>(a.outer[0])];
-    return std::all_of(b.outer.begin(), b.outer.end(), [&](int v) {
-      return std::abs(glm::dot(scene.vertices[static_cast<size_t>(v)] - origin, a.normal)) <= tol;
-    });
-  };
+  const std::vector<Box3> boxes = outline_boxes(scene);
   auto refuse = [&](size_t p, size_t q, const Vec3& at) {
     const Patch& first = scene.patches[p];
     const Patch& second = scene.patches[q];
@@ -136,10 +254,8 @@ void refuse_coplanar_overlaps(const Scene& scene, const Mesh& mesh) {
   auto is_direct = [&](size_t p) {
     if (direct[p] < 0) {
       const Patch& patch = scene.patches[p];
-      const PlaneAxes axes(patch.normal);
-      Polygon2 poly;
-      for (const int v : patch.outer) poly.push_back(axes.flat(scene.vertices[static_cast<size_t>(v)]));
-      direct[p] = patch.holes.empty() && patch.outer.size() <= kMaxDirectVertices && convex(poly);
+      direct[p] = patch.holes.empty() && patch.outer.size() <= kMaxDirectVertices &&
+                  convex(flat_loop(scene, patch.outer, PlaneAxes(patch.normal)));
     }
     return direct[p] == 1;
   };
@@ -152,15 +268,14 @@ void refuse_coplanar_overlaps(const Scene& scene, const Mesh& mesh) {
   for (size_t p = 0; p < np; ++p)
     patch_tree.overlapping(boxes[p], tol, [&](int qi) {
       const size_t q = static_cast<size_t>(qi);
-      if (q <= p || !coplanar(p, q)) return true;
+      if (q <= p || !coplanar(scene, boxes, p, q, tol)) return true;
       if (!is_direct(p) || !is_direct(q)) {
         involved[p] = involved[q] = any = true;
         return true;
       }
       const PlaneAxes axes(scene.patches[p].normal);
-      Polygon2 a, b;
-      for (const int v : scene.patches[p].outer) a.push_back(axes.flat(scene.vertices[static_cast<size_t>(v)]));
-      for (const int v : scene.patches[q].outer) b.push_back(axes.flat(scene.vertices[static_cast<size_t>(v)]));
+      const Polygon2 a = flat_loop(scene, scene.patches[p].outer, axes);
+      const Polygon2 b = flat_loop(scene, scene.patches[q].outer, axes);
       if (overlap_more_than(a, b, tol))
         refuse(p, q,
                axes.lift(shared_point(a, b),
@@ -193,7 +308,7 @@ void refuse_coplanar_overlaps(const Scene& scene, const Mesh& mesh) {
     const Polygon2 a = flat(tris[i]);
     tri_tree.overlapping(tri_boxes[i], tol, [&](int j) {
       const size_t q = static_cast<size_t>(mesh.patch[static_cast<size_t>(tris[static_cast<size_t>(j)])]);
-      if (q <= p || !coplanar(p, q)) return true;
+      if (q <= p || !coplanar(scene, boxes, p, q, tol)) return true;
       const Polygon2 b = flat(tris[static_cast<size_t>(j)]);
       if (overlap_more_than(a, b, tol))
         refuse(p, q, axes.lift(shared_point(a, b), glm::dot(mesh.positions[static_cast<size_t>(corners(tris[i])[0])], axes.n)));

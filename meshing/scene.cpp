@@ -1,5 +1,7 @@
 #include "meshing/scene.h"
 
+#include "meshing/overlap.h"
+
 #include "meshing/errors.h"
 
 #include <algorithm>
@@ -429,6 +431,24 @@ Scene build_scene(const std::vector<RawFace>& faces, std::vector<Material> mater
     }
     same.push_back(p);
   }
+
+  // A face lying in a larger one of its plane (a lamp in an uncut ceiling)
+  // is cut out of it, and said.
+  const std::vector<std::pair<int, int>> cuts = cut_contained_coplanar_faces(scene, options.planarity_tolerance);
+  scene.report.faces_cut_out = static_cast<int>(cuts.size());
+  for (size_t k = 0; k < cuts.size() && k < 5; ++k) {
+    const Patch& in = scene.patches[static_cast<size_t>(cuts[k].first)];
+    const Patch& out = scene.patches[static_cast<size_t>(cuts[k].second)];
+    std::string out_at = where(out.file, out.line);
+    out_at.resize(out_at.size() >= 2 ? out_at.size() - 2 : 0);  // without its ": "
+    scene.report.warnings.push_back(where(in.file, in.line) + "face '" + in.name + "' lies in face '" + out.name +
+                                    "'" + (out_at.empty() ? "" : " (" + out_at + ")") +
+                                    ", in its plane and facing the same way: cut out of it as a hole, since what "
+                                    "a face covers is hidden");
+  }
+  if (cuts.size() > 5)
+    scene.report.warnings.push_back(source + ": cut " + std::to_string(cuts.size()) +
+                                    " faces in all out of the faces of their plane they lie in");
 
   if (scene.report.zero_area_faces_dropped > 5)
     scene.report.warnings.push_back(source + ": dropped " +

@@ -45,6 +45,7 @@ struct SceneReport {
   int vertices_welded = 0;        // vertices merged into an earlier coincident one
   int zero_area_faces_dropped = 0;
   int nonplanar_faces_split = 0;  // faces split into triangles
+  int faces_cut_out = 0;          // faces cut out of a face of their plane they lie in (meshing/overlap.h)
   std::vector<std::string> warnings;
 };
 

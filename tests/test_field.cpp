@@ -152,29 +152,8 @@ TEST(Field, AFurnaceWithABlockInsideIsUniformAtEveryVertexEvenOnItsCreases) {
   // reflectance 0.8: B = 5 everywhere. Refinement leaves T-vertices on the
   // room's creases that only zero-area triangles use; gathered on the
   // crease itself (no area around them to step into) they came out 41% low.
-  std::vector<RawFace> faces;
-  auto quad = [&](std::vector<Vec3> pts) {
-    RawFace f;
-    f.name = "box";
-    f.material = 0;
-    f.points = std::move(pts);
-    faces.push_back(f);
-  };
-  auto box = [&](Vec3 lo, Vec3 hi, bool out) {
-    std::vector<std::vector<Vec3>> q = {
-        {{lo.x, lo.y, lo.z}, {lo.x, hi.y, lo.z}, {hi.x, hi.y, lo.z}, {hi.x, lo.y, lo.z}},
-        {{lo.x, lo.y, hi.z}, {hi.x, lo.y, hi.z}, {hi.x, hi.y, hi.z}, {lo.x, hi.y, hi.z}},
-        {{lo.x, lo.y, lo.z}, {lo.x, lo.y, hi.z}, {lo.x, hi.y, hi.z}, {lo.x, hi.y, lo.z}},
-        {{hi.x, lo.y, lo.z}, {hi.x, hi.y, lo.z}, {hi.x, hi.y, hi.z}, {hi.x, lo.y, hi.z}},
-        {{lo.x, hi.y, lo.z}, {lo.x, hi.y, hi.z}, {hi.x, hi.y, hi.z}, {hi.x, hi.y, lo.z}},
-        {{lo.x, lo.y, lo.z}, {hi.x, lo.y, lo.z}, {hi.x, lo.y, hi.z}, {lo.x, lo.y, hi.z}}};
-    for (auto& f : q) {
-      if (!out) std::reverse(f.begin(), f.end());
-      quad(f);
-    }
-  };
-  box({0, 0, 0}, {1, 1, 1}, false);
-  box({0.3, 0.2, 0.3}, {0.6, 0.5, 0.6}, true);
+  std::vector<RawFace> faces = test::box_faces("box", 0, {0, 0, 0}, {1, 1, 1}, false);
+  for (const RawFace& f : test::box_faces("box", 0, {0.3, 0.2, 0.3}, {0.6, 0.5, 0.6})) faces.push_back(f);
   const Scene scene = build_scene(faces, {test::material("f", Rgb(0.8), Rgb(1.0))}, "furnace with a block");
   SolveOptions so;
   so.field = FieldMode::gather;

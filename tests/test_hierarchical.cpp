@@ -321,12 +321,7 @@ TEST(Hierarchical, TwoSidedPanelAndBlocksInContactShareCornersButNotInsides) {
     add_face(faces, name, material, std::move(pts));
   };
   auto block = [&](const std::string& name, Vec3 lo, Vec3 hi) {  // faces out
-    quad(name, 0, {{lo.x, lo.y, lo.z}, {lo.x, hi.y, lo.z}, {hi.x, hi.y, lo.z}, {hi.x, lo.y, lo.z}});
-    quad(name, 0, {{lo.x, lo.y, hi.z}, {hi.x, lo.y, hi.z}, {hi.x, hi.y, hi.z}, {lo.x, hi.y, hi.z}});
-    quad(name, 0, {{lo.x, lo.y, lo.z}, {lo.x, lo.y, hi.z}, {lo.x, hi.y, hi.z}, {lo.x, hi.y, lo.z}});
-    quad(name, 0, {{hi.x, lo.y, lo.z}, {hi.x, hi.y, lo.z}, {hi.x, hi.y, hi.z}, {hi.x, lo.y, hi.z}});
-    quad(name, 0, {{lo.x, hi.y, lo.z}, {lo.x, hi.y, hi.z}, {hi.x, hi.y, hi.z}, {hi.x, hi.y, lo.z}});
-    quad(name, 0, {{lo.x, lo.y, lo.z}, {hi.x, lo.y, lo.z}, {hi.x, lo.y, hi.z}, {lo.x, lo.y, hi.z}});
+    for (const RawFace& f : test::box_faces(name, 0, lo, hi)) faces.push_back(f);
   };
   quad("room", 0, {{0, 0, 0}, {0, 0, 1}, {1, 0, 1}, {1, 0, 0}});  // floor, up
   quad("room", 0, {{0, 1, 0}, {1, 1, 0}, {1, 1, 1}, {0, 1, 1}});  // ceiling, down
@@ -613,4 +608,22 @@ TEST(Hierarchical, BaumLeavesOfAGatheredFieldTakeTheirParentsRadiosity) {
   ASSERT_GE(links.size(), 2u);
   EXPECT_EQ(links.back(), links[links.size() - 2]);
   EXPECT_EQ(leaves.back() - leaves[leaves.size() - 2], 3 * g.stats.baum_splits);
+}
+
+TEST(Hierarchical, AFurnaceWithATileLyingInItsFloorStaysUniform) {
+  // A tile modelled on the furnace's floor: cut out of the floor, the cube
+  // is still covered once and B = E / (1 - rho) everywhere; kept as a
+  // second surface over the floor, the walls' rows would count the tile's
+  // area twice.
+  std::vector<RawFace> faces = test::box_faces("room", 0, {0, 0, 0}, {1, 1, 1}, false);
+  add_face(faces, "tile", 0, {{0.2, 0, 0.2}, {0.2, 0, 0.5}, {0.5, 0, 0.5}, {0.5, 0, 0.2}});
+  const Scene s = build_scene(faces, {test::material("f", Rgb(0.8), Rgb(1.0))}, "furnace with a tile");
+  ASSERT_EQ(s.report.faces_cut_out, 1);
+  HierarchicalOptions ho;
+  ho.epsilon = 0.02;
+  ho.min_area = 2e-3;
+  const HierarchicalSolution h = solve_hierarchical(s, coarse_mesh(s, 0.5), {}, ho);
+  for (const Rgb& b : h.solution.element) ASSERT_NEAR(b.x, 5.0, 5e-5);
+  EXPECT_NEAR(h.stats.row_sum_min, 1.0, 1e-9);
+  EXPECT_NEAR(h.stats.row_sum_max, 1.0, 1e-9);
 }

@@ -2,6 +2,7 @@
 
 #include "io/obj_reader.h"
 #include "meshing/errors.h"
+#include "meshing/mesh.h"
 
 #include <gtest/gtest.h>
 
@@ -304,4 +305,43 @@ TEST(Scene, FacesFacingEachOtherAcrossAWeldedGapAreRefused) {
   EXPECT_TRUE(contains(msg, "s.obj:12")) << msg;
   EXPECT_TRUE(contains(msg, "gap of 1e-09")) << msg;
   fs::remove_all(dir);
+}
+
+TEST(Scene, AFaceLyingInAnotherOfItsPlaneIsCutOutOfIt) {
+  // A lamp lying in an uncut ceiling, a rug on the floor, and a tile on a
+  // mat on the floor: each is cut out of the smallest face it lies in (the
+  // tile out of the mat, not the floor), since what a face covers is
+  // hidden; the cuts are counted and said.
+  auto rect = [](const std::string& name, int material, double x0, double z0, double x1, double z1, double y,
+                 bool up) {
+    RawFace f;
+    f.name = name;
+    f.material = material;
+    f.points = {{x0, y, z0}, {x0, y, z1}, {x1, y, z1}, {x1, y, z0}};
+    if (!up) std::reverse(f.points.begin(), f.points.end());
+    return f;
+  };
+  const std::vector<RawFace> faces = {rect("floor", 0, 0, 0, 4, 4, 0, true),
+                                      rect("rug", 0, 1, 1, 2, 2, 0, true),
+                                      rect("tile", 0, 2.8, 2.8, 3.2, 3.2, 0, true),
+                                      rect("mat", 0, 2.5, 2.5, 3.5, 3.5, 0, true),
+                                      rect("ceiling", 0, 0, 0, 4, 4, 3, false),
+                                      rect("lamp", 1, 1.5, 1.5, 2.5, 2.5, 3, false)};
+  const Scene s = build_scene(
+      faces, {test::material("white", Rgb(0.5)), test::material("lamp", Rgb(0.0), Rgb(10.0))}, "cuts");
+  EXPECT_EQ(s.report.faces_cut_out, 4);
+  const int floor = test::patch_named(s, "floor"), mat = test::patch_named(s, "mat");
+  const int ceiling = test::patch_named(s, "ceiling");
+  EXPECT_EQ(s.patches[static_cast<size_t>(floor)].holes.size(), 2u);
+  EXPECT_EQ(s.patches[static_cast<size_t>(mat)].holes.size(), 1u);
+  EXPECT_NEAR(s.patch_area(floor), 16.0 - 1.0 - 1.0, 1e-12);
+  EXPECT_NEAR(s.patch_area(mat), 1.0 - 0.16, 1e-12);
+  EXPECT_NEAR(s.patch_area(ceiling), 15.0, 1e-12);
+  bool said = false;
+  for (const std::string& w : s.report.warnings) said = said || contains(w, "face 'lamp' lies in face 'ceiling'");
+  EXPECT_TRUE(said);
+  // The mesh covers each patch once, and nothing is left overlapping.
+  const Mesh m = mesh_scene(s, {});
+  const std::vector<double> area = test::patch_areas(s, m);
+  for (size_t p = 0; p < s.patches.size(); ++p) EXPECT_NEAR(area[p], s.patch_area(static_cast<int>(p)), 1e-9);
 }

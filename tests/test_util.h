@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <exception>
 
 #include <string>
@@ -20,6 +21,29 @@ inline Material material(const std::string& name, const Rgb& reflectance, const 
   m.reflectance = reflectance;
   m.emission = emission;
   return m;
+}
+
+// The six faces of the box [lo, hi] as quads named `name` with material
+// `material`, facing out (a block) or in (a room).
+inline std::vector<RawFace> box_faces(const std::string& name, int material, const Vec3& lo, const Vec3& hi,
+                                      bool outward = true) {
+  std::vector<std::vector<Vec3>> q = {
+      {{lo.x, lo.y, lo.z}, {lo.x, hi.y, lo.z}, {hi.x, hi.y, lo.z}, {hi.x, lo.y, lo.z}},
+      {{lo.x, lo.y, hi.z}, {hi.x, lo.y, hi.z}, {hi.x, hi.y, hi.z}, {lo.x, hi.y, hi.z}},
+      {{lo.x, lo.y, lo.z}, {lo.x, lo.y, hi.z}, {lo.x, hi.y, hi.z}, {lo.x, hi.y, lo.z}},
+      {{hi.x, lo.y, lo.z}, {hi.x, hi.y, lo.z}, {hi.x, hi.y, hi.z}, {hi.x, lo.y, hi.z}},
+      {{lo.x, hi.y, lo.z}, {lo.x, hi.y, hi.z}, {hi.x, hi.y, hi.z}, {hi.x, hi.y, lo.z}},
+      {{lo.x, lo.y, lo.z}, {hi.x, lo.y, lo.z}, {hi.x, lo.y, hi.z}, {lo.x, lo.y, hi.z}}};
+  std::vector<RawFace> faces;
+  for (auto& pts : q) {
+    RawFace f;
+    f.name = name;
+    f.material = material;
+    f.points = std::move(pts);
+    if (!outward) std::reverse(f.points.begin(), f.points.end());
+    faces.push_back(std::move(f));
+  }
+  return faces;
 }
 
 // Runs f, expects it to throw E, returns the message (a test failure when it
