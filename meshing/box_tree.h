@@ -76,7 +76,7 @@ private:
     int left = -1;  // children left and left + 1; -1 for a leaf
     int begin = 0, end = 0;
   };
-  void build(int node, int begin, int end, int depth);
+  void build(int node, int begin, int end, int depth, const std::vector<Vec3>& centre);
   std::vector<Box3> boxes_;
   std::vector<int> order_;
   std::vector<Node> nodes_;

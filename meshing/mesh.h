@@ -65,9 +65,6 @@ struct MeshingOptions {
   // (estimated from the patch areas, before any meshing) is refused with a
   // message naming the size that fits, instead of meshing for hours.
   double max_elements = 2e7;
-  // Refuse faces that overlap in one plane facing the same way (see
-  // meshing/overlap.h). Off only to test the mesher itself on such input.
-  bool check_coplanar_overlaps = true;
 };
 
 struct MeshReport {

@@ -900,7 +900,7 @@ Mesh mesh_scene(const Scene& scene, const MeshingOptions& options, MeshReport* r
   const MeshingOptions opt = resolve_meshing_options(scene, options);
   SceneMesher mesher(scene, opt, true);
   Mesh mesh = mesher.run(report);
-  if (opt.check_coplanar_overlaps) refuse_coplanar_overlaps(scene, mesh);
+  refuse_coplanar_overlaps(scene, mesh);
   return mesh;
 }
 

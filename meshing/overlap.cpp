@@ -116,9 +116,16 @@ bool coplanar(const Scene& scene, const std::vector<Box3>& boxes, size_t p, size
   });
 }
 
+// A loop in a plane's axes, into `poly` (kept by the caller: a million
+// faces would otherwise allocate a million times).
+void flat_loop(const Scene& scene, const std::vector<int>& loop, const PlaneAxes& axes, Polygon2& poly) {
+  poly.clear();
+  for (const int v : loop) poly.push_back(axes.flat(scene.vertices[static_cast<size_t>(v)]));
+}
+
 Polygon2 flat_loop(const Scene& scene, const std::vector<int>& loop, const PlaneAxes& axes) {
   Polygon2 poly;
-  for (const int v : loop) poly.push_back(axes.flat(scene.vertices[static_cast<size_t>(v)]));
+  flat_loop(scene, loop, axes, poly);
   return poly;
 }
 
@@ -175,117 +182,156 @@ bool lies_inside(const Scene& scene, size_t out, size_t in, double tol) {
   return true;
 }
 
+// Whether two loops of one orientation run along a common edge (in
+// opposite directions).
+bool share_an_edge(const std::vector<int>& a, const std::vector<int>& b) {
+  for (size_t i = 0; i < a.size(); ++i)
+    for (size_t j = 0; j < b.size(); ++j)
+      if (a[i] == b[(j + 1) % b.size()] && a[(i + 1) % a.size()] == b[j]) return true;
+  return false;
+}
+
+// The error for patches p and q that overlap around `at`.
+InputError overlap_error(const Scene& scene, size_t p, size_t q, const Vec3& at, double tol) {
+  const Patch& first = scene.patches[p];
+  const Patch& second = scene.patches[q];
+  std::string first_at = where(first.file, first.line);
+  first_at.resize(first_at.size() >= 2 ? first_at.size() - 2 : 0);  // without its ": "
+  return InputError(where(second.file, second.line) + "face '" + second.name + "' and face '" + first.name + "'" +
+                    (first_at.empty() ? "" : " (" + first_at + ")") +
+                    " lie in one plane facing the same way and overlap (around (" + format_number(at.x) + ", " +
+                    format_number(at.y) + ", " + format_number(at.z) +
+                    ")): which of them is lit there is not defined, and the light would count the area twice; "
+                    "cut the overlap out of one of them (a hole in the ceiling where a lamp lies in it), or lift one "
+                    "off the other by more than " +
+                    format_number(tol) + " (" + format_number(kCoplanarOverlapTolerance) + " of the scene size)");
+}
+
+// Whether patch `in` can become a hole of patch `out`: it lies in out's
+// plane as build_scene wants holes to (within planarity_tolerance of out's
+// size, at least its box's diagonal / sqrt 3), inside it and clear of its
+// edges and holes.
+bool fits_as_hole(const Scene& scene, const std::vector<Box3>& boxes, size_t out, size_t in, double tol,
+                  double planarity_tolerance) {
+  const Patch& o = scene.patches[out];
+  const Vec3& origin = scene.vertices[static_cast<size_t>(o.outer[0])];
+  const double off = planarity_tolerance * glm::length(boxes[out].hi - boxes[out].lo) / std::sqrt(3.0);
+  for (const int v : scene.patches[in].outer)
+    if (std::abs(glm::dot(scene.vertices[static_cast<size_t>(v)] - origin, o.normal)) > off) return false;
+  return lies_inside(scene, out, in, tol);
+}
+
 }  // namespace
 
-std::vector<std::pair<int, int>> cut_contained_coplanar_faces(Scene& scene, double planarity_tolerance) {
-  std::vector<std::pair<int, int>> cuts;  // in the order made
+std::vector<std::pair<int, int>> settle_coplanar_faces(Scene& scene, double planarity_tolerance) {
   const size_t np = scene.patches.size();
   const double tol = kCoplanarOverlapTolerance * scene.diagonal();
   const std::vector<Box3> boxes = outline_boxes(scene);
-  const BoxTree tree(boxes);
-  // Largest first: nothing is cut out of a face before the face itself
-  // has been placed, so the holes it has then are its own (a ring's: the
-  // floor shows through, and the ring is left as it is).
-  std::vector<double> areas(np);
-  std::vector<size_t> order(np);
-  for (size_t p = 0; p < np; ++p) {
-    areas[p] = scene.patch_area(static_cast<int>(p));
-    order[p] = p;
-  }
-  std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) { return areas[a] > areas[b]; });
-  for (const size_t in : order) {
-    if (!scene.patches[in].holes.empty()) continue;
-    const double area = areas[in];
-    int best = -1;
-    double best_area = INFINITY;
-    // Only boxes that, grown by tol, hold in's box are walked: a subtree
-    // whose box does not holds no box that does.
-    const Box3 inner{boxes[in].lo + tol, boxes[in].hi - tol};
-    const auto holds = [&](const Box3& b) {
-      return glm::all(glm::lessThanEqual(b.lo, inner.lo)) && glm::all(glm::greaterThanEqual(b.hi, inner.hi));
-    };
-    tree.where(holds, [&](int o) {
-      const size_t out = static_cast<size_t>(o);
-      if (out == in || !coplanar(scene, boxes, out, in, tol)) return true;
-      // As a hole it must lie in out's plane as build_scene wants holes to
-      // (of out's size: at least its box's diagonal / sqrt 3).
-      const Patch& o_patch = scene.patches[out];
-      const Vec3& origin = scene.vertices[static_cast<size_t>(o_patch.outer[0])];
-      const double off = planarity_tolerance * glm::length(boxes[out].hi - boxes[out].lo) / std::sqrt(3.0);
-      for (const int v : scene.patches[in].outer)
-        if (std::abs(glm::dot(scene.vertices[static_cast<size_t>(v)] - origin, o_patch.normal)) > off) return true;
-      const double a = areas[out];
-      if (a > area && a < best_area && lies_inside(scene, out, in, tol)) {
-        best = o;
-        best_area = a;
+  scene.coplanar_pairs.clear();
+
+  // A pair in one plane that is not a cut: two convex faces without holes
+  // are tested whole (convex faces along a shared edge lie on its two
+  // sides); the others are left to the mesh's triangles.
+  std::vector<signed char> direct(np, -1);  // per patch, -1 until known
+  Polygon2 pa, pb;
+  auto is_direct = [&](size_t p) {
+    if (direct[p] < 0) {
+      const Patch& patch = scene.patches[p];
+      direct[p] = patch.holes.empty() && patch.outer.size() <= kMaxDirectVertices;
+      if (direct[p]) {
+        flat_loop(scene, patch.outer, PlaneAxes(patch.normal), pa);
+        direct[p] = convex(pa);
       }
-      return true;
-    });
-    if (best < 0) continue;
+    }
+    return direct[p] == 1;
+  };
+  auto check = [&](size_t p, size_t q) {
+    if (!is_direct(p) || !is_direct(q)) {
+      scene.coplanar_pairs.emplace_back(static_cast<int>(p), static_cast<int>(q));
+      return;
+    }
+    if (share_an_edge(scene.patches[p].outer, scene.patches[q].outer)) return;
+    const PlaneAxes axes(scene.patches[p].normal);
+    flat_loop(scene, scene.patches[p].outer, axes, pa);
+    flat_loop(scene, scene.patches[q].outer, axes, pb);
+    if (overlap_more_than(pa, pb, tol))
+      throw overlap_error(scene, p, q,
+                          axes.lift(shared_point(pa, pb),
+                                    glm::dot(scene.vertices[static_cast<size_t>(scene.patches[p].outer[0])], axes.n)),
+                          tol);
+  };
+  // Whether out's box, grown by tol, holds in's box: a pair that may be a
+  // cut, checked once the cuts are made.
+  auto holds = [&](size_t out, size_t in) {
+    return glm::all(glm::lessThanEqual(boxes[out].lo - tol, boxes[in].lo)) &&
+           glm::all(glm::greaterThanEqual(boxes[out].hi + tol, boxes[in].hi));
+  };
+  std::vector<std::pair<size_t, size_t>> held;  // (p, q), p < q
+  {
+    const BoxTree tree(boxes);
+    for (size_t p = 0; p < np; ++p)
+      tree.overlapping(boxes[p], tol, [&](int qi) {
+        const size_t q = static_cast<size_t>(qi);
+        if (q <= p || !(coplanar(scene, boxes, p, q, tol) || coplanar(scene, boxes, q, p, tol))) return true;
+        if (holds(p, q) || holds(q, p))
+          held.emplace_back(p, q);
+        else
+          check(p, q);
+        return true;
+      });
+  }
+
+  // Cuts: per face without holes, the faces of larger area holding it.
+  // Largest first: nothing is cut out of a face before the face itself has
+  // been placed, so the holes it has then are its own (a ring's: the floor
+  // shows through, and it is not cut).
+  std::vector<double> areas(np, -1.0);
+  auto area = [&](size_t p) {
+    if (areas[p] < 0.0) areas[p] = scene.patch_area(static_cast<int>(p));
+    return areas[p];
+  };
+  std::vector<std::pair<size_t, size_t>> containing;  // (in, out)
+  for (const auto& [a, b] : held)
+    for (const auto& [in, out] : {std::pair<size_t, size_t>(a, b), std::pair<size_t, size_t>(b, a)})
+      if (scene.patches[in].holes.empty() && holds(out, in) && area(out) > area(in)) containing.emplace_back(in, out);
+  std::stable_sort(containing.begin(), containing.end(), [&](const auto& x, const auto& y) {
+    return areas[x.first] > areas[y.first] || (areas[x.first] == areas[y.first] && x.first < y.first);
+  });
+  std::vector<std::pair<int, int>> cuts;  // (in, out), in the order made
+  std::vector<std::pair<size_t, size_t>> cut_pairs;  // the same as (p, q), p < q
+  for (size_t k = 0; k < containing.size();) {
+    const size_t in = containing[k].first;
+    size_t best = np;
+    for (; k < containing.size() && containing[k].first == in; ++k) {
+      const size_t out = containing[k].second;
+      if ((best == np || areas[out] < areas[best]) && fits_as_hole(scene, boxes, out, in, tol, planarity_tolerance))
+        best = out;
+    }
+    if (best == np) continue;
     std::vector<int> hole = scene.patches[in].outer;
     std::reverse(hole.begin(), hole.end());  // clockwise around the normal
-    scene.patches[static_cast<size_t>(best)].holes.push_back(std::move(hole));
-    cuts.emplace_back(static_cast<int>(in), best);
+    scene.patches[best].holes.push_back(std::move(hole));
+    direct[best] = 0;
+    cuts.emplace_back(static_cast<int>(in), static_cast<int>(best));
+    cut_pairs.emplace_back(std::min(in, best), std::max(in, best));
   }
+  std::sort(cut_pairs.begin(), cut_pairs.end());
+  for (const auto& pq : held)
+    if (!std::binary_search(cut_pairs.begin(), cut_pairs.end(), pq)) check(pq.first, pq.second);
+  std::sort(scene.coplanar_pairs.begin(), scene.coplanar_pairs.end());
   return cuts;
 }
 
 void refuse_coplanar_overlaps(const Scene& scene, const Mesh& mesh) {
+  if (scene.coplanar_pairs.empty()) return;
   const size_t np = scene.patches.size();
   const double tol = kCoplanarOverlapTolerance * scene.diagonal();
-  const std::vector<Box3> boxes = outline_boxes(scene);
-  auto refuse = [&](size_t p, size_t q, const Vec3& at) {
-    const Patch& first = scene.patches[p];
-    const Patch& second = scene.patches[q];
-    std::string first_at = where(first.file, first.line);
-    first_at.resize(first_at.size() >= 2 ? first_at.size() - 2 : 0);  // without its ": "
-    throw InputError(where(second.file, second.line) + "face '" + second.name + "' and face '" + first.name + "'" +
-                     (first_at.empty() ? "" : " (" + first_at + ")") +
-                     " lie in one plane facing the same way and overlap (around (" + format_number(at.x) + ", " +
-                     format_number(at.y) + ", " + format_number(at.z) +
-                     ")): which of them is lit there is not defined, and the light would count the area twice; "
-                     "cut the overlap out of one of them (a hole in the ceiling where a lamp lies in it), or lift one off "
-                     "the other by more than " +
-                     format_number(tol) + " (" + format_number(kCoplanarOverlapTolerance) + " of the scene size)");
-  };
-  // Per patch: whether it is a convex polygon without holes, small enough
-  // to be tested whole (-1: not known yet).
-  std::vector<signed char> direct(np, -1);
-  auto is_direct = [&](size_t p) {
-    if (direct[p] < 0) {
-      const Patch& patch = scene.patches[p];
-      direct[p] = patch.holes.empty() && patch.outer.size() <= kMaxDirectVertices &&
-                  convex(flat_loop(scene, patch.outer, PlaneAxes(patch.normal)));
-    }
-    return direct[p] == 1;
-  };
-
-  // Candidates from a box tree over the patches; two convex outlines are
-  // tested whole, any other pair through its triangles below.
-  const BoxTree patch_tree(boxes);
   std::vector<char> involved(np, 0);
-  bool any = false;
-  for (size_t p = 0; p < np; ++p)
-    patch_tree.overlapping(boxes[p], tol, [&](int qi) {
-      const size_t q = static_cast<size_t>(qi);
-      if (q <= p || !coplanar(scene, boxes, p, q, tol)) return true;
-      if (!is_direct(p) || !is_direct(q)) {
-        involved[p] = involved[q] = any = true;
-        return true;
-      }
-      const PlaneAxes axes(scene.patches[p].normal);
-      const Polygon2 a = flat_loop(scene, scene.patches[p].outer, axes);
-      const Polygon2 b = flat_loop(scene, scene.patches[q].outer, axes);
-      if (overlap_more_than(a, b, tol))
-        refuse(p, q,
-               axes.lift(shared_point(a, b),
-                         glm::dot(scene.vertices[static_cast<size_t>(scene.patches[p].outer[0])], axes.n)));
-      return true;
-    });
-  if (!any) return;
+  for (const auto& [p, q] : scene.coplanar_pairs) involved[static_cast<size_t>(p)] = involved[static_cast<size_t>(q)] = 1;
+  const std::vector<std::pair<int, int>>& pairs = scene.coplanar_pairs;  // sorted
 
-  // The triangles of the patches left, pair by pair where their boxes meet,
-  // in the first patch's plane.
+  // Their triangles, pair by pair where their boxes meet, in the first
+  // patch's plane.
   std::vector<int> tris;
   std::vector<Box3> tri_boxes;
   for (int t = 0; t < mesh.triangle_count(); ++t) {
@@ -308,10 +354,14 @@ void refuse_coplanar_overlaps(const Scene& scene, const Mesh& mesh) {
     const Polygon2 a = flat(tris[i]);
     tri_tree.overlapping(tri_boxes[i], tol, [&](int j) {
       const size_t q = static_cast<size_t>(mesh.patch[static_cast<size_t>(tris[static_cast<size_t>(j)])]);
-      if (q <= p || !coplanar(scene, boxes, p, q, tol)) return true;
+      if (q <= p || !std::binary_search(pairs.begin(), pairs.end(), std::pair<int, int>(static_cast<int>(p), static_cast<int>(q))))
+        return true;
       const Polygon2 b = flat(tris[static_cast<size_t>(j)]);
       if (overlap_more_than(a, b, tol))
-        refuse(p, q, axes.lift(shared_point(a, b), glm::dot(mesh.positions[static_cast<size_t>(corners(tris[i])[0])], axes.n)));
+        throw overlap_error(
+            scene, p, q,
+            axes.lift(shared_point(a, b), glm::dot(mesh.positions[static_cast<size_t>(corners(tris[i])[0])], axes.n)),
+            tol);
       return true;
     });
   }

@@ -15,26 +15,30 @@ namespace radmesh {
 // off a surface.
 constexpr double kCoplanarOverlapTolerance = 1e-5;
 
-// A face without holes that lies wholly inside another face of its plane,
-// facing the same way and clear of that face's edges and holes by more than
-// the tolerance (a lamp lying in an uncut ceiling, a rug on the floor), is
-// cut out of it: its outline becomes a hole of the other (of the smallest
-// such face whose plane it lies in within planarity_tolerance of that
-// face's size, as build_scene wants holes to), since what lies under a face
-// is hidden from the room. A face with holes of its own (a ring: the floor
-// shows through) is not cut. Returns the cuts as (inner patch, outer
-// patch), largest inner face first. build_scene calls it.
-std::vector<std::pair<int, int>> cut_contained_coplanar_faces(Scene& scene, double planarity_tolerance);
+// Faces that lie in one plane (within kCoplanarOverlapTolerance of the
+// scene diagonal) facing the same way, found through a box tree over the
+// patches, as build_scene leaves them:
+// - A face without holes lying wholly inside a larger one, clear of its
+//   edges and holes by more than the tolerance (a lamp lying in an uncut
+//   ceiling, a rug on the floor), is cut out of it: its outline becomes a
+//   hole of the smallest such face whose plane it lies in within
+//   planarity_tolerance of that face's size (as build_scene wants holes
+//   to), since what lies under a face is hidden. Largest first, so a face
+//   with holes of its own (a ring: the floor shows through) is not cut.
+// - Two convex faces without holes that overlap otherwise by more than the
+//   tolerance across are refused with an InputError naming both and a point
+//   of the overlap: which one is lit is not defined, and the light would
+//   count the area twice.
+// - Other pairs (non-convex, holed) go to Scene::coplanar_pairs, for
+//   refuse_coplanar_overlaps to test through their triangles.
+// Faces that meet along an edge, or facing opposite ways (a block's bottom
+// on the floor, a two-sided panel), pass. Returns the cuts as (inner patch,
+// outer patch), largest inner face first.
+std::vector<std::pair<int, int>> settle_coplanar_faces(Scene& scene, double planarity_tolerance);
 
-// Two patches that lie in one plane, face the same way and overlap by more
-// than the tolerance across, what the cut above leaves (a rug over the
-// floor's edge, two rugs over one another): which one is lit is not
-// defined and the light counts the area twice, so mesh_scene refuses them
-// with an InputError naming both faces and a point of the overlap. Faces
-// that meet along an edge, or facing opposite ways (a block's bottom on the
-// floor, a two-sided panel), pass. Candidates come from a box tree over the
-// patches; convex outlines are tested whole, others through their
-// triangles in `mesh`: O(n log n).
+// The same refusal for Scene::coplanar_pairs, through the triangles of
+// `mesh` (mesh_scene calls it): nothing to do, and no cost, when the list
+// is empty.
 void refuse_coplanar_overlaps(const Scene& scene, const Mesh& mesh);
 
 }  // namespace radmesh

@@ -433,8 +433,8 @@ Scene build_scene(const std::vector<RawFace>& faces, std::vector<Material> mater
   }
 
   // A face lying in a larger one of its plane (a lamp in an uncut ceiling)
-  // is cut out of it, and said.
-  const std::vector<std::pair<int, int>> cuts = cut_contained_coplanar_faces(scene, options.planarity_tolerance);
+  // is cut out of it, and said; other overlaps in one plane are refused.
+  const std::vector<std::pair<int, int>> cuts = settle_coplanar_faces(scene, options.planarity_tolerance);
   scene.report.faces_cut_out = static_cast<int>(cuts.size());
   for (size_t k = 0; k < cuts.size() && k < 5; ++k) {
     const Patch& in = scene.patches[static_cast<size_t>(cuts[k].first)];

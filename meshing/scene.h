@@ -4,6 +4,7 @@
 #include "meshing/geometry.h"
 
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace radmesh {
@@ -55,6 +56,10 @@ struct Scene {
   std::vector<Material> materials;
   std::vector<Patch> patches;
   SceneReport report;
+  // Patch pairs (p < q, sorted) that lie in one plane facing the same way
+  // with meeting boxes, whose overlap the mesh's triangles decide
+  // (meshing/overlap.h; filled by build_scene).
+  std::vector<std::pair<int, int>> coplanar_pairs;
 
   std::vector<Vec3> loop_points(const std::vector<int>& loop) const;
   const Material& material_of(int patch) const;      // the material of patches[patch]

@@ -468,10 +468,6 @@ void check_full_mesh(const Scene& s, const std::string& what, double seconds_bou
   const auto t0 = std::chrono::steady_clock::now();
   MeshingOptions o;
   o.discontinuity = DiscontinuityMode::full;
-  // Some of these scenes overlap in one plane on purpose (a mat in the
-  // floor, a lamp in its ceiling): refused by default, meshed here to test
-  // the mesher on them.
-  o.check_coplanar_overlaps = false;
   MeshReport rep;
   const Mesh m = mesh_scene(s, o, &rep);
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

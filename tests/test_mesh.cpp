@@ -228,11 +228,13 @@ RawFace flat_rect(const std::string& name, double x0, double z0, double x1, doub
   return f;
 }
 
+// The error a scene of these faces gets, from build_scene (convex faces) or
+// from meshing (the others).
 std::string overlap_message(const std::vector<RawFace>& faces) {
-  const Scene s = build_scene(faces, {test::material("white", Rgb(0.5))}, "rug.obj");
   MeshingOptions o;
   o.discontinuity = DiscontinuityMode::contacts;
-  return test::message_of<InputError>([&] { mesh_scene(s, o); });
+  return test::message_of<InputError>(
+      [&] { mesh_scene(build_scene(faces, {test::material("white", Rgb(0.5))}, "rug.obj"), o); });
 }
 }  // namespace
 
