@@ -1,4 +1,5 @@
-// Faces that lie in one plane, face the same way and overlap: refused.
+// Faces that lie in one plane facing the same way: cut out of the face they
+// lie in, or refused where they overlap otherwise (see overlap.h).
 
 #include "meshing/box_tree.h"
 #include "meshing/errors.h"
@@ -82,16 +83,20 @@ Point2 shared_point(const Polygon2& a, const Polygon2& b) {
   return c;
 }
 
-// A plane's two in-plane axes, (u, w, n) right-handed: a loop counter-
-// clockwise around n is counter-clockwise in (u, w).
+// A plane's axes about a point of it, (u, w, n) right-handed: a loop
+// counter-clockwise around n is counter-clockwise in (u, w). About a point
+// of the face, not the origin, the coordinates keep their digits in a scene
+// far from the origin.
 struct PlaneAxes {
-  Vec3 u, w, n;
-  explicit PlaneAxes(const Vec3& normal)
-      : u(glm::normalize(glm::cross(normal, std::abs(normal.x) < 0.9 ? Vec3(1, 0, 0) : Vec3(0, 1, 0)))),
-        w(glm::cross(normal, u)),
-        n(normal) {}
-  Point2 flat(const Vec3& x) const { return {glm::dot(x, u), glm::dot(x, w)}; }
-  Vec3 lift(const Point2& p, double height) const { return p[0] * u + p[1] * w + height * n; }
+  Vec3 o, u, w;
+  PlaneAxes(const Vec3& normal, const Vec3& origin)
+      : o(origin),
+        u(glm::normalize(glm::cross(normal, std::abs(normal.x) < 0.9 ? Vec3(1, 0, 0) : Vec3(0, 1, 0)))),
+        w(glm::cross(normal, u)) {}
+  PlaneAxes(const Scene& scene, const Patch& patch)
+      : PlaneAxes(patch.normal, scene.vertices[static_cast<size_t>(patch.outer[0])]) {}
+  Point2 flat(const Vec3& x) const { return {glm::dot(x - o, u), glm::dot(x - o, w)}; }
+  Vec3 lift(const Point2& p) const { return o + p[0] * u + p[1] * w; }
 };
 
 std::vector<Box3> outline_boxes(const Scene& scene) {
@@ -164,7 +169,7 @@ constexpr size_t kMaxContainmentPairs = 1 << 20;
 // out inside it.
 bool lies_inside(const Scene& scene, size_t out, size_t in, double tol) {
   const Patch& o = scene.patches[out];
-  const PlaneAxes axes(o.normal);
+  const PlaneAxes axes(scene, o);
   std::vector<Polygon2> loops = {flat_loop(scene, o.outer, axes)};
   for (const auto& h : o.holes) loops.push_back(flat_loop(scene, h, axes));
   const Polygon2 poly = flat_loop(scene, scene.patches[in].outer, axes);
@@ -239,7 +244,7 @@ std::vector<std::pair<int, int>> settle_coplanar_faces(Scene& scene, double plan
       const Patch& patch = scene.patches[p];
       direct[p] = patch.holes.empty() && patch.outer.size() <= kMaxDirectVertices;
       if (direct[p]) {
-        flat_loop(scene, patch.outer, PlaneAxes(patch.normal), pa);
+        flat_loop(scene, patch.outer, PlaneAxes(scene, patch), pa);
         direct[p] = convex(pa);
       }
     }
@@ -251,14 +256,10 @@ std::vector<std::pair<int, int>> settle_coplanar_faces(Scene& scene, double plan
       return;
     }
     if (share_an_edge(scene.patches[p].outer, scene.patches[q].outer)) return;
-    const PlaneAxes axes(scene.patches[p].normal);
+    const PlaneAxes axes(scene, scene.patches[p]);
     flat_loop(scene, scene.patches[p].outer, axes, pa);
     flat_loop(scene, scene.patches[q].outer, axes, pb);
-    if (overlap_more_than(pa, pb, tol))
-      throw overlap_error(scene, p, q,
-                          axes.lift(shared_point(pa, pb),
-                                    glm::dot(scene.vertices[static_cast<size_t>(scene.patches[p].outer[0])], axes.n)),
-                          tol);
+    if (overlap_more_than(pa, pb, tol)) throw overlap_error(scene, p, q, axes.lift(shared_point(pa, pb)), tol);
   };
   // Whether out's box, grown by tol, holds in's box: a pair that may be a
   // cut, checked once the cuts are made.
@@ -342,13 +343,12 @@ void refuse_coplanar_overlaps(const Scene& scene, const Mesh& mesh) {
     tri_boxes.push_back(b);
   }
   const BoxTree tri_tree(tri_boxes);
-  auto corners = [&](int t) { return mesh.triangles[static_cast<size_t>(t)]; };
   for (size_t i = 0; i < tris.size(); ++i) {
     const size_t p = static_cast<size_t>(mesh.patch[static_cast<size_t>(tris[i])]);
-    const PlaneAxes axes(scene.patches[p].normal);
+    const PlaneAxes axes(scene, scene.patches[p]);
     auto flat = [&](int t) {
       Polygon2 f;
-      for (const int v : corners(t)) f.push_back(axes.flat(mesh.positions[static_cast<size_t>(v)]));
+      for (const int v : mesh.triangles[static_cast<size_t>(t)]) f.push_back(axes.flat(mesh.positions[static_cast<size_t>(v)]));
       return f;
     };
     const Polygon2 a = flat(tris[i]);
@@ -357,11 +357,7 @@ void refuse_coplanar_overlaps(const Scene& scene, const Mesh& mesh) {
       if (q <= p || !std::binary_search(pairs.begin(), pairs.end(), std::pair<int, int>(static_cast<int>(p), static_cast<int>(q))))
         return true;
       const Polygon2 b = flat(tris[static_cast<size_t>(j)]);
-      if (overlap_more_than(a, b, tol))
-        throw overlap_error(
-            scene, p, q,
-            axes.lift(shared_point(a, b), glm::dot(mesh.positions[static_cast<size_t>(corners(tris[i])[0])], axes.n)),
-            tol);
+      if (overlap_more_than(a, b, tol)) throw overlap_error(scene, p, q, axes.lift(shared_point(a, b)), tol);
       return true;
     });
   }
