@@ -15,6 +15,13 @@ std::string where(const std::string& file, int line) {
   return s;
 }
 
+std::string also_at(const std::string& file, int line) {
+  std::string s = where(file, line);
+  if (s.empty()) return s;
+  s.resize(s.size() - 2);  // without its ": "
+  return " (" + s + ")";
+}
+
 std::string format_number(double v) {
   std::ostringstream s;
   s.precision(9);

@@ -41,6 +41,10 @@ public:
 // Helper: "file:line: " prefix (line omitted when <= 0, file omitted when empty).
 std::string where(const std::string& file, int line);
 
+// The same place without the ": ", in parentheses after a space, for a
+// second place inside a message (" (file:line)"; empty when file is empty).
+std::string also_at(const std::string& file, int line);
+
 // A number for a message: up to 9 significant digits, no trailing zeros
 // (std::to_string would print 1e-20 as 0.000000).
 std::string format_number(double v);

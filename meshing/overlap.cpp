@@ -200,11 +200,8 @@ bool share_an_edge(const std::vector<int>& a, const std::vector<int>& b) {
 InputError overlap_error(const Scene& scene, size_t p, size_t q, const Vec3& at, double tol) {
   const Patch& first = scene.patches[p];
   const Patch& second = scene.patches[q];
-  std::string first_at = where(first.file, first.line);
-  first_at.resize(first_at.size() >= 2 ? first_at.size() - 2 : 0);  // without its ": "
   return InputError(where(second.file, second.line) + "face '" + second.name + "' and face '" + first.name + "'" +
-                    (first_at.empty() ? "" : " (" + first_at + ")") +
-                    " lie in one plane facing the same way and overlap (around (" + format_number(at.x) + ", " +
+                    also_at(first.file, first.line) + " lie in one plane facing the same way and overlap (around (" + format_number(at.x) + ", " +
                     format_number(at.y) + ", " + format_number(at.z) +
                     ")): which of them is lit there is not defined, and the light would count the area twice; "
                     "cut the overlap out of one of them (a hole in the ceiling where a lamp lies in it), or lift one "

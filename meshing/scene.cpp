@@ -439,11 +439,8 @@ Scene build_scene(const std::vector<RawFace>& faces, std::vector<Material> mater
   for (size_t k = 0; k < cuts.size() && k < 5; ++k) {
     const Patch& in = scene.patches[static_cast<size_t>(cuts[k].first)];
     const Patch& out = scene.patches[static_cast<size_t>(cuts[k].second)];
-    std::string out_at = where(out.file, out.line);
-    out_at.resize(out_at.size() >= 2 ? out_at.size() - 2 : 0);  // without its ": "
     scene.report.warnings.push_back(where(in.file, in.line) + "face '" + in.name + "' lies in face '" + out.name +
-                                    "'" + (out_at.empty() ? "" : " (" + out_at + ")") +
-                                    ", in its plane and facing the same way: cut out of it as a hole, since what "
+                                    "'" + also_at(out.file, out.line) + ", in its plane and facing the same way: cut out of it as a hole, since what "
                                     "a face covers is hidden");
   }
   if (cuts.size() > 5)
