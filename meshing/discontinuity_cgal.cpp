@@ -302,7 +302,7 @@ public:
     double strongest = 0.0;
     for (int p = 0; p < np; ++p) {
       const Rgb& e = scene_.material_of(p).emission;
-      const double power = std::max({e.x, e.y, e.z}) * scene_.patch_area(p);
+      const double power = max3(e) * scene_.patch_area(p);
       if (power > 0.0) emitters.push_back({power, p});
       strongest = std::max(strongest, power);
     }

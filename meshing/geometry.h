@@ -4,6 +4,7 @@
 #include <glm/vec3.hpp>
 #include <glm/geometric.hpp>
 
+#include <algorithm>
 #include <array>
 #include <vector>
 
@@ -12,6 +13,9 @@ namespace radmesh {
 using Vec3 = glm::dvec3;
 // RGB triple (reflectance, emission, radiosity).
 using Rgb = glm::dvec3;
+
+// The largest of an RGB triple's channels.
+inline double max3(const Rgb& c) { return std::max({c.x, c.y, c.z}); }
 
 // Newell normal (not normalized): its length is twice the polygon's vector area.
 Vec3 newell_normal(const std::vector<Vec3>& loop);

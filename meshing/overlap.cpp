@@ -145,19 +145,16 @@ bool inside(const Polygon2& poly, const Point2& x) {
   return in;
 }
 
-double point_segment_distance(const Point2& x, const Point2& a, const Point2& b) {
-  const double dx = b[0] - a[0], dy = b[1] - a[1], len2 = dx * dx + dy * dy;
-  const double t = len2 > 0.0 ? std::clamp(((x[0] - a[0]) * dx + (x[1] - a[1]) * dy) / len2, 0.0, 1.0) : 0.0;
-  return std::hypot(x[0] - a[0] - t * dx, x[1] - a[1] - t * dy);
-}
-
 // Whether two segments come within tol of each other (crossing: distance 0).
 bool segments_near(const Point2& a0, const Point2& a1, const Point2& b0, const Point2& b1, double tol) {
   const double d1 = cross2(a0, a1, b0), d2 = cross2(a0, a1, b1), d3 = cross2(b0, b1, a0), d4 = cross2(b0, b1, a1);
   if (((d1 < 0.0 && d2 > 0.0) || (d1 > 0.0 && d2 < 0.0)) && ((d3 < 0.0 && d4 > 0.0) || (d3 > 0.0 && d4 < 0.0)))
     return true;
-  return std::min({point_segment_distance(a0, b0, b1), point_segment_distance(a1, b0, b1),
-                   point_segment_distance(b0, a0, a1), point_segment_distance(b1, a0, a1)}) <= tol;
+  // The end points' distances (geometry.h's, in the plane z = 0).
+  const auto d = [](const Point2& x, const Point2& a, const Point2& b) {
+    return point_segment_distance(Vec3(x[0], x[1], 0.0), Vec3(a[0], a[1], 0.0), Vec3(b[0], b[1], 0.0));
+  };
+  return std::min({d(a0, b0, b1), d(a1, b0, b1), d(b0, a0, a1), d(b1, a0, a1)}) <= tol;
 }
 
 // Edge pairs a containment test may compare; past this the face is not cut

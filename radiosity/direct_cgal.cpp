@@ -510,7 +510,7 @@ DirectIllumination::DirectIllumination(const Scene& scene) : impl_(std::make_uni
   for (size_t p = 0; p < scene.patches.size(); ++p) {
     const Patch& patch = scene.patches[p];
     const Material& m = scene.material_of(patch);
-    if (std::max({m.emission.x, m.emission.y, m.emission.z}) <= 0.0) continue;
+    if (max3(m.emission) <= 0.0) continue;
     Emitter e;
     e.patch = static_cast<int>(p);
     e.normal = patch.normal;
@@ -607,7 +607,7 @@ double DirectIllumination::unoccluded_form_factor(const Vec3& x, const Vec3& n, 
 Rgb DirectIllumination::reflected(const Vec3& x, int patch, DirectCounts* counts) const {
   const Patch& p = impl_->scene.patches[static_cast<size_t>(patch)];
   const Rgb rho = impl_->scene.material_of(p).reflectance;
-  if (std::max({rho.x, rho.y, rho.z}) <= 0.0) return Rgb(0.0);
+  if (max3(rho) <= 0.0) return Rgb(0.0);
   DirectCounts local;
   std::vector<int> scratch;
   Rgb sum(0.0);

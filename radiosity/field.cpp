@@ -26,8 +26,6 @@ namespace {
 // the source's cut has at least this many parts; see indirect().
 constexpr size_t kListedParts = 8;
 
-double max3(const Rgb& c) { return std::max({c.x, c.y, c.z}); }
-
 // Lambert's formula for a whole patch (outline less holes), front side only.
 double patch_form_factor(const Vec3& x, const Vec3& n, const std::vector<std::vector<Vec3>>& loops,
                          const Vec3& normal) {

@@ -31,7 +31,6 @@ namespace {
 double seconds_since(std::chrono::steady_clock::time_point t) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
 }
-double max3(const Rgb& c) { return std::max({c.x, c.y, c.z}); }
 
 struct Link {
   int source = -1;

@@ -33,7 +33,7 @@ LineSet link_line_set(const Scene& scene, const HierarchicalSolution& h) {
       ff.push_back(l.form_factor);
       vis.push_back(l.visible);
       const Rgb t = rho * h.node_radiosity[static_cast<size_t>(l.source)] * l.form_factor;
-      transport.push_back(std::max({t.x, t.y, t.z}));
+      transport.push_back(max3(t));
     }
   }
   // Links with a cluster end: level and patch -1 at that end.

@@ -174,10 +174,7 @@ namespace {
 // run was stopped before it could light anything.
 std::string unlit_warning(const Scene& scene, const MethodResult& r) {
   if (r.interrupted) return {};
-  const auto max3 = [](const Rgb& c) { return std::max({c.x, c.y, c.z}); };
-  bool emits = false;
-  for (const Patch& p : scene.patches) emits = emits || max3(scene.material_of(p).emission) > 0.0;
-  if (!emits) return {};  // the scene's own warning says so
+  if (!scene.has_emitter()) return {};  // the scene's own warning says so
   std::set<int> reflecting;
   for (int t = 0; t < r.mesh.triangle_count(); ++t) {
     const int p = r.mesh.patch[static_cast<size_t>(t)];
