@@ -7,7 +7,9 @@
 
 #include <algorithm>
 #include <array>
+#include <climits>
 #include <cmath>
+#include <numeric>
 
 namespace radmesh {
 
@@ -161,15 +163,15 @@ bool segments_near(const Point2& a0, const Point2& a1, const Point2& b0, const P
 // (and the overlap check refuses it).
 constexpr size_t kMaxContainmentPairs = 1 << 20;
 
-// Whether face `in` lies inside face `out` (its outline less its holes)
-// with every edge clear of out's edges by more than tol, and no hole of
-// out inside it.
-bool lies_inside(const Scene& scene, size_t out, size_t in, double tol) {
+// Whether the outline `in` (a face's, or a group's of faces: counter-
+// clockwise) lies inside face `out` (its outline less its holes) with every
+// edge clear of out's edges by more than tol, and no hole of out inside it.
+bool lies_inside(const Scene& scene, size_t out, const std::vector<int>& in, double tol) {
   const Patch& o = scene.patches[out];
   const PlaneAxes axes(scene, o);
   std::vector<Polygon2> loops = {flat_loop(scene, o.outer, axes)};
   for (const auto& h : o.holes) loops.push_back(flat_loop(scene, h, axes));
-  const Polygon2 poly = flat_loop(scene, scene.patches[in].outer, axes);
+  const Polygon2 poly = flat_loop(scene, in, axes);
   size_t pairs = 0;
   for (const Polygon2& loop : loops) pairs += loop.size() * poly.size();
   if (pairs > kMaxContainmentPairs) return false;
@@ -193,6 +195,44 @@ bool share_an_edge(const std::vector<int>& a, const std::vector<int>& b) {
   return false;
 }
 
+// The outline of faces of one plane without holes joined along shared
+// edges (a rug of tiles), counter-clockwise as theirs are: the edges that no
+// other face of the group runs along the other way. Empty unless those
+// make one loop through distinct vertices enclosing the faces' area: not
+// where faces meet only at a corner or an edge ends on another's middle,
+// nor around a part of the plane they leave open (a ring of tiles, whose
+// middle would be an island of the face below).
+std::vector<int> joined_outline(const Scene& scene, const std::vector<size_t>& faces) {
+  std::vector<std::pair<int, int>> edges;
+  double area = 0.0;
+  for (const size_t f : faces) {
+    const std::vector<int>& o = scene.patches[f].outer;
+    for (size_t i = 0; i < o.size(); ++i) edges.emplace_back(o[i], o[(i + 1) % o.size()]);
+    area += scene.patch_area(static_cast<int>(f));
+  }
+  std::sort(edges.begin(), edges.end());
+  std::vector<std::pair<int, int>> next;  // boundary edges, by first vertex
+  for (const auto& [a, b] : edges)
+    if (!std::binary_search(edges.begin(), edges.end(), std::pair<int, int>(b, a))) next.emplace_back(a, b);
+  for (size_t i = 1; i < next.size(); ++i)
+    if (next[i].first == next[i - 1].first) return {};  // a pinch, or an edge twice
+  std::vector<int> loop;
+  for (int v = next.empty() ? -1 : next[0].first; v >= 0 && loop.size() <= next.size();) {
+    loop.push_back(v);
+    const auto it = std::lower_bound(next.begin(), next.end(), std::pair<int, int>(v, INT_MIN));
+    if (it == next.end() || it->first != v) return {};
+    v = it->second;
+    if (v == loop[0]) break;
+  }
+  if (loop.size() != next.size() || loop.size() < 3) return {};
+  const PlaneAxes axes(scene, scene.patches[faces[0]]);
+  const Polygon2 poly = flat_loop(scene, loop, axes);
+  double twice = 0.0;
+  for (size_t i = 0; i < poly.size(); ++i) twice += cross2({0.0, 0.0}, poly[i], poly[(i + 1) % poly.size()]);
+  if (!(std::abs(0.5 * twice - area) <= 1e-9 * area)) return {};
+  return loop;
+}
+
 // The error for patches p and q that overlap around `at`.
 InputError overlap_error(const Scene& scene, size_t p, size_t q, const Vec3& at, double tol) {
   const Patch& first = scene.patches[p];
@@ -206,16 +246,16 @@ InputError overlap_error(const Scene& scene, size_t p, size_t q, const Vec3& at,
                     format_number(tol) + " (" + format_number(kCoplanarOverlapTolerance) + " of the scene size)");
 }
 
-// Whether patch `in` can become a hole of patch `out`: it lies in out's
-// plane as build_scene wants holes to (within planarity_tolerance of out's
-// size, at least its box's diagonal / sqrt 3), inside it and clear of its
-// edges and holes.
-bool fits_as_hole(const Scene& scene, const std::vector<Box3>& boxes, size_t out, size_t in, double tol,
-                  double planarity_tolerance) {
+// Whether the outline `in` can become a hole of patch `out`: it lies in
+// out's plane as build_scene wants holes to (within planarity_tolerance of
+// out's size, at least its box's diagonal / sqrt 3), inside it and clear of
+// its edges and holes.
+bool fits_as_hole(const Scene& scene, const std::vector<Box3>& boxes, size_t out, const std::vector<int>& in,
+                  double tol, double planarity_tolerance) {
   const Patch& o = scene.patches[out];
   const Vec3& origin = scene.vertices[static_cast<size_t>(o.outer[0])];
   const double off = planarity_tolerance * glm::length(boxes[out].hi - boxes[out].lo) / std::sqrt(3.0);
-  for (const int v : scene.patches[in].outer)
+  for (const int v : in)
     if (std::abs(glm::dot(scene.vertices[static_cast<size_t>(v)] - origin, o.normal)) > off) return false;
   return lies_inside(scene, out, in, tol);
 }
@@ -262,24 +302,19 @@ std::vector<std::pair<int, int>> settle_coplanar_faces(Scene& scene, double plan
            glm::all(glm::greaterThanEqual(boxes[out].hi + tol, boxes[in].hi));
   };
   std::vector<std::pair<size_t, size_t>> held;  // (p, q), p < q
-  {
-    const BoxTree tree(boxes);
-    for (size_t p = 0; p < np; ++p)
-      tree.overlapping(boxes[p], tol, [&](int qi) {
-        const size_t q = static_cast<size_t>(qi);
-        if (q <= p || !(coplanar(scene, boxes, p, q, tol) || coplanar(scene, boxes, q, p, tol))) return true;
-        if (holds(p, q) || holds(q, p))
-          held.emplace_back(p, q);
-        else
-          check(p, q);
-        return true;
-      });
-  }
+  const BoxTree tree(boxes);
+  for (size_t p = 0; p < np; ++p)
+    tree.overlapping(boxes[p], tol, [&](int qi) {
+      const size_t q = static_cast<size_t>(qi);
+      if (q <= p || !(coplanar(scene, boxes, p, q, tol) || coplanar(scene, boxes, q, p, tol))) return true;
+      if (holds(p, q) || holds(q, p))
+        held.emplace_back(p, q);
+      else
+        check(p, q);
+      return true;
+    });
 
   // Cuts: per face without holes, the faces of larger area holding it.
-  // Largest first: nothing is cut out of a face before the face itself has
-  // been placed, so the holes it has then are its own (a ring's: the floor
-  // shows through, and it is not cut).
   std::vector<double> areas(np, -1.0);
   auto area = [&](size_t p) {
     if (areas[p] < 0.0) areas[p] = scene.patch_area(static_cast<int>(p));
@@ -289,26 +324,91 @@ std::vector<std::pair<int, int>> settle_coplanar_faces(Scene& scene, double plan
   for (const auto& [a, b] : held)
     for (const auto& [in, out] : {std::pair<size_t, size_t>(a, b), std::pair<size_t, size_t>(b, a)})
       if (scene.patches[in].holes.empty() && holds(out, in) && area(out) > area(in)) containing.emplace_back(in, out);
-  std::stable_sort(containing.begin(), containing.end(), [&](const auto& x, const auto& y) {
-    return areas[x.first] > areas[y.first] || (areas[x.first] == areas[y.first] && x.first < y.first);
+  std::sort(containing.begin(), containing.end());
+
+  // What is cut: a face, or faces of one plane joined along shared edges
+  // (a rug of tiles, a grid of lamp panels) as one outline, each with the
+  // faces that may hold it (those holding every member).
+  struct Unit {
+    std::vector<size_t> members;
+    std::vector<int> outline;
+    double area = 0.0;
+    std::vector<size_t> outs;
+  };
+  std::vector<Unit> units;
+  if (!containing.empty()) {
+    std::vector<size_t> first(np, containing.size());  // per face, its first entry in containing
+    for (size_t k = containing.size(); k-- > 0;) first[containing[k].first] = k;
+    auto outs_of = [&](size_t in) {
+      std::vector<size_t> outs;
+      for (size_t k = first[in]; k < containing.size() && containing[k].first == in; ++k)
+        outs.push_back(containing[k].second);
+      return outs;
+    };
+    // Faces that may be cut, joined where they share an edge.
+    std::vector<size_t> cuttable;
+    for (size_t k = 0; k < containing.size(); ++k)
+      if (k == 0 || containing[k - 1].first != containing[k].first) cuttable.push_back(containing[k].first);
+    std::vector<size_t> group(np);
+    std::iota(group.begin(), group.end(), size_t{0});
+    auto find = [&](size_t x) {
+      while (group[x] != x) x = group[x] = group[group[x]];
+      return x;
+    };
+    for (const size_t p : cuttable) {
+      const std::vector<int>& a = scene.patches[p].outer;
+      tree.overlapping(boxes[p], tol, [&](int qi) {
+        const size_t q = static_cast<size_t>(qi);
+        const std::vector<int>& b = scene.patches[q].outer;
+        if (q != p && first[q] < containing.size() && a.size() * b.size() <= kMaxContainmentPairs &&
+            coplanar(scene, boxes, p, q, tol) && share_an_edge(a, b))
+          group[find(p)] = find(q);
+        return true;
+      });
+    }
+    std::stable_sort(cuttable.begin(), cuttable.end(), [&](size_t x, size_t y) { return find(x) < find(y); });
+    for (size_t k = 0, end; k < cuttable.size(); k = end) {
+      for (end = k + 1; end < cuttable.size() && find(cuttable[end]) == find(cuttable[k]);) ++end;
+      const std::vector<size_t> faces(cuttable.begin() + static_cast<std::ptrdiff_t>(k),
+                                      cuttable.begin() + static_cast<std::ptrdiff_t>(end));
+      std::vector<int> outline = faces.size() > 1 ? joined_outline(scene, faces) : std::vector<int>();
+      if (outline.empty()) {  // one face, or faces that do not join into one outline: each alone
+        for (const size_t f : faces) units.push_back({{f}, scene.patches[f].outer, area(f), outs_of(f)});
+        continue;
+      }
+      Unit u{faces, std::move(outline), 0.0, outs_of(faces[0])};
+      for (const size_t f : faces) {
+        u.area += area(f);
+        const std::vector<size_t> outs = outs_of(f);
+        std::erase_if(u.outs, [&](size_t o) { return std::find(outs.begin(), outs.end(), o) == outs.end(); });
+      }
+      units.push_back(std::move(u));
+    }
+  }
+  // Largest first: nothing is cut out of a face before the face itself has
+  // been placed, so the holes it has then are its own (a ring's: the floor
+  // shows through, and it is not cut).
+  std::stable_sort(units.begin(), units.end(), [](const Unit& x, const Unit& y) {
+    return x.area > y.area || (x.area == y.area && x.members[0] < y.members[0]);
   });
   std::vector<std::pair<int, int>> cuts;  // (in, out), in the order made
   std::vector<std::pair<size_t, size_t>> cut_pairs;  // the same as (p, q), p < q
-  for (size_t k = 0; k < containing.size();) {
-    const size_t in = containing[k].first;
+  for (const Unit& u : units) {
     size_t best = np;
-    for (; k < containing.size() && containing[k].first == in; ++k) {
-      const size_t out = containing[k].second;
-      if ((best == np || areas[out] < areas[best]) && fits_as_hole(scene, boxes, out, in, tol, planarity_tolerance))
+    for (const size_t out : u.outs)
+      if (area(out) > u.area && (best == np || areas[out] < areas[best]) &&
+          std::find(u.members.begin(), u.members.end(), out) == u.members.end() &&
+          fits_as_hole(scene, boxes, out, u.outline, tol, planarity_tolerance))
         best = out;
-    }
     if (best == np) continue;
-    std::vector<int> hole = scene.patches[in].outer;
+    std::vector<int> hole = u.outline;
     std::reverse(hole.begin(), hole.end());  // clockwise around the normal
     scene.patches[best].holes.push_back(std::move(hole));
     direct[best] = 0;
-    cuts.emplace_back(static_cast<int>(in), static_cast<int>(best));
-    cut_pairs.emplace_back(std::min(in, best), std::max(in, best));
+    for (const size_t in : u.members) {
+      cuts.emplace_back(static_cast<int>(in), static_cast<int>(best));
+      cut_pairs.emplace_back(std::min(in, best), std::max(in, best));
+    }
   }
   std::sort(cut_pairs.begin(), cut_pairs.end());
   for (const auto& pq : held)

@@ -259,6 +259,16 @@ TEST(Mesh, FacesOverlappingInOnePlaneFacingTheSameWayAreRefused) {
   holed.holes = {{{1, 0, 1}, {1, 0, 2}, {2, 0, 2}, {2, 0, 1}}};
   m = overlap_message({holed, flat_rect("rug", 0.5, 1.25, 1.5, 1.75, 0, true, 20)});
   EXPECT_TRUE(test::contains(m, "face 'rug' and face 'floor'")) << m;
+
+  // A ring of eight tiles around a bare square: cut as one, the floor would
+  // have an island in its hole, which a face cannot hold (a rug of tiles
+  // without one is cut: Scene.FacesJoinedAlongEdgesInAnotherOfTheirPlaneAreCutOutAsOneHole).
+  std::vector<RawFace> ring = {flat_rect("floor", 0, 0, 4, 4, 0, true, 10)};
+  for (int i = 0; i < 3; ++i)
+    for (int k = 0; k < 3; ++k)
+      if (i != 1 || k != 1) ring.push_back(flat_rect("tile", 0.5 + i, 0.5 + k, 1.5 + i, 1.5 + k, 0, true, 20 + 3 * i + k));
+  m = overlap_message(ring);
+  EXPECT_TRUE(test::contains(m, "and face 'floor' (rug.obj:10) lie in one plane facing the same way")) << m;
 }
 
 TEST(Mesh, FacesThatOnlyMeetInOnePlaneOrFaceOppositeWaysAreKept) {

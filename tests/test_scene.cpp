@@ -345,3 +345,35 @@ TEST(Scene, AFaceLyingInAnotherOfItsPlaneIsCutOutOfIt) {
   const std::vector<double> area = test::patch_areas(s, m);
   for (size_t p = 0; p < s.patches.size(); ++p) EXPECT_NEAR(area[p], s.patch_area(static_cast<int>(p)), 1e-9);
 }
+
+TEST(Scene, FacesJoinedAlongEdgesInAnotherOfTheirPlaneAreCutOutAsOneHole) {
+  // A rug of 2 x 2 tiles on the floor and a row of three lamp panels in an
+  // uncut ceiling: each group is cut out of the face it lies in as one
+  // hole, its joined outline (the tiles' shared edges are inside it).
+  auto rect = [](const std::string& name, int material, double x0, double z0, double x1, double z1, double y,
+                 bool up) {
+    RawFace f;
+    f.name = name;
+    f.material = material;
+    f.points = {{x0, y, z0}, {x0, y, z1}, {x1, y, z1}, {x1, y, z0}};
+    if (!up) std::reverse(f.points.begin(), f.points.end());
+    return f;
+  };
+  std::vector<RawFace> faces = {rect("floor", 0, 0, 0, 4, 4, 0, true), rect("ceiling", 0, 0, 0, 4, 4, 3, false)};
+  for (int i = 0; i < 2; ++i)
+    for (int k = 0; k < 2; ++k) faces.push_back(rect("rug", 0, 1 + i, 1 + k, 2 + i, 2 + k, 0, true));
+  for (int i = 0; i < 3; ++i) faces.push_back(rect("lamp", 1, 0.5 + i, 1.5, 1.5 + i, 2.5, 3, false));
+  const Scene s = build_scene(
+      faces, {test::material("white", Rgb(0.5)), test::material("lamp", Rgb(0.0), Rgb(10.0))}, "tiles");
+  EXPECT_EQ(s.report.faces_cut_out, 7);
+  const int floor = test::patch_named(s, "floor"), ceiling = test::patch_named(s, "ceiling");
+  ASSERT_EQ(s.patches[static_cast<size_t>(floor)].holes.size(), 1u);
+  EXPECT_EQ(s.patches[static_cast<size_t>(floor)].holes[0].size(), 8u);  // the 2 x 2 rug's outline
+  ASSERT_EQ(s.patches[static_cast<size_t>(ceiling)].holes.size(), 1u);
+  EXPECT_EQ(s.patches[static_cast<size_t>(ceiling)].holes[0].size(), 8u);  // the row of three's
+  EXPECT_NEAR(s.patch_area(floor), 16.0 - 4.0, 1e-12);
+  EXPECT_NEAR(s.patch_area(ceiling), 16.0 - 3.0, 1e-12);
+  const Mesh m = mesh_scene(s, {});
+  const std::vector<double> area = test::patch_areas(s, m);
+  for (size_t p = 0; p < s.patches.size(); ++p) EXPECT_NEAR(area[p], s.patch_area(static_cast<int>(p)), 1e-9);
+}
