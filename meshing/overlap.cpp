@@ -366,11 +366,12 @@ std::vector<std::pair<int, int>> settle_coplanar_faces(Scene& scene, double plan
         return true;
       });
     }
-    std::stable_sort(cuttable.begin(), cuttable.end(), [&](size_t x, size_t y) { return find(x) < find(y); });
-    for (size_t k = 0, end; k < cuttable.size(); k = end) {
-      for (end = k + 1; end < cuttable.size() && find(cuttable[end]) == find(cuttable[k]);) ++end;
-      const std::vector<size_t> faces(cuttable.begin() + static_cast<std::ptrdiff_t>(k),
-                                      cuttable.begin() + static_cast<std::ptrdiff_t>(end));
+    std::vector<std::pair<size_t, size_t>> joined;  // (group, face), faces of a group together
+    for (const size_t f : cuttable) joined.emplace_back(find(f), f);
+    std::sort(joined.begin(), joined.end());
+    for (size_t k = 0, end; k < joined.size(); k = end) {
+      std::vector<size_t> faces;
+      for (end = k; end < joined.size() && joined[end].first == joined[k].first; ++end) faces.push_back(joined[end].second);
       std::vector<int> outline = faces.size() > 1 ? joined_outline(scene, faces) : std::vector<int>();
       if (outline.empty()) {  // one face, or faces that do not join into one outline: each alone
         for (const size_t f : faces) units.push_back({{f}, scene.patches[f].outer, area(f), outs_of(f)});
@@ -379,8 +380,8 @@ std::vector<std::pair<int, int>> settle_coplanar_faces(Scene& scene, double plan
       Unit u{faces, std::move(outline), 0.0, outs_of(faces[0])};
       for (const size_t f : faces) {
         u.area += area(f);
-        const std::vector<size_t> outs = outs_of(f);
-        std::erase_if(u.outs, [&](size_t o) { return std::find(outs.begin(), outs.end(), o) == outs.end(); });
+        const std::vector<size_t> outs = outs_of(f);  // sorted, as containing is
+        std::erase_if(u.outs, [&](size_t o) { return !std::binary_search(outs.begin(), outs.end(), o); });
       }
       units.push_back(std::move(u));
     }
@@ -395,9 +396,8 @@ std::vector<std::pair<int, int>> settle_coplanar_faces(Scene& scene, double plan
   std::vector<std::pair<size_t, size_t>> cut_pairs;  // the same as (p, q), p < q
   for (const Unit& u : units) {
     size_t best = np;
-    for (const size_t out : u.outs)
+    for (const size_t out : u.outs)  // never a member: no face holds itself
       if (area(out) > u.area && (best == np || areas[out] < areas[best]) &&
-          std::find(u.members.begin(), u.members.end(), out) == u.members.end() &&
           fits_as_hole(scene, boxes, out, u.outline, tol, planarity_tolerance))
         best = out;
     if (best == np) continue;

@@ -23,8 +23,12 @@ constexpr double kCoplanarOverlapTolerance = 1e-5;
 //   ceiling, a rug on the floor), is cut out of it: its outline becomes a
 //   hole of the smallest such face whose plane it lies in within
 //   planarity_tolerance of that face's size (as build_scene wants holes
-//   to), since what lies under a face is hidden. Largest first, so a face
-//   with holes of its own (a ring: the floor shows through) is not cut.
+//   to), since what lies under a face is hidden. Faces without holes
+//   joined along shared edges (a rug of tiles, a row of lamp panels) are
+//   cut as one, by their joined outline, where that is one loop enclosing
+//   just their area (not a ring of tiles: its middle would be an island).
+//   Largest first, so a face with holes of its own (a ring: the floor
+//   shows through) is not cut.
 // - Two convex faces without holes that overlap otherwise by more than the
 //   tolerance across are refused with an InputError naming both and a point
 //   of the overlap: which one is lit is not defined, and the light would
