@@ -128,6 +128,18 @@ def main():
           cornell.replace(b"newmtl white\n", b"newmtl white\nKe 1 1 1\n")
                  .replace(b"newmtl red\n", b"newmtl red\nKe 1 1 1\n"))
     write("fuzz_mesh", "cornell_floor_vertex_moved", cornell.replace(b"v 552.8 0 0\n", b"v 552.8 300 0\n", 1))
+    # A rug of 2 x 2 tiles lying in the floor's plane, each tile on its own
+    # vertices: welded, then cut out of the floor together.
+    obj, mtl = cornell.split(MARK)
+    first = obj.count(b"\nv ") + 1
+    rug = b"\no rug\nusemtl white\n"
+    for i in range(2):
+        for k in range(2):
+            x, z = 50 + 50 * i, 350 + 50 * k
+            rug += b"".join(b"v %d 0 %d\n" % p for p in [(x, z), (x, z + 50), (x + 50, z + 50), (x + 50, z)])
+            n = first + 4 * (2 * i + k)
+            rug += b"f %d %d %d %d\n" % (n, n + 1, n + 2, n + 3)
+    write("fuzz_mesh", "cornell_tiled_rug", obj.rstrip(b"\n") + rug + MARK + mtl)
 
     formats = [(0, "ply_ascii", ply_ascii()), (0, "ply_binary", ply_binary()), (1, "stl_ascii", stl_ascii()),
                (1, "stl_binary", stl_binary()), (2, "off", off()), (3, "gltf", gltf()), (4, "glb", glb())]
