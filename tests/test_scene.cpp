@@ -307,20 +307,23 @@ TEST(Scene, FacesFacingEachOtherAcrossAWeldedGapAreRefused) {
   fs::remove_all(dir);
 }
 
+namespace {
+// A rectangle [x0, x1] x [z0, z1] in the plane y, facing up (+y) or down.
+RawFace rect(const std::string& name, int material, double x0, double z0, double x1, double z1, double y, bool up) {
+  RawFace f;
+  f.name = name;
+  f.material = material;
+  f.points = {{x0, y, z0}, {x0, y, z1}, {x1, y, z1}, {x1, y, z0}};
+  if (!up) std::reverse(f.points.begin(), f.points.end());
+  return f;
+}
+}  // namespace
+
 TEST(Scene, AFaceLyingInAnotherOfItsPlaneIsCutOutOfIt) {
   // A lamp lying in an uncut ceiling, a rug on the floor, and a tile on a
   // mat on the floor: each is cut out of the smallest face it lies in (the
   // tile out of the mat, not the floor), since what a face covers is
   // hidden; the cuts are counted and said.
-  auto rect = [](const std::string& name, int material, double x0, double z0, double x1, double z1, double y,
-                 bool up) {
-    RawFace f;
-    f.name = name;
-    f.material = material;
-    f.points = {{x0, y, z0}, {x0, y, z1}, {x1, y, z1}, {x1, y, z0}};
-    if (!up) std::reverse(f.points.begin(), f.points.end());
-    return f;
-  };
   const std::vector<RawFace> faces = {rect("floor", 0, 0, 0, 4, 4, 0, true),
                                       rect("rug", 0, 1, 1, 2, 2, 0, true),
                                       rect("tile", 0, 2.8, 2.8, 3.2, 3.2, 0, true),
@@ -350,15 +353,6 @@ TEST(Scene, FacesJoinedAlongEdgesInAnotherOfTheirPlaneAreCutOutAsOneHole) {
   // A rug of 2 x 2 tiles on the floor and a row of three lamp panels in an
   // uncut ceiling: each group is cut out of the face it lies in as one
   // hole, its joined outline (the tiles' shared edges are inside it).
-  auto rect = [](const std::string& name, int material, double x0, double z0, double x1, double z1, double y,
-                 bool up) {
-    RawFace f;
-    f.name = name;
-    f.material = material;
-    f.points = {{x0, y, z0}, {x0, y, z1}, {x1, y, z1}, {x1, y, z0}};
-    if (!up) std::reverse(f.points.begin(), f.points.end());
-    return f;
-  };
   std::vector<RawFace> faces = {rect("floor", 0, 0, 0, 4, 4, 0, true), rect("ceiling", 0, 0, 0, 4, 4, 3, false)};
   for (int i = 0; i < 2; ++i)
     for (int k = 0; k < 2; ++k) faces.push_back(rect("rug", 0, 1 + i, 1 + k, 2 + i, 2 + k, 0, true));
