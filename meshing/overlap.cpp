@@ -10,6 +10,7 @@
 #include <climits>
 #include <cmath>
 #include <numeric>
+#include <string>
 
 namespace radmesh {
 
@@ -260,6 +261,54 @@ bool fits_as_hole(const Scene& scene, const std::vector<Box3>& boxes, size_t out
   return lies_inside(scene, out, in, tol);
 }
 
+// Where face `in` (outline `outline`, with the faces `outs` that may hold
+// it) fits in none of them only because it touches what was cut out of one
+// of them for another face (`made`: (face cut into, face cut out), one per
+// hole added, in order), refuses it naming that face: faces that meet at a
+// corner, or along part of an edge, cannot be cut out together, and the
+// overlap error alone would not say why.
+void refuse_touching_cut(Scene& scene, const std::vector<Box3>& boxes, size_t in, const std::vector<int>& outline,
+                         const std::vector<size_t>& outs, const std::vector<std::pair<size_t, size_t>>& made,
+                         double tol, double planarity_tolerance) {
+  for (const size_t out : outs) {
+    std::vector<size_t> cut;  // faces cut out of `out`, in hole order
+    for (const auto& [into, face] : made)
+      if (into == out) cut.push_back(face);
+    if (cut.empty()) continue;
+    Patch& o = scene.patches[out];
+    const size_t own = o.holes.size() - cut.size();
+    std::vector<std::vector<int>> added(o.holes.begin() + static_cast<std::ptrdiff_t>(own), o.holes.end());
+    o.holes.resize(own);
+    const bool fits = fits_as_hole(scene, boxes, out, outline, tol, planarity_tolerance);
+    o.holes.insert(o.holes.end(), added.begin(), added.end());
+    if (!fits) continue;
+    const PlaneAxes axes(scene, o);
+    const Polygon2 poly = flat_loop(scene, outline, axes);
+    for (size_t h = 0; h < added.size(); ++h) {
+      const Polygon2 hole = flat_loop(scene, added[h], axes);
+      bool touches = false;
+      for (size_t i = 0; i < hole.size() && !touches; ++i)
+        for (size_t j = 0; j < poly.size() && !touches; ++j)
+          touches = segments_near(hole[i], hole[(i + 1) % hole.size()], poly[j], poly[(j + 1) % poly.size()], tol);
+      if (!touches) continue;
+      const Patch& a = scene.patches[in];
+      const Patch& b = scene.patches[cut[h]];
+      const std::string head = where(a.file, a.line) + "face '" + a.name + "' lies in face '" + o.name + "'" +
+                               also_at(o.file, o.line) + " and touches face '" + b.name + "'" +
+                               also_at(b.file, b.line) + ", cut out of it already";
+      if (share_an_edge(a.outer, b.outer))
+        throw InputError(head + ", along an edge, but the faces joined with them by their edges enclose part of "
+                                "face '" + o.name + "' (a ring of tiles) or meet only at a corner, which one hole "
+                                "cannot follow; fill the part they enclose with a face of its own, or lift them off "
+                                "face '" + o.name + "' by more than " + format_number(tol));
+      throw InputError(head + ", without sharing whole edges with it (at a corner, or along part of an edge): the "
+                              "two cannot be cut out of it together; make them share the edges where they meet (the "
+                              "same vertices at both ends), or keep them more than " +
+                       format_number(tol) + " apart");
+    }
+  }
+}
+
 }  // namespace
 
 std::vector<std::pair<int, int>> settle_coplanar_faces(Scene& scene, double planarity_tolerance) {
@@ -394,13 +443,18 @@ std::vector<std::pair<int, int>> settle_coplanar_faces(Scene& scene, double plan
   });
   std::vector<std::pair<int, int>> cuts;  // (in, out), in the order made
   std::vector<std::pair<size_t, size_t>> cut_pairs;  // the same as (p, q), p < q
+  std::vector<std::pair<size_t, size_t>> made;  // (face cut into, first face of the unit cut), in hole order
   for (const Unit& u : units) {
     size_t best = np;
     for (const size_t out : u.outs)  // never a member: no face holds itself
       if (area(out) > u.area && (best == np || areas[out] < areas[best]) &&
           fits_as_hole(scene, boxes, out, u.outline, tol, planarity_tolerance))
         best = out;
-    if (best == np) continue;
+    if (best == np) {
+      refuse_touching_cut(scene, boxes, u.members[0], u.outline, u.outs, made, tol, planarity_tolerance);
+      continue;
+    }
+    made.emplace_back(best, u.members[0]);
     std::vector<int> hole = u.outline;
     std::reverse(hole.begin(), hole.end());  // clockwise around the normal
     scene.patches[best].holes.push_back(std::move(hole));
