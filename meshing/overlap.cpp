@@ -420,7 +420,8 @@ std::vector<std::pair<int, int>> settle_coplanar_faces(Scene& scene, double plan
     std::sort(joined.begin(), joined.end());
     for (size_t k = 0, end; k < joined.size(); k = end) {
       std::vector<size_t> faces;
-      for (end = k; end < joined.size() && joined[end].first == joined[k].first; ++end) faces.push_back(joined[end].second);
+      for (end = k; end < joined.size() && joined[end].first == joined[k].first; ++end)
+        faces.push_back(joined[end].second);
       std::vector<int> outline = faces.size() > 1 ? joined_outline(scene, faces) : std::vector<int>();
       if (outline.empty()) {  // one face, or faces that do not join into one outline: each alone
         for (const size_t f : faces) units.push_back({{f}, scene.patches[f].outer, area(f), outs_of(f)});

@@ -448,10 +448,8 @@ Scene build_scene(const std::vector<RawFace>& faces, std::vector<Material> mater
       for (auto i = at; i != end; ++i) hash = (hash ^ static_cast<uint32_t>(*i)) * 1099511628211ULL;
       order[p] = {hash, p};
     }
-    auto same_list = [&](size_t a, size_t b) {
-      return std::equal(ids.begin() + static_cast<std::ptrdiff_t>(begin[a]), ids.begin() + static_cast<std::ptrdiff_t>(begin[a + 1]),
-                        ids.begin() + static_cast<std::ptrdiff_t>(begin[b]), ids.begin() + static_cast<std::ptrdiff_t>(begin[b + 1]));
-    };
+    auto list = [&](size_t p, size_t end) { return ids.begin() + static_cast<std::ptrdiff_t>(begin[p + end]); };
+    auto same_list = [&](size_t a, size_t b) { return std::equal(list(a, 0), list(a, 1), list(b, 0), list(b, 1)); };
     std::sort(order.begin(), order.end());
     size_t worst = np;  // the first patch, in file order, with a problem
     std::string problem;

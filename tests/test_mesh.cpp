@@ -268,7 +268,8 @@ TEST(Mesh, FacesOverlappingInOnePlaneFacingTheSameWayAreRefused) {
   std::vector<RawFace> ring = {flat_rect("floor", 0, 0, 4, 4, 0, true, 10)};
   for (int i = 0; i < 3; ++i)
     for (int k = 0; k < 3; ++k)
-      if (i != 1 || k != 1) ring.push_back(flat_rect("tile", 0.5 + i, 0.5 + k, 1.5 + i, 1.5 + k, 0, true, 20 + 3 * i + k));
+      if (i != 1 || k != 1)
+        ring.push_back(flat_rect("tile", 0.5 + i, 0.5 + k, 1.5 + i, 1.5 + k, 0, true, 20 + 3 * i + k));
   m = overlap_message(ring);
   EXPECT_TRUE(test::contains(m, "lies in face 'floor' (rug.obj:10) and touches face 'tile' (rug.obj:2")) << m;
   EXPECT_TRUE(test::contains(m, "enclose part of face 'floor' (a ring of tiles)")) << m;
@@ -277,7 +278,8 @@ TEST(Mesh, FacesOverlappingInOnePlaneFacingTheSameWayAreRefused) {
   // refused naming the first.
   m = overlap_message({flat_rect("floor", 0, 0, 4, 4, 0, true, 10), flat_rect("a", 1, 1, 2, 2, 0, true, 20),
                        flat_rect("b", 2, 2, 3, 3, 0, true, 21)});
-  EXPECT_TRUE(test::contains(m, "rug.obj:21: face 'b' lies in face 'floor' (rug.obj:10) and touches face 'a' (rug.obj:20)")) << m;
+  EXPECT_TRUE(test::contains(m, "rug.obj:21: face 'b' lies in face 'floor' (rug.obj:10)")) << m;
+  EXPECT_TRUE(test::contains(m, "and touches face 'a' (rug.obj:20)")) << m;
   EXPECT_TRUE(test::contains(m, "without sharing whole edges with it")) << m;
 }
 
