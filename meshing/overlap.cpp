@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <array>
 #include <climits>
+#include <cstdint>
 #include <cmath>
 #include <numeric>
 #include <string>
@@ -160,18 +161,27 @@ bool segments_near(const Point2& a0, const Point2& a1, const Point2& b0, const P
   return std::min({d(a0, b0, b1), d(a1, b0, b1), d(b0, a0, a1), d(b1, a0, a1)}) <= tol;
 }
 
+// Whether an edge of loop a comes within tol of an edge of loop b.
+bool loops_near(const Polygon2& a, const Polygon2& b, double tol) {
+  for (size_t i = 0; i < a.size(); ++i)
+    for (size_t j = 0; j < b.size(); ++j)
+      if (segments_near(a[i], a[(i + 1) % a.size()], b[j], b[(j + 1) % b.size()], tol)) return true;
+  return false;
+}
+
 // Edge pairs a containment test may compare; past this the face is not cut
 // (and the overlap check refuses it).
 constexpr size_t kMaxContainmentPairs = 1 << 20;
 
 // Whether the outline `in` (a face's, or a group's of faces: counter-
-// clockwise) lies inside face `out` (its outline less its holes) with every
-// edge clear of out's edges by more than tol, and no hole of out inside it.
-bool lies_inside(const Scene& scene, size_t out, const std::vector<int>& in, double tol) {
+// clockwise) lies inside face `out` (its outline less its first `holes`
+// holes) with every edge clear of those edges by more than tol, and no
+// such hole inside it.
+bool lies_inside(const Scene& scene, size_t out, size_t holes, const std::vector<int>& in, double tol) {
   const Patch& o = scene.patches[out];
   const PlaneAxes axes(scene, o);
   std::vector<Polygon2> loops = {flat_loop(scene, o.outer, axes)};
-  for (const auto& h : o.holes) loops.push_back(flat_loop(scene, h, axes));
+  for (size_t h = 0; h < holes; ++h) loops.push_back(flat_loop(scene, o.holes[h], axes));
   const Polygon2 poly = flat_loop(scene, in, axes);
   size_t pairs = 0;
   for (const Polygon2& loop : loops) pairs += loop.size() * poly.size();
@@ -179,12 +189,7 @@ bool lies_inside(const Scene& scene, size_t out, const std::vector<int>& in, dou
   if (!inside(loops[0], poly[0])) return false;
   for (size_t h = 1; h < loops.size(); ++h)
     if (inside(loops[h], poly[0]) || inside(poly, loops[h][0])) return false;
-  for (const Polygon2& loop : loops)
-    for (size_t i = 0; i < loop.size(); ++i)
-      for (size_t j = 0; j < poly.size(); ++j)
-        if (segments_near(loop[i], loop[(i + 1) % loop.size()], poly[j], poly[(j + 1) % poly.size()], tol))
-          return false;
-  return true;
+  return std::none_of(loops.begin(), loops.end(), [&](const Polygon2& loop) { return loops_near(loop, poly, tol); });
 }
 
 // Whether two loops of one orientation run along a common edge (in
@@ -226,11 +231,8 @@ std::vector<int> joined_outline(const Scene& scene, const std::vector<size_t>& f
     if (v == loop[0]) break;
   }
   if (loop.size() != next.size() || loop.size() < 3) return {};
-  const PlaneAxes axes(scene, scene.patches[faces[0]]);
-  const Polygon2 poly = flat_loop(scene, loop, axes);
-  double twice = 0.0;
-  for (size_t i = 0; i < poly.size(); ++i) twice += cross2({0.0, 0.0}, poly[i], poly[(i + 1) % poly.size()]);
-  if (!(std::abs(0.5 * twice - area) <= 1e-9 * area)) return {};
+  const double joined = 0.5 * glm::dot(newell_normal(scene.loop_points(loop)), scene.patches[faces[0]].normal);
+  if (!(std::abs(joined - area) <= 1e-9 * area)) return {};
   return loop;
 }
 
@@ -250,15 +252,15 @@ InputError overlap_error(const Scene& scene, size_t p, size_t q, const Vec3& at,
 // Whether the outline `in` can become a hole of patch `out`: it lies in
 // out's plane as build_scene wants holes to (within planarity_tolerance of
 // out's size, at least its box's diagonal / sqrt 3), inside it and clear of
-// its edges and holes.
+// its edges and of its first `holes` holes (all of them by default).
 bool fits_as_hole(const Scene& scene, const std::vector<Box3>& boxes, size_t out, const std::vector<int>& in,
-                  double tol, double planarity_tolerance) {
+                  double tol, double planarity_tolerance, size_t holes = SIZE_MAX) {
   const Patch& o = scene.patches[out];
   const Vec3& origin = scene.vertices[static_cast<size_t>(o.outer[0])];
   const double off = planarity_tolerance * glm::length(boxes[out].hi - boxes[out].lo) / std::sqrt(3.0);
   for (const int v : in)
     if (std::abs(glm::dot(scene.vertices[static_cast<size_t>(v)] - origin, o.normal)) > off) return false;
-  return lies_inside(scene, out, in, tol);
+  return lies_inside(scene, out, std::min(holes, o.holes.size()), in, tol);
 }
 
 // Where face `in` (outline `outline`, with the faces `outs` that may hold
@@ -267,7 +269,7 @@ bool fits_as_hole(const Scene& scene, const std::vector<Box3>& boxes, size_t out
 // hole added, in order), refuses it naming that face: faces that meet at a
 // corner, or along part of an edge, cannot be cut out together, and the
 // overlap error alone would not say why.
-void refuse_touching_cut(Scene& scene, const std::vector<Box3>& boxes, size_t in, const std::vector<int>& outline,
+void refuse_touching_cut(const Scene& scene, const std::vector<Box3>& boxes, size_t in, const std::vector<int>& outline,
                          const std::vector<size_t>& outs, const std::vector<std::pair<size_t, size_t>>& made,
                          double tol, double planarity_tolerance) {
   for (const size_t out : outs) {
@@ -275,22 +277,13 @@ void refuse_touching_cut(Scene& scene, const std::vector<Box3>& boxes, size_t in
     for (const auto& [into, face] : made)
       if (into == out) cut.push_back(face);
     if (cut.empty()) continue;
-    Patch& o = scene.patches[out];
-    const size_t own = o.holes.size() - cut.size();
-    std::vector<std::vector<int>> added(o.holes.begin() + static_cast<std::ptrdiff_t>(own), o.holes.end());
-    o.holes.resize(own);
-    const bool fits = fits_as_hole(scene, boxes, out, outline, tol, planarity_tolerance);
-    o.holes.insert(o.holes.end(), added.begin(), added.end());
-    if (!fits) continue;
+    const Patch& o = scene.patches[out];
+    const size_t own = o.holes.size() - cut.size();  // the holes it had before the cuts
+    if (!fits_as_hole(scene, boxes, out, outline, tol, planarity_tolerance, own)) continue;
     const PlaneAxes axes(scene, o);
     const Polygon2 poly = flat_loop(scene, outline, axes);
-    for (size_t h = 0; h < added.size(); ++h) {
-      const Polygon2 hole = flat_loop(scene, added[h], axes);
-      bool touches = false;
-      for (size_t i = 0; i < hole.size() && !touches; ++i)
-        for (size_t j = 0; j < poly.size() && !touches; ++j)
-          touches = segments_near(hole[i], hole[(i + 1) % hole.size()], poly[j], poly[(j + 1) % poly.size()], tol);
-      if (!touches) continue;
+    for (size_t h = 0; h < cut.size(); ++h) {
+      if (!loops_near(flat_loop(scene, o.holes[own + h], axes), poly, tol)) continue;
       const Patch& a = scene.patches[in];
       const Patch& b = scene.patches[cut[h]];
       const std::string head = where(a.file, a.line) + "face '" + a.name + "' lies in face '" + o.name + "'" +
