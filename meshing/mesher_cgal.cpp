@@ -31,10 +31,12 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdint>
 #include <map>
 #include <numbers>
 #include <set>
 #include <sstream>
+#include <unordered_map>
 
 namespace radmesh {
 
@@ -333,9 +335,25 @@ private:
     auto near = [&](int g) { return glm::length(positions_[static_cast<size_t>(g)] - p) <= eps_; };
     if (near(segments_[s].a)) return segments_[s].a;
     if (near(segments_[s].b)) return segments_[s].b;
-    for (int g : seg_points_[s])
-      if (near(g)) return g;
+    double t;
+    on_line(s, p, &t);
+    const uint64_t c = cell_key(s, t), first = cell_key(s, 0.0);
+    for (uint64_t k = std::max(c, first + 1) - 1; k <= c + 1; ++k) {
+      const auto [from, to] = seg_cells_.equal_range(k);
+      for (auto it = from; it != to; ++it)
+        if (near(it->second)) return it->second;
+    }
     return -1;
+  }
+  // The points of segment s by cells of 2 eps_ along it (seg_cells_): a
+  // point within eps_ of p lies in p's cell or a neighbour. A scan of the
+  // segment's list for every point added was quadratic in the points on
+  // one edge (10^5 where a narrow gap ran along it, see narrow()).
+  uint64_t cell_key(size_t s, double t) const {
+    const double len = glm::length(positions_[static_cast<size_t>(segments_[s].b)] -
+                                   positions_[static_cast<size_t>(segments_[s].a)]);
+    const double cell = std::clamp(std::floor(t * len / (2.0 * eps_)), 0.0, 4e9);
+    return (static_cast<uint64_t>(s) << 32) + static_cast<uint64_t>(cell);
   }
 
   // Adds global point id g to segment s (and to every segment overlapping s
@@ -344,9 +362,12 @@ private:
     auto put = [&](size_t seg) {
       double t;
       if (!strictly_inside(seg, positions_[static_cast<size_t>(g)], &t)) return;
-      auto& pts = seg_points_[seg];
-      if (std::find(pts.begin(), pts.end(), g) != pts.end()) return;
-      pts.push_back(g);
+      const uint64_t key = cell_key(seg, t);
+      const auto [from, to] = seg_cells_.equal_range(key);
+      for (auto it = from; it != to; ++it)
+        if (it->second == g) return;
+      seg_cells_.emplace(key, g);
+      seg_points_[seg].push_back(g);
       if (touched) touched->push_back(segments_[seg].patch);
     };
     put(s);
@@ -686,7 +707,8 @@ private:
       perimeter += glm::length(positions_[static_cast<size_t>(segments_[s].b)] - positions_[static_cast<size_t>(segments_[s].a)]);
     const double patch_area = scene_.patch_area(p);
     const double width = 2.0 * patch_area / perimeter;
-    if (refine && width < opt_.min_separation_fraction * opt_.max_edge && perimeter > 200.0 * width) {
+    const double floor = opt_.min_separation_fraction * opt_.max_edge;
+    if (refine && ((width < floor && perimeter > 200.0 * width) || narrow(cdt, patch, floor))) {
       refine = false;
       thin_.insert(p);
     }
@@ -805,6 +827,48 @@ private:
     return tris;
   }
 
+  // Whether refining the patch would cut an edge or line into more than
+  // kNarrowPoints pieces below the separation floor, as it cuts a
+  // sliver's long edges about its width apart: a hole narrower than the
+  // floor (twice its area over its perimeter) and more than kNarrowPoints
+  // times longer, or a vertex nearer than the floor to a constrained edge,
+  // more than kNarrowPoints times as far from both its ends, and joined to
+  // neither end by a constrained edge (a box standing 1e-5 from a wall:
+  // its footprint line beside the floor's edge; joined ones make small
+  // angles, which CGAL's mesher handles). Such a vertex is an apex of a
+  // triangle on the edge (one lies in the edge's diametral circle
+  // whenever any visible vertex does). The floor's edge along that box was
+  // cut 1e-5 apart, 10^5 points, and the next round took minutes to
+  // insert them; a vertex 1e-10 from a thin hole's edge crashed CGAL's
+  // mesher. At 1e-3 from the wall the floor is refined as before (10^3
+  // points along the box).
+  static constexpr double kNarrowPoints = 1e4;
+  bool narrow(const CDT& cdt, const Patch& patch, double floor) const {
+    for (const auto& h : patch.holes) {
+      const std::vector<Vec3> pts = scene_.loop_points(h);
+      double perimeter = 0.0;
+      for (size_t i = 0; i < pts.size(); ++i) perimeter += glm::length(pts[(i + 1) % pts.size()] - pts[i]);
+      const double width = glm::length(newell_normal(pts)) / perimeter;  // twice the area over the perimeter
+      if (width < floor && perimeter > kNarrowPoints * width) return true;
+    }
+    auto joined = [&](CDT::Vertex_handle v, CDT::Vertex_handle w) {
+      CDT::Face_handle f;
+      int i = 0;
+      return cdt.is_edge(v, w, f, i) && cdt.is_constrained(CDT::Edge(f, i));
+    };
+    for (auto f = cdt.finite_faces_begin(); f != cdt.finite_faces_end(); ++f)
+      for (int i = 0; i < 3; ++i) {
+        if (!cdt.is_constrained(CDT::Edge(f, i))) continue;
+        const CDT::Vertex_handle v = f->vertex(i), a = f->vertex(CDT::cw(i)), b = f->vertex(CDT::ccw(i));
+        const K::Vector_2 ab = b->point() - a->point(), av = v->point() - a->point();
+        const double len = std::sqrt(ab.squared_length());
+        const double along = (av * ab) / len, off = std::abs(CGAL::to_double(CGAL::determinant(ab, av))) / len;
+        if (off < floor && std::min(along, len - along) > kNarrowPoints * off && !joined(v, a) && !joined(v, b))
+          return true;
+      }
+    return false;
+  }
+
   static bool is_on_constraint(CDT& cdt, CDT::Vertex_handle v) {
     auto e = cdt.incident_edges(v), end = e;
     if (e == nullptr) return false;
@@ -842,6 +906,7 @@ private:
   std::vector<Segment> segments_;
   std::vector<int> patch_segments_;  // patch p's segments: [patch_segments_[p], patch_segments_[p + 1])
   std::vector<std::vector<int>> seg_points_;
+  std::unordered_multimap<uint64_t, int> seg_cells_;  // (segment << 32) + cell of 2 eps_ -> its points (cell_key)
   std::vector<std::vector<int>> overlaps_;
   struct Pending {
     size_t segment;

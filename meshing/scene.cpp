@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <limits>
 #include <sstream>
+#include <tuple>
 #include <unordered_map>
 
 namespace radmesh {
@@ -161,6 +162,8 @@ class Welder {
 public:
   explicit Welder(double eps) : eps_(eps > 0.0 ? eps : std::numeric_limits<double>::min()) {}
 
+  double tolerance() const { return eps_; }
+
   void reserve(size_t n) {
     exact_.reserve(n);
     grid_.reserve(n);
@@ -303,6 +306,11 @@ Scene build_scene(const std::vector<RawFace>& faces, std::vector<Material> mater
     }
     return dedupe_loop(std::move(loop));
   };
+  auto distinct_points = [](std::vector<Vec3> points) {
+    const auto less = [](const Vec3& a, const Vec3& b) { return std::tie(a.x, a.y, a.z) < std::tie(b.x, b.y, b.z); };
+    std::sort(points.begin(), points.end(), less);
+    return static_cast<int>(std::unique(points.begin(), points.end()) - points.begin());
+  };
   auto distinct = [](std::vector<int> loop) {
     std::sort(loop.begin(), loop.end());
     return static_cast<int>(std::unique(loop.begin(), loop.end()) - loop.begin());
@@ -315,6 +323,16 @@ Scene build_scene(const std::vector<RawFace>& faces, std::vector<Material> mater
     Vec3 given(0.0);
     for (const Vec3& p : f.points) given += p / static_cast<double>(f.points.size());
     std::vector<int> outer = weld_loop(f.points);
+    if (distinct(outer) < 3 && distinct_points(f.points) >= 3) {
+      // Distinct as given, welded into fewer than 3: thinner than the weld
+      // tolerance, a zero-area face at the scene's resolution.
+      if (++scene.report.zero_area_faces_dropped <= 5)
+        scene.report.warnings.push_back(where(f.file, f.line) + "face '" + f.name + "' has its vertices welded into " +
+                                        std::to_string(distinct(outer)) + " within the weld tolerance " +
+                                        format_number(welder.tolerance()) + " (of the scene size " +
+                                        format_number(diag) + "): dropped as zero-area");
+      continue;
+    }
     if (distinct(outer) < 3)
       throw InputError(at() + "has " + std::to_string(distinct(outer)) +
                        " distinct vertices; a face needs at least 3");
@@ -331,6 +349,17 @@ Scene build_scene(const std::vector<RawFace>& faces, std::vector<Material> mater
       if (++scene.report.zero_area_faces_dropped <= 5)
         scene.report.warnings.push_back(where(f.file, f.line) + "face '" + f.name +
                                         "' has zero area: dropped");
+      continue;
+    }
+    // Thinner than the weld tolerance (its area over its diameter, a
+    // triangle's height over its longest edge): at the scene's resolution
+    // it has no inside, and meshing it found no triangle.
+    if (2.0 * area / diam < welder.tolerance()) {
+      if (++scene.report.zero_area_faces_dropped <= 5)
+        scene.report.warnings.push_back(where(f.file, f.line) + "face '" + f.name + "' is " +
+                                        format_number(2.0 * area / diam) + " wide, below the weld tolerance " +
+                                        format_number(welder.tolerance()) + " (of the scene size " +
+                                        format_number(diag) + "): dropped as zero-area");
       continue;
     }
     const Vec3 n = newell / (2.0 * area);

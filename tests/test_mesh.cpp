@@ -161,6 +161,63 @@ TEST(Mesh, ASliverIsLeftAsItsOutlineAndMeshesAtOnce) {
   EXPECT_GT(floor, 100);  // 1 / 0.1^2 squares' worth: refined as ever
 }
 
+TEST(Mesh, ANearlyTouchingLineLeavesItsFaceUnrefinedInsteadOfCuttingItThatFine) {
+  // A 4 x 4 floor and a panel standing on it, d from the floor's edge and
+  // parallel to it: its foot is a contact line on the floor. At d = 1e-5
+  // the mesher cut the floor's edge and the line about d apart (10^5
+  // points) and the next round took minutes to insert them; the floor is
+  // now left as the triangulation of its outline and lines, and counted.
+  // At d = 1e-3 (10^3 points along the panel) it is refined as before.
+  auto scene = [](double d) {
+    std::vector<RawFace> faces(2);
+    faces[0].name = "floor";
+    faces[0].points = {{0, 0, 0}, {0, 0, 4}, {4, 0, 4}, {4, 0, 0}};
+    faces[1].name = "panel";
+    faces[1].points = {{d, 0, 1.5}, {d, 1, 1.5}, {d, 1, 2.5}, {d, 0, 2.5}};
+    faces[0].material = faces[1].material = 0;
+    return build_scene(faces, {test::material("white", Rgb(0.5), Rgb(1.0))}, "panel");
+  };
+  for (const double d : {1e-5, 1e-3}) {
+    const Scene s = scene(d);
+    MeshReport report;
+    const Mesh m = mesh_scene(s, {}, &report);
+    EXPECT_EQ(report.thin_faces_unrefined, d < 1e-4 ? 1 : 0) << d;
+    EXPECT_GT(report.contact_segments, 0) << d;
+    int floor = 0;
+    for (int t = 0; t < m.triangle_count(); ++t) floor += m.patch[static_cast<size_t>(t)] == 0;
+    if (d < 1e-4)
+      EXPECT_LT(floor, 100) << d;
+    else
+      EXPECT_GT(floor, 1000) << d;  // cut about d apart along the panel: 10^3 points
+    const std::vector<double> area = test::patch_areas(s, m);
+    EXPECT_NEAR(area[0], 16.0, 1e-9) << d;
+    EXPECT_NEAR(area[1], 1.0, 1e-9) << d;
+  }
+}
+
+TEST(Mesh, AVertexNextToAThinHolesEdgeDoesNotCrashTheMesher) {
+  // A 2 x 2 floor with a triangle 1 long and 1e-8 high lying in it (cut
+  // out as a hole) and a panel standing on a vertex 1e-10 from that
+  // hole's long edge: CGAL's mesher dereferenced a null face refining
+  // the floor (a segmentation fault). The floor is left unrefined.
+  std::vector<RawFace> faces(3);
+  faces[0].name = "floor";
+  faces[0].points = {{0, 0, 0}, {2, 0, 0}, {2, 2, 0}, {0, 2, 0}};
+  faces[1].name = "strip";
+  faces[1].points = {{0.5, 0.5, 0}, {1.5, 0.5, 0}, {1, 0.5 + 1e-8, 0}};
+  faces[2].name = "panel";
+  faces[2].points = {{1, 0.5 + 1e-10, 0}, {1.2, 0.5 + 1e-10, 1}, {1, 0.5 + 1e-10, 1}};
+  for (RawFace& f : faces) f.material = 0;
+  const Scene s = build_scene(faces, {test::material("white", Rgb(0.5), Rgb(1.0))}, "strip");
+  ASSERT_EQ(s.report.faces_cut_out, 1);
+  MeshReport report;
+  const Mesh m = mesh_scene(s, {}, &report);
+  EXPECT_EQ(report.thin_faces_unrefined, 2);  // the strip (a sliver) and the floor
+  const std::vector<double> area = test::patch_areas(s, m);
+  EXPECT_NEAR(area[0] + area[1], 4.0, 1e-12);
+  EXPECT_NEAR(area[2], 0.1, 1e-12);
+}
+
 TEST(Mesh, SameInputSameMesh) {
   const Scene s = read_obj_scene(kData + "/cornell_box/cornell_box.obj");
   const Mesh a = mesh_scene(s, {});

@@ -132,6 +132,39 @@ TEST(Scene, ZeroAreaFaceIsDroppedAndCounted) {
   EXPECT_TRUE(contains(s.report.warnings[0], "zero_area.obj:9")) << s.report.warnings[0];
 }
 
+TEST(Scene, FacesThinnerThanTheWeldToleranceAreDroppedAsZeroArea) {
+  // A 2 x 2 floor (scene size 2 x sqrt(2), weld tolerance 2.8e-9) with two
+  // slivers on it: a triangle 1e-10 high over a base of 1, whose vertices
+  // stay distinct (meshing it found no triangle and stopped the run), and
+  // a quad 1e-9 wide whose vertices weld into 2 (refused as a face of 2
+  // distinct vertices). Both have no inside at the scene's resolution and
+  // are dropped with a warning, as faces of zero area are; a triangle 1e-8
+  // high is kept.
+  const fs::path dir = fs::temp_directory_path() / ("radmesh_sliver_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  std::ofstream(dir / "s.mtl") << "newmtl lamp\nKd 0 0 0\nKe 1 1 1\n";
+  std::ofstream(dir / "s.obj") << "mtllib s.mtl\nusemtl lamp\nv 0 0 0\nv 2 0 0\nv 2 2 0\nv 0 2 0\n"
+                                  "v 0.5 0.5 0\nv 1.5 0.5 0\nv 1 0.5000000001 0\nv 1.5 0.500000001 0\n"
+                                  "v 0.5 0.500000001 0\nv 1 0.50000001 0\n"
+                                  "o floor\nf 1 2 3 4\no tri\nf 5 6 7\no quad\nf 5 6 8 9\no kept\nf 5 6 10\n";
+  const Scene s = read_obj_scene((dir / "s.obj").string());
+  EXPECT_EQ(s.report.zero_area_faces_dropped, 2);
+  ASSERT_EQ(s.patches.size(), 2u);
+  EXPECT_EQ(s.patches[1].name, "kept");
+  ASSERT_EQ(s.report.warnings.size(), 3u);  // the third: 'kept' is cut out of the floor
+  EXPECT_TRUE(contains(s.report.warnings[0], "s.obj:16: face 'tri' is 1.00000008e-10 wide, below the weld tolerance"))
+      << s.report.warnings[0];
+  EXPECT_TRUE(contains(s.report.warnings[1], "s.obj:18: face 'quad' has its vertices welded into 2"))
+      << s.report.warnings[1];
+  // What is left meshes: the floor around its thin hole and the kept
+  // triangle in it cover the floor's area.
+  const Mesh m = mesh_scene(s, {});
+  const std::vector<double> area = test::patch_areas(s, m);
+  EXPECT_NEAR(area[0] + area[1], 4.0, 1e-12);
+  EXPECT_NEAR(area[1], 5e-9, 5e-11);
+  fs::remove_all(dir);
+}
+
 TEST(Scene, FacesWithoutAnObjectNameAreNamedAfterTheFile) {
   // No o or g line: the patch takes the file's stem (it was named '').
   const fs::path dir = fs::temp_directory_path() / ("radmesh_unnamed_" + std::to_string(::getpid()));
