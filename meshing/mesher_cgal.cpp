@@ -562,8 +562,9 @@ private:
     for (int s = patch_segments_[static_cast<size_t>(p)]; s < patch_segments_[static_cast<size_t>(p) + 1]; ++s)
       my_segments.push_back(static_cast<size_t>(s));
 
-    auto insert_vertex = [&](int g) {
-      auto vh = cdt.insert(frame.to2(positions_[static_cast<size_t>(g)]));
+    // `near`: a face to start locating the point from.
+    auto insert_vertex = [&](int g, CDT::Face_handle near = CDT::Face_handle()) {
+      auto vh = cdt.insert(frame.to2(positions_[static_cast<size_t>(g)]), near);
       vh->info().id = g;
       return vh;
     };
@@ -577,10 +578,27 @@ private:
         pts.push_back({t, g});
       }
       std::sort(pts.begin(), pts.end());
+      // An edge cut into many points (5 x 10^4 where a narrow gap ran
+      // along it, 4.8 s for its round, now 0.55 s): while the triangulation
+      // is still a line, CGAL locates a point on it by a scan of its edges
+      // (quadratic), so a vertex of the outline off that line goes in
+      // first; and each point is located from the one before it. Only
+      // there: both change the triangulation where points are cocircular
+      // (the Cornell box's mesh, 18,279 points, came out with 18,262).
+      const bool many = pts.size() > kCollinearRun;
+      if (cdt.dimension() < 2 && many)
+        for (size_t o : my_segments) {
+          const Vec3 q = positions_[static_cast<size_t>(segments_[o].b)];
+          double t;
+          if (!on_line(s, q, &t)) {
+            insert_vertex(segments_[o].b);
+            break;
+          }
+        }
       CDT::Vertex_handle prev = insert_vertex(pts[0].second);
       boundary_vertices.push_back(prev);
       for (size_t i = 1; i < pts.size(); ++i) {
-        CDT::Vertex_handle cur = insert_vertex(pts[i].second);
+        CDT::Vertex_handle cur = insert_vertex(pts[i].second, many ? prev->face() : CDT::Face_handle());
         boundary_vertices.push_back(cur);
         if (prev != cur) cdt.insert_constraint(prev, cur);
         prev = cur;
@@ -843,6 +861,7 @@ private:
   // mesher. At 1e-3 from the wall the floor is refined as before (10^3
   // points along the box).
   static constexpr double kNarrowPoints = 1e4;
+  static constexpr size_t kCollinearRun = 1000;  // see mesh_patch
   bool narrow(const CDT& cdt, const Patch& patch, double floor) const {
     for (const auto& h : patch.holes) {
       const std::vector<Vec3> pts = scene_.loop_points(h);
