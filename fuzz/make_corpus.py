@@ -140,6 +140,17 @@ def main():
             n = first + 4 * (2 * i + k)
             rug += b"f %d %d %d %d\n" % (n, n + 1, n + 2, n + 3)
     write("fuzz_mesh", "cornell_tiled_rug", obj.rstrip(b"\n") + rug + MARK + mtl)
+    # Narrow gaps (session 30): a panel standing 1e-5 from the floor's edge
+    # (meshed for minutes), and a panel standing 1e-10 from the edge of a
+    # thin strip lying in the floor (crashed CGAL's mesher).
+    lamp = b"newmtl lamp\nKd 0.5 0.5 0.5\nKe 1 1 1\n"
+    write("fuzz_mesh", "narrow_gap_panel",
+          b"mtllib scene.mtl\nusemtl lamp\nv 0 0 0\nv 0 0 4\nv 4 0 4\nv 4 0 0\n"
+          b"v 1e-5 0 1.5\nv 1e-5 1 1.5\nv 1e-5 1 2.5\nv 1e-5 0 2.5\no floor\nf 1 2 3 4\no panel\nf 5 6 7 8" + MARK + lamp)
+    write("fuzz_mesh", "thin_strip_vertex",
+          b"mtllib scene.mtl\nusemtl lamp\nv 0 0 0\nv 2 0 0\nv 2 2 0\nv 0 2 0\nv 0.5 0.5 0\nv 1.5 0.5 0\n"
+          b"v 1 0.50000001 0\nv 1 0.5000000001 0\nv 1.2 0.5000000001 1\nv 1 0.5000000001 1\n"
+          b"o floor\nf 1 2 3 4\no strip\nf 5 6 7\no panel\nf 8 9 10" + MARK + lamp)
 
     formats = [(0, "ply_ascii", ply_ascii()), (0, "ply_binary", ply_binary()), (1, "stl_ascii", stl_ascii()),
                (1, "stl_binary", stl_binary()), (2, "off", off()), (3, "gltf", gltf()), (4, "glb", glb())]
