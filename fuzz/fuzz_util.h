@@ -106,13 +106,8 @@ inline void check_mesh(const Scene& scene, const Mesh& mesh) {
   for (size_t p = 0; p < area.size(); ++p) {
     const double want = scene.patch_area(static_cast<int>(p));
     const Patch& patch = scene.patches[p];
-    double perimeter = 0.0;
-    auto add_loop = [&](const std::vector<int>& loop) {
-      const std::vector<Vec3> pts = scene.loop_points(loop);
-      for (size_t i = 0; i < pts.size(); ++i) perimeter += glm::length(pts[(i + 1) % pts.size()] - pts[i]);
-    };
-    add_loop(patch.outer);
-    for (const auto& h : patch.holes) add_loop(h);
+    double perimeter = loop_length(scene.loop_points(patch.outer));
+    for (const auto& h : patch.holes) perimeter += loop_length(scene.loop_points(h));
     if (std::abs(area[p] - want) > 1e-6 * want + weld * perimeter)
       defect("patch " + std::to_string(p) + ": mesh area " + std::to_string(area[p]) + " != patch area " +
              std::to_string(want));

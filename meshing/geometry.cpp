@@ -17,6 +17,12 @@ Vec3 newell_normal(const std::vector<Vec3>& loop) {
   return n;
 }
 
+double loop_length(const std::vector<Vec3>& loop) {
+  double length = 0.0;
+  for (size_t i = 0; i < loop.size(); ++i) length += glm::length(loop[(i + 1) % loop.size()] - loop[i]);
+  return length;
+}
+
 double triangle_area(const Vec3& a, const Vec3& b, const Vec3& c) {
   return 0.5 * glm::length(glm::cross(b - a, c - a));
 }

@@ -20,6 +20,9 @@ inline double max3(const Rgb& c) { return std::max({c.x, c.y, c.z}); }
 // Newell normal (not normalized): its length is twice the polygon's vector area.
 Vec3 newell_normal(const std::vector<Vec3>& loop);
 
+// Length of a closed polygon's boundary.
+double loop_length(const std::vector<Vec3>& loop);
+
 // Area of a triangle.
 double triangle_area(const Vec3& a, const Vec3& b, const Vec3& c);
 

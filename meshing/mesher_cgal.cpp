@@ -865,8 +865,7 @@ private:
   bool narrow(const CDT& cdt, const Patch& patch, double floor) const {
     for (const auto& h : patch.holes) {
       const std::vector<Vec3> pts = scene_.loop_points(h);
-      double perimeter = 0.0;
-      for (size_t i = 0; i < pts.size(); ++i) perimeter += glm::length(pts[(i + 1) % pts.size()] - pts[i]);
+      const double perimeter = loop_length(pts);
       const double width = glm::length(newell_normal(pts)) / perimeter;  // twice the area over the perimeter
       if (width < floor && perimeter > kNarrowPoints * width) return true;
     }
