@@ -579,7 +579,7 @@ private:
       }
       std::sort(pts.begin(), pts.end());
       // An edge cut into many points (5 x 10^4 where a narrow gap ran
-      // along it, 4.8 s for its round, now 0.55 s): while the triangulation
+      // along it, 4.8 s for its round, now 0.53 s): while the triangulation
       // is still a line, CGAL locates a point on it by a scan of its edges
       // (quadratic), so a vertex of the outline off that line goes in
       // first; and each point is located from the one before it. Only
