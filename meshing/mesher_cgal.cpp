@@ -249,6 +249,7 @@ public:
       report->crossings = crossings_;
       report->rounding_crossings = 0;
       report->thin_faces_unrefined = static_cast<int>(thin_.size());
+      report->warnings = warnings_;
       for (const auto& [p, n] : rounding_crossings_) report->rounding_crossings += n;
       report->shadow = shadow_report_;
       report->discontinuities = discontinuities_;
@@ -726,9 +727,14 @@ private:
     const double patch_area = scene_.patch_area(p);
     const double width = 2.0 * patch_area / perimeter;
     const double floor = opt_.min_separation_fraction * opt_.max_edge;
-    if (refine && ((width < floor && perimeter > 200.0 * width) || narrow(cdt, patch, floor))) {
+    const std::string gap = refine && !(width < floor && perimeter > 200.0 * width) ? narrow(cdt, patch, frame, floor) : "";
+    if (refine && ((width < floor && perimeter > 200.0 * width) || !gap.empty())) {
       refine = false;
-      thin_.insert(p);
+      if (thin_.insert(p).second && !gap.empty())
+        warnings_.push_back(where(patch.file, patch.line) + "face '" + patch.name + "': " + gap +
+                            ", so refining it to --max-edge " + format_number(opt_.max_edge) +
+                            " would cut that edge about as finely along its length: left as the triangulation of its "
+                            "outline and lines (the hierarchical method still splits it where its links ask)");
     }
     if (refine) {
       const double s = std::sin(opt_.min_angle * std::numbers::pi / 180.0);
@@ -862,12 +868,15 @@ private:
   // points along the box).
   static constexpr double kNarrowPoints = 1e4;
   static constexpr size_t kCollinearRun = 1000;  // see mesh_patch
-  bool narrow(const CDT& cdt, const Patch& patch, double floor) const {
+  // What makes it narrow, or "".
+  std::string narrow(const CDT& cdt, const Patch& patch, const Frame& frame, double floor) const {
     for (const auto& h : patch.holes) {
       const std::vector<Vec3> pts = scene_.loop_points(h);
       const double perimeter = loop_length(pts);
       const double width = glm::length(newell_normal(pts)) / perimeter;  // twice the area over the perimeter
-      if (width < floor && perimeter > kNarrowPoints * width) return true;
+      if (width < floor && perimeter > kNarrowPoints * width)
+        return "a hole " + format_number(width) + " wide and " + format_number(perimeter) +
+               " around (a face lying in it) is narrower than the separation floor " + format_number(floor);
     }
     auto joined = [&](CDT::Vertex_handle v, CDT::Vertex_handle w) {
       CDT::Face_handle f;
@@ -881,10 +890,14 @@ private:
         const K::Vector_2 ab = b->point() - a->point(), av = v->point() - a->point();
         const double len = std::sqrt(ab.squared_length());
         const double along = (av * ab) / len, off = std::abs(CGAL::to_double(CGAL::determinant(ab, av))) / len;
-        if (off < floor && std::min(along, len - along) > kNarrowPoints * off && !joined(v, a) && !joined(v, b))
-          return true;
+        if (off < floor && std::min(along, len - along) > kNarrowPoints * off && !joined(v, a) && !joined(v, b)) {
+          const Vec3 at = frame.to3(v->point());
+          return "a vertex at (" + format_number(at.x) + ", " + format_number(at.y) + ", " + format_number(at.z) +
+                 ") lies " + format_number(off) + " from one of its edges or lines, " +
+                 format_number(std::min(along, len - along)) + " from that edge's nearer end";
+        }
       }
-    return false;
+    return "";
   }
 
   static bool is_on_constraint(CDT& cdt, CDT::Vertex_handle v) {
@@ -939,6 +952,7 @@ private:
   std::map<int, int> rounding_crossings_;
   double point_budget_ = 0.0;  // points the mesher may add to the patch being meshed
   std::set<int> thin_;         // patches too thin to refine (mesh_patch)
+  std::vector<std::string> warnings_;  // MeshReport::warnings
   struct Steiner {
     int id;
     Point2 q;

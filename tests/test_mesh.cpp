@@ -182,13 +182,21 @@ TEST(Mesh, ANearlyTouchingLineLeavesItsFaceUnrefinedInsteadOfCuttingItThatFine) 
     MeshReport report;
     const Mesh m = mesh_scene(s, {}, &report);
     EXPECT_EQ(report.thin_faces_unrefined, d < 1e-4 ? 1 : 0) << d;
+    // Said, naming the face and the vertex (the panel's foot at z 1.5 or 2.5).
+    ASSERT_EQ(report.warnings.size(), d < 1e-4 ? 1u : 0u) << d;
+    if (d < 1e-4) {
+      EXPECT_TRUE(test::contains(report.warnings[0], "face 'floor': a vertex at (1e-05, 0, ") &&
+                  test::contains(report.warnings[0], ") lies 1e-05 from one of its edges or lines"))
+          << report.warnings[0];
+    }
     EXPECT_GT(report.contact_segments, 0) << d;
     int floor = 0;
     for (int t = 0; t < m.triangle_count(); ++t) floor += m.patch[static_cast<size_t>(t)] == 0;
-    if (d < 1e-4)
+    if (d < 1e-4) {
       EXPECT_LT(floor, 100) << d;
-    else
+    } else {
       EXPECT_GT(floor, 1000) << d;  // cut about d apart along the panel: 10^3 points
+    }
     const std::vector<double> area = test::patch_areas(s, m);
     EXPECT_NEAR(area[0], 16.0, 1e-9) << d;
     EXPECT_NEAR(area[1], 1.0, 1e-9) << d;
@@ -213,6 +221,8 @@ TEST(Mesh, AVertexNextToAThinHolesEdgeDoesNotCrashTheMesher) {
   MeshReport report;
   const Mesh m = mesh_scene(s, {}, &report);
   EXPECT_EQ(report.thin_faces_unrefined, 2);  // the strip (a sliver) and the floor
+  ASSERT_EQ(report.warnings.size(), 1u);       // the floor's hole; a sliver face is only counted
+  EXPECT_TRUE(test::contains(report.warnings[0], "face 'floor': a hole ")) << report.warnings[0];
   const std::vector<double> area = test::patch_areas(s, m);
   EXPECT_NEAR(area[0] + area[1], 4.0, 1e-12);
   EXPECT_NEAR(area[2], 0.1, 1e-12);
