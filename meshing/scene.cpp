@@ -333,9 +333,20 @@ Scene build_scene(const std::vector<RawFace>& faces, std::vector<Material> mater
                                         format_number(diag) + "): dropped as zero-area");
       continue;
     }
-    if (distinct(outer) < 3)
-      throw InputError(at() + "has " + std::to_string(distinct(outer)) +
-                       " distinct vertices; a face needs at least 3");
+    if (distinct(outer) < 3) {
+      // Far from the origin for its size, its vertices may be distinct in
+      // the file and equal in double (an object moved 1e49 away).
+      double far = 0.0;
+      for (const Vec3& p : f.points) far = std::max(far, glm::length(p));
+      const std::string hint =
+          far > 1e15 * diameter(f.points)
+              ? "; it lies " + format_number(far) +
+                    " from the origin, where double precision (16 digits) cannot keep its vertices apart: move the "
+                    "scene nearer the origin"
+              : "";
+      throw InputError(at() + "has " + std::to_string(distinct(outer)) + " distinct vertices; a face needs at least 3" +
+                       hint);
+    }
     std::vector<Vec3> pts = scene.loop_points(outer);
     const Vec3 newell = newell_normal(pts);
     const double area = 0.5 * glm::length(newell);

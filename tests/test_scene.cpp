@@ -165,6 +165,28 @@ TEST(Scene, FacesThinnerThanTheWeldToleranceAreDroppedAsZeroArea) {
   fs::remove_all(dir);
 }
 
+TEST(Scene, AFaceWhoseVerticesDoubleCannotTellApartSaysItIsTooFarFromTheOrigin) {
+  // A 4 x 4 square moved 1e49 along x (a JSON transform can do it): in
+  // double 1e49 + 4 is 1e49, and its 4 vertices are 2. The error says why;
+  // a face naming one point twice near the origin gets no such hint.
+  RawFace far;
+  far.name = "far";
+  far.material = 0;
+  far.points = {{1e49, 0, 0}, {1e49, 0, 4}, {1e49 + 4.0, 0, 4}, {1e49 + 4.0, 0, 0}};
+  const std::string msg = message_of<InputError>([&] { build_scene({far}, {test::material("grey", Rgb(0.5))}, "far"); });
+  EXPECT_TRUE(contains(msg, "face 'far': has 2 distinct vertices; a face needs at least 3; it lies 1e+49 from the "
+                            "origin, where double precision (16 digits) cannot keep its vertices apart"))
+      << msg;
+  RawFace twice;
+  twice.name = "twice";
+  twice.material = 0;
+  twice.points = {{0, 0, 0}, {1, 0, 0}, {0, 0, 0}};
+  const std::string near =
+      message_of<InputError>([&] { build_scene({twice}, {test::material("grey", Rgb(0.5))}, "twice"); });
+  EXPECT_TRUE(contains(near, "face 'twice': has 2 distinct vertices; a face needs at least 3")) << near;
+  EXPECT_FALSE(contains(near, "origin")) << near;
+}
+
 TEST(Scene, FacesWithoutAnObjectNameAreNamedAfterTheFile) {
   // No o or g line: the patch takes the file's stem (it was named '').
   const fs::path dir = fs::temp_directory_path() / ("radmesh_unnamed_" + std::to_string(::getpid()));
