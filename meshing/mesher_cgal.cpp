@@ -727,8 +727,9 @@ private:
     const double patch_area = scene_.patch_area(p);
     const double width = 2.0 * patch_area / perimeter;
     const double floor = opt_.min_separation_fraction * opt_.max_edge;
-    const std::string gap = refine && !(width < floor && perimeter > 200.0 * width) ? narrow(cdt, patch, frame, floor) : "";
-    if (refine && ((width < floor && perimeter > 200.0 * width) || !gap.empty())) {
+    const bool sliver = width < floor && perimeter > 200.0 * width;
+    const std::string gap = refine && !sliver ? narrow(cdt, patch, frame, floor) : "";
+    if (refine && (sliver || !gap.empty())) {
       refine = false;
       if (thin_.insert(p).second && !gap.empty())
         warnings_.push_back(where(patch.file, patch.line) + "face '" + patch.name + "': " + gap +

@@ -318,22 +318,26 @@ Scene build_scene(const std::vector<RawFace>& faces, std::vector<Material> mater
 
   // Per patch: the centroid of its face's points as given, before welding.
   std::vector<Vec3> raw_centroid;
+  const std::string weld_text = "the weld tolerance " + format_number(welder.tolerance()) + " (of the scene size " +
+                                format_number(diag) + "): dropped as zero-area";
   for (const RawFace& f : faces) {
     auto at = [&f] { return where(f.file, f.line) + "face '" + f.name + "': "; };
     Vec3 given(0.0);
     for (const Vec3& p : f.points) given += p / static_cast<double>(f.points.size());
+    // Dropped, counted, and said for the first 5.
+    auto drop_as_zero_area = [&](const std::string& why) {
+      if (++scene.report.zero_area_faces_dropped <= 5)
+        scene.report.warnings.push_back(where(f.file, f.line) + "face '" + f.name + "' " + why);
+    };
     std::vector<int> outer = weld_loop(f.points);
-    if (distinct(outer) < 3 && distinct_points(f.points) >= 3) {
+    const int kept = distinct(outer);
+    if (kept < 3 && distinct_points(f.points) >= 3) {
       // Distinct as given, welded into fewer than 3: thinner than the weld
       // tolerance, a zero-area face at the scene's resolution.
-      if (++scene.report.zero_area_faces_dropped <= 5)
-        scene.report.warnings.push_back(where(f.file, f.line) + "face '" + f.name + "' has its vertices welded into " +
-                                        std::to_string(distinct(outer)) + " within the weld tolerance " +
-                                        format_number(welder.tolerance()) + " (of the scene size " +
-                                        format_number(diag) + "): dropped as zero-area");
+      drop_as_zero_area("has its vertices welded into " + std::to_string(kept) + " within " + weld_text);
       continue;
     }
-    if (distinct(outer) < 3) {
+    if (kept < 3) {
       // Far from the origin for its size, its vertices may be distinct in
       // the file and equal in double (an object moved 1e49 away).
       double far = 0.0;
@@ -344,8 +348,7 @@ Scene build_scene(const std::vector<RawFace>& faces, std::vector<Material> mater
                     " from the origin, where double precision (16 digits) cannot keep its vertices apart: move the "
                     "scene nearer the origin"
               : "";
-      throw InputError(at() + "has " + std::to_string(distinct(outer)) + " distinct vertices; a face needs at least 3" +
-                       hint);
+      throw InputError(at() + "has " + std::to_string(kept) + " distinct vertices; a face needs at least 3" + hint);
     }
     std::vector<Vec3> pts = scene.loop_points(outer);
     const Vec3 newell = newell_normal(pts);
@@ -357,20 +360,14 @@ Scene build_scene(const std::vector<RawFace>& faces, std::vector<Material> mater
       if (off_line(pts) > options.planarity_tolerance * diam)
         throw InputError(at() + "is not a simple polygon: its edges cross so that its signed area is zero, though "
                                 "its vertices do not lie on one line; check the order of the face's vertices");
-      if (++scene.report.zero_area_faces_dropped <= 5)
-        scene.report.warnings.push_back(where(f.file, f.line) + "face '" + f.name +
-                                        "' has zero area: dropped");
+      drop_as_zero_area("has zero area: dropped");
       continue;
     }
     // Thinner than the weld tolerance (its area over its diameter, a
     // triangle's height over its longest edge): at the scene's resolution
     // it has no inside, and meshing it found no triangle.
     if (2.0 * area / diam < welder.tolerance()) {
-      if (++scene.report.zero_area_faces_dropped <= 5)
-        scene.report.warnings.push_back(where(f.file, f.line) + "face '" + f.name + "' is " +
-                                        format_number(2.0 * area / diam) + " wide, below the weld tolerance " +
-                                        format_number(welder.tolerance()) + " (of the scene size " +
-                                        format_number(diag) + "): dropped as zero-area");
+      drop_as_zero_area("is " + format_number(2.0 * area / diam) + " wide, below " + weld_text);
       continue;
     }
     const Vec3 n = newell / (2.0 * area);
