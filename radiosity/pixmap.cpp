@@ -389,6 +389,23 @@ PixmapLayout layout_of(const Scene& scene, const Mesh& coarse, const PixmapOptio
       return false;
     };
     const int b = options.block;
+    // Overhung texels: a surface (front or back) lies in front of the
+    // texel's centroid, along the patch's normal, nearer than a block's
+    // diagonal (a lamp hung under a ceiling, a low shelf over a floor).
+    // One hemicube at a block's centroid cannot stand for texels on both
+    // sides of an overhang's outline: under a lamp 1 cm below a ceiling it
+    // sees the lamp's back, which receives nothing, and the lit texels of
+    // the blocks straddling the lamp's outline lost their power there. So
+    // the outline splits a block as a contact line does, and a group whose
+    // centroid falls on the other side (an L of three open texels around a
+    // covered one) shoots texel by texel.
+    const double overhang_reach = std::sqrt(2.0) * b * std::max(pm.texel_u, pm.texel_v);
+    auto overhung_at = [&](const Vec3& x) -> char {
+      return vis && vis->first_hit(x, pm.normal, overhang_reach, pm.patches[0]) >= 0 ? 1 : 0;
+    };
+    std::vector<char> overhung(static_cast<size_t>(pm.texels()), 0);
+    for (long long idx = 0; idx < pm.texels(); ++idx)
+      if (pm.owner[idx] == idx) overhung[idx] = overhung_at(pm.centroid[idx]);
     for (int bj = 0; bj < pm.height; bj += b)
       for (int bi = 0; bi < pm.width; bi += b) {
         std::vector<int> owners;
@@ -403,31 +420,48 @@ PixmapLayout layout_of(const Scene& scene, const Mesh& coarse, const PixmapOptio
           }
         std::sort(block_lines.begin(), block_lines.end());
         block_lines.erase(std::unique(block_lines.begin(), block_lines.end()), block_lines.end());
-        // Groups: owners joined where nothing separates them.
+        // Groups: owners joined where nothing separates them (neither a
+        // contact line nor an overhang's outline).
         UnionFind groups(static_cast<int>(owners.size()));
         if (!block_lines.empty()) {
           for (size_t x = 0; x < owners.size(); ++x)
             for (size_t y = x + 1; y < owners.size(); ++y)
-              if (!separated(owners[x], owners[y])) groups.unite(static_cast<int>(x), static_cast<int>(y));
+              if (overhung[owners[x]] == overhung[owners[y]] && !separated(owners[x], owners[y]))
+                groups.unite(static_cast<int>(x), static_cast<int>(y));
         } else {
-          for (size_t x = 1; x < owners.size(); ++x) groups.unite(0, static_cast<int>(x));
+          int first[2] = {-1, -1};
+          for (size_t x = 0; x < owners.size(); ++x) {
+            int& f = first[static_cast<size_t>(overhung[owners[x]])];
+            if (f < 0) f = static_cast<int>(x);
+            groups.unite(f, static_cast<int>(x));
+          }
         }
-        for (size_t g = 0; g < owners.size(); ++g) {
-          if (groups.find(static_cast<int>(g)) != static_cast<int>(g)) continue;
+        auto add_shooter = [&](const std::vector<int>& texels) {
           Shooter sh;
           sh.pixmap = static_cast<int>(k);
+          sh.texels = texels;
           Vec3 sum(0.0);
           double weight = 0.0;
-          for (size_t x = 0; x < owners.size(); ++x) {
-            if (groups.find(static_cast<int>(x)) != static_cast<int>(g)) continue;
-            const int idx = owners[x];
-            sh.texels.push_back(idx);
+          for (int idx : texels) {
             sh.area += pm.area[idx];
             sum += pm.coverage[idx] * pm.centroid[idx];
             weight += pm.coverage[idx];
           }
           sh.centre = sum / weight;
           L.shooters.push_back(std::move(sh));
+        };
+        std::vector<int> members;
+        for (size_t g = 0; g < owners.size(); ++g) {
+          if (groups.find(static_cast<int>(g)) != static_cast<int>(g)) continue;
+          members.clear();
+          for (size_t x = 0; x < owners.size(); ++x)
+            if (groups.find(static_cast<int>(x)) == static_cast<int>(g)) members.push_back(owners[x]);
+          add_shooter(members);
+          const Shooter& group = L.shooters.back();
+          if (members.size() > 1 && overhung[members[0]] != overhung_at(group.centre)) {
+            L.shooters.pop_back();
+            for (int idx : members) add_shooter({idx});
+          }
         }
       }
   }

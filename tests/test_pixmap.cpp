@@ -191,35 +191,43 @@ SolveOptions threads(int n) {
 // A 4 x 2 x 2 room cut in two by a floor-to-ceiling wall `thickness`
 // thick at x = 2, lit by its end wall at x = 0 (E = 1): the half beyond the
 // wall is sealed, and its true radiosity is 0.
-Scene divided_room(double thickness) {
-  const std::string dir = ::testing::TempDir() + "/radmesh_divided_room";
+using NamedQuad = std::pair<std::string, std::array<std::array<double, 3>, 4>>;
+
+// An OBJ scene of quads (counter-clockwise seen from the side they face)
+// written to the test directory `name` and read: the quad named "light"
+// emits 1 (reflectance 0), the others are white (0.7).
+Scene quad_scene(const std::string& name, const std::vector<NamedQuad>& quads) {
+  const std::string dir = ::testing::TempDir() + "/radmesh_" + name;
   std::filesystem::create_directories(dir);
-  const double a = 2.0 - 0.5 * thickness, b = 2.0 + 0.5 * thickness;
   std::ofstream mtl(dir + "/room.mtl");
   mtl << "newmtl white\nKd 0.7 0.7 0.7\nnewmtl light\nKd 0 0 0\nKe 1 1 1\n";
   mtl.close();
   std::ofstream obj(dir + "/room.obj");
   obj << "mtllib room.mtl\n";
-  // Quads counter-clockwise seen from the side they face.
-  const std::vector<std::pair<std::string, std::array<std::array<double, 3>, 4>>> quads = {
-      {"floor", {{{0, 0, 0}, {0, 0, 2}, {4, 0, 2}, {4, 0, 0}}}},
-      {"ceiling", {{{0, 2, 0}, {4, 2, 0}, {4, 2, 2}, {0, 2, 2}}}},
-      {"back", {{{0, 0, 0}, {4, 0, 0}, {4, 2, 0}, {0, 2, 0}}}},
-      {"front", {{{0, 0, 2}, {0, 2, 2}, {4, 2, 2}, {4, 0, 2}}}},
-      {"light", {{{0, 0, 0}, {0, 2, 0}, {0, 2, 2}, {0, 0, 2}}}},
-      {"end", {{{4, 0, 0}, {4, 0, 2}, {4, 2, 2}, {4, 2, 0}}}},
-      {"wall_lit", {{{a, 0, 0}, {a, 0, 2}, {a, 2, 2}, {a, 2, 0}}}},
-      {"wall_sealed", {{{b, 0, 0}, {b, 2, 0}, {b, 2, 2}, {b, 0, 2}}}},
-  };
   int v = 0;
-  for (const auto& [name, q] : quads) {
+  for (const auto& [quad_name, q] : quads) {
     for (const auto& p : q) obj << "v " << p[0] << " " << p[1] << " " << p[2] << "\n";
-    obj << "o " << name << "\nusemtl " << (name == "light" ? "light" : "white") << "\nf " << v + 1 << " " << v + 2
-        << " " << v + 3 << " " << v + 4 << "\n";
+    obj << "o " << quad_name << "\nusemtl " << (quad_name == "light" ? "light" : "white") << "\nf " << v + 1 << " "
+        << v + 2 << " " << v + 3 << " " << v + 4 << "\n";
     v += 4;
   }
   obj.close();
   return read_obj_scene(dir + "/room.obj");
+}
+
+// A 4 x 2 x 2 room lit from one end, cut in two by a wall `thickness` thick.
+Scene divided_room(double thickness) {
+  const double a = 2.0 - 0.5 * thickness, b = 2.0 + 0.5 * thickness;
+  return quad_scene("divided_room", {
+                                        {"floor", {{{0, 0, 0}, {0, 0, 2}, {4, 0, 2}, {4, 0, 0}}}},
+                                        {"ceiling", {{{0, 2, 0}, {4, 2, 0}, {4, 2, 2}, {0, 2, 2}}}},
+                                        {"back", {{{0, 0, 0}, {4, 0, 0}, {4, 2, 0}, {0, 2, 0}}}},
+                                        {"front", {{{0, 0, 2}, {0, 2, 2}, {4, 2, 2}, {4, 0, 2}}}},
+                                        {"light", {{{0, 0, 0}, {0, 2, 0}, {0, 2, 2}, {0, 0, 2}}}},
+                                        {"end", {{{4, 0, 0}, {4, 0, 2}, {4, 2, 2}, {4, 2, 0}}}},
+                                        {"wall_lit", {{{a, 0, 0}, {a, 0, 2}, {a, 2, 2}, {a, 2, 0}}}},
+                                        {"wall_sealed", {{{b, 0, 0}, {b, 2, 0}, {b, 2, 2}, {b, 0, 2}}}},
+                                    });
 }
 
 TEST(PixmapSolver, NoShooterSitsAcrossAWallStandingOnItsPatch) {
@@ -251,6 +259,68 @@ TEST(PixmapSolver, NoShooterSitsAcrossAWallStandingOnItsPatch) {
   std::printf("divided room: lit side of the wall %.4f, sealed half at most %.3g\n", lit, sealed);
   EXPECT_GT(lit, 0.1);
   EXPECT_LT(sealed, 3e-3 * lit);
+}
+
+TEST(PixmapSolver, BlocksUnderALampHungJustBelowTheCeilingLoseNoMoreThanTheirTexels) {
+  // A closed 4 m room, a 0.9 x 0.9 lamp facing down 1 cm under the ceiling.
+  // Its back receives nothing, so light that enters the gap is lost there:
+  // at most the radiosity around the gap times the opening's area (the
+  // lamp's perimeter times 0.01). Blocks of 2 x 2 texels are a speed-up
+  // over shooting texel by texel and must lose what the texels lose. The
+  // ceiling's blocks straddling the lamp's outline shot their open texels'
+  // power from a centroid over the lamp, into its back: 18 times what the
+  // texels shot one by one lost, 9 times the bound. Now the outline splits a
+  // block, and a group whose centroid falls on the other side of it (an L of
+  // three open texels around a covered one) shoots texel by texel.
+  const double gap = 0.01, top = 4.0 - gap, lo = 1.35, hi = 2.25;
+  const Scene scene = quad_scene(
+      "lamp_room", {
+                       {"floor", {{{0, 0, 0}, {0, 0, 4}, {4, 0, 4}, {4, 0, 0}}}},
+                       {"ceiling", {{{0, 4, 0}, {4, 4, 0}, {4, 4, 4}, {0, 4, 4}}}},
+                       {"back", {{{0, 0, 0}, {4, 0, 0}, {4, 4, 0}, {0, 4, 0}}}},
+                       {"front", {{{0, 0, 4}, {0, 4, 4}, {4, 4, 4}, {4, 0, 4}}}},
+                       {"left", {{{0, 0, 0}, {0, 4, 0}, {0, 4, 4}, {0, 0, 4}}}},
+                       {"right", {{{4, 0, 0}, {4, 0, 4}, {4, 4, 4}, {4, 4, 0}}}},
+                       {"light", {{{lo, top, lo}, {hi, top, lo}, {hi, top, hi}, {lo, top, hi}}}},
+                   });
+  const int floor = test::patch_named(scene, "floor"), light = test::patch_named(scene, "light");
+  struct Result {
+    double escaped, floor_mean, bound;
+  };
+  auto solve = [&](int block) {
+    PixmapOptions o;
+    o.texel_size = 0.2;
+    o.block = block;
+    o.hemicube_res = 32;
+    const PixmapSolver solver(scene, o, threads(0));
+    const PixmapRun run = solver.run(solver.initial_state());
+    const PixmapLayout& L = solver.layout();
+    double brightest = 0.0, sum = 0.0, area = 0.0;
+    for (size_t k = 0; k < L.pixmaps.size(); ++k) {
+      const Pixmap& pm = L.pixmaps[k];
+      if (static_cast<int>(k) == L.pixmap_of_patch[light]) continue;
+      for (long long i = 0; i < pm.texels(); ++i) {
+        if (pm.owner[i] != i) continue;
+        const double b = run.state.radiosity[k][i * 3];
+        brightest = std::max(brightest, b);
+        if (static_cast<int>(k) == L.pixmap_of_patch[floor]) {
+          sum += b * pm.area[i];
+          area += pm.area[i];
+        }
+      }
+    }
+    const Result r{run.state.power_escaped.x, sum / area, brightest * 4.0 * (hi - lo) * gap};
+    std::printf("lamp under the ceiling, blocks of %d: escaped %.4g of %.4g emitted (bound %.4g), floor %.6f\n", block,
+                r.escaped, run.power_emitted.x, r.bound, r.floor_mean);
+    return r;
+  };
+  const Result texels = solve(1), blocks = solve(2);
+  for (const Result& r : {texels, blocks}) {
+    EXPECT_GT(r.escaped, 0.0);
+    EXPECT_LT(r.escaped, r.bound);
+  }
+  EXPECT_NEAR(blocks.escaped / texels.escaped, 1.0, 0.25);
+  EXPECT_NEAR(blocks.floor_mean / texels.floor_mean, 1.0, 2e-3);
 }
 
 TEST(PixmapSolver, FurnaceConvergesToEOverOneMinusRho) {
