@@ -45,6 +45,16 @@ struct DiscontinuitySegment {
 // 1e-9 of the scene diagonal of a plane count as on it.
 std::vector<DiscontinuitySegment> contact_segments(const Scene& scene);
 
+// Overhang outlines: where every vertex of a patch q lies in front of patch
+// p, nearer than `max_gap` to its plane (a lamp hung just under a ceiling, a
+// rug laid just above a floor, a picture on a wall), q's loops projected
+// onto p's plane and clipped to p, as contact segments of p (other = q). At
+// a mesh's resolution such a gap is a contact: p is dark under q and lit
+// beside it, and an element straddling the outline would send what its lit
+// part gathered into q's back. mesh_scene uses max_gap = the separation
+// floor (min_separation_fraction x max_edge).
+std::vector<DiscontinuitySegment> overhang_segments(const Scene& scene, double max_gap);
+
 // Shadow boundaries (D1/D2) cast by every emitter polygon.
 //
 // For each emitter e, each receiver r facing it and each occluder o in the

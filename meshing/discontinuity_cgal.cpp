@@ -212,6 +212,49 @@ std::vector<DiscontinuitySegment> contact_segments(const Scene& scene) {
   return out;
 }
 
+std::vector<DiscontinuitySegment> overhang_segments(const Scene& scene, double max_gap) {
+  const double eps = 1e-9 * scene.diagonal();
+  std::vector<DiscontinuitySegment> out;
+  if (!(max_gap > eps)) return out;
+  const std::vector<Poly> polys = make_polys(scene);
+  const std::vector<Box3> boxes = poly_boxes(polys);
+  const BoxTree tree(boxes);
+  std::vector<int> near;
+  for (size_t p = 0; p < polys.size(); ++p) {
+    const Poly& t = polys[p];
+    near.clear();
+    tree.overlapping(boxes[p], max_gap, [&](int q) {
+      near.push_back(q);
+      return true;
+    });
+    std::sort(near.begin(), near.end());
+    for (int qi : near) {
+      const Poly& o = polys[static_cast<size_t>(qi)];
+      if (static_cast<size_t>(qi) == p) continue;
+      bool in_front = true;
+      for (const Vec3& x : o.loops[0]) {
+        const double d = t.dist(x);
+        in_front = in_front && d > eps && d <= max_gap;
+      }
+      if (!in_front) continue;
+      for (const auto& loop : o.loops)
+        for (size_t i = 0, n = loop.size(); i < n; ++i) {
+          const Vec3 a = loop[i] - t.dist(loop[i]) * t.normal;
+          const Vec3 b = loop[(i + 1) % n] - t.dist(loop[(i + 1) % n]) * t.normal;
+          for (const auto& [c, d] : clip(t, a, b, eps)) {
+            DiscontinuitySegment seg;
+            seg.patch = static_cast<int>(p);
+            seg.other = qi;
+            seg.a = c;
+            seg.b = d;
+            out.push_back(seg);
+          }
+        }
+    }
+  }
+  return out;
+}
+
 namespace {
 
 // Does the segment (a, b) pass through the inside of a patch? It does when a

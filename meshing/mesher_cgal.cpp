@@ -383,6 +383,9 @@ private:
   // patch's boundary, are shared with the neighbours like any boundary point.
   void setup_constraints() {
     std::vector<DiscontinuitySegment> lines = contact_segments(scene_);
+    const std::vector<DiscontinuitySegment> overhangs =
+        overhang_segments(scene_, opt_.min_separation_fraction * opt_.max_edge);
+    lines.insert(lines.end(), overhangs.begin(), overhangs.end());
     if (opt_.discontinuity == DiscontinuityMode::full) {
       ShadowOptions so = opt_.shadow;
       if (so.min_separation == 0.0) so.min_separation = opt_.min_separation_fraction * opt_.max_edge;

@@ -147,6 +147,39 @@ TEST(Field, AVertexOnAContactLineTakesTheValueOfItsOwnSide) {
   EXPECT_GE(r.field.on_other_surface, under + outside);
 }
 
+TEST(Field, BesideARugAMillimetreAboveTheFloorTheFloorKeepsItsLight) {
+  // The floor is cut along the rug's outline (a contact line at the mesh's
+  // scale). Its vertices there used to take the value on the outline itself,
+  // half lit, and the lit side's interpolation was dark over a whole
+  // element: the field's floor power came out 7% below the elements'. Each
+  // side's value is now taken ten gaps into that side.
+  const Scene scene = test::room_with_panel(0.001, 1.0);
+  const int floor = patch_named(scene, "floor");
+  const MethodResult r = solve(scene, "matrix", 0.5, DiscontinuityMode::contacts);
+  double field = 0.0, elements = 0.0;
+  for (int t = 0; t < r.mesh.triangle_count(); ++t) {
+    if (r.mesh.patch[static_cast<size_t>(t)] != floor) continue;
+    double mean = 0.0;
+    for (int d : r.solution.nodal.corners[static_cast<size_t>(t)]) mean += r.solution.nodal.radiosity[static_cast<size_t>(d)].x / 3.0;
+    field += r.mesh.area(t) * mean;
+    elements += r.mesh.area(t) * r.solution.element[static_cast<size_t>(t)].x;
+  }
+  std::printf("floor power beside a rug 1 mm up: field %.5f, elements %.5f\n", field, elements);
+  EXPECT_NEAR(field / elements, 1.0, 0.01);
+  // On the outline: a dark vertex under the rug and a lit one beside it.
+  const auto patch = vertex_patches(r);
+  int dark = 0, lit = 0;
+  for (size_t d = 0; d < r.solution.nodal.points.size(); ++d) {
+    const Vec3& x = r.solution.nodal.points[d];
+    if (patch[d] != floor || std::max(std::abs(x.x), std::abs(x.z)) != 1.0) continue;
+    const double b = r.solution.nodal.radiosity[d].x;
+    if (b < 0.01 * elements / 16.0) ++dark;
+    if (b > 0.7 * elements / 12.0) ++lit;
+  }
+  EXPECT_GT(dark, 4);
+  EXPECT_EQ(dark, lit);
+}
+
 TEST(Field, AFurnaceWithABlockInsideIsUniformAtEveryVertexEvenOnItsCreases) {
   // A closed room and a floating block, everything emitting 1 with
   // reflectance 0.8: B = 5 everywhere. Refinement leaves T-vertices on the

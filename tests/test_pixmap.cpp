@@ -230,6 +230,23 @@ Scene divided_room(double thickness) {
                                     });
 }
 
+TEST(PixmapLayout, ATableTopOverTheFloorLeavesNoFloorOut) {
+  // A one-sided table top 3 x 3, 20 cm over a 4 x 4 floor, covers the
+  // centroids of both of the floor's coarse triangles, where every ray of
+  // the test for the inside of a closed object meets its back. The whole
+  // floor was left out (black, and 18% of the emitted power lost). A
+  // triangle must be shut near its corners too, and nothing here is.
+  const Scene scene = test::room_with_panel(0.2, 1.5);
+  PixmapOptions o;
+  o.texel_size = 0.2;
+  const PixmapLayout L = make_pixmap_layout(scene, o, 1e9);
+  EXPECT_EQ(L.enclosed_area, 0.0);
+  // Under a rug 1 mm up, cut along its outline, the floor is shut: its 4
+  // m^2 are left out, exactly.
+  const PixmapLayout rug = make_pixmap_layout(test::room_with_panel(0.001, 1.0), o, 1e9);
+  EXPECT_NEAR(rug.enclosed_area, 4.0, 1e-9);
+}
+
 TEST(PixmapSolver, NoShooterSitsAcrossAWallStandingOnItsPatch) {
   // The wall (0.04) is thinner than a texel (0.08), and a block of 4 x 4
   // texels on the floor, ceiling and side walls straddles it: shooting that

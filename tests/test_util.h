@@ -78,6 +78,26 @@ inline std::vector<double> patch_areas(const Scene& s, const Mesh& m) {
   return area;
 }
 
+// A closed room [-2, 2] x [0, 4] x [-2, 2] (white, 0.7; its bottom face named
+// "floor", the others "room"), a lamp 0.5 x 0.5 facing down at y = 3.5
+// (emitting 10), and a one-sided panel "panel" [-s, s]^2 at height h facing
+// up (grey, 0.5): a rug just above the floor, or a table top.
+inline Scene room_with_panel(double h, double s) {
+  std::vector<RawFace> faces = box_faces("room", 0, Vec3(-2, 0, -2), Vec3(2, 4, 2), false);
+  faces[5].name = "floor";
+  RawFace lamp, panel;
+  lamp.name = "lamp";
+  lamp.material = 2;
+  lamp.points = {{-0.25, 3.5, -0.25}, {0.25, 3.5, -0.25}, {0.25, 3.5, 0.25}, {-0.25, 3.5, 0.25}};
+  panel.name = "panel";
+  panel.material = 1;
+  panel.points = {{-s, h, -s}, {-s, h, s}, {s, h, s}, {s, h, -s}};
+  faces.push_back(lamp);
+  faces.push_back(panel);
+  return build_scene(faces, {material("white", Rgb(0.7)), material("grey", Rgb(0.5)), material("lamp", Rgb(0.0), Rgb(10.0))},
+                     "room_with_panel");
+}
+
 // Rebuilds a scene from its patches (outer loops) with every point mapped by
 // f, the faces in the order `order` (a permutation of the patch indices;
 // empty: as they are).
