@@ -247,50 +247,61 @@ Vec3 FieldEvaluator::evaluation_point(const Vec3& x, int patch, const Vec3& inwa
   const double diagonal = m.diagonal;
   const double length = glm::length(inward);
   const Vec3& normal = m.scene.patches[static_cast<size_t>(patch)].normal;
-  // The nearest patch lying wholly in front of this one, parallel to it,
-  // nearer than a tenth of `inward` (a rug a millimetre above a floor, a
-  // lamp hung just under a ceiling), with x within twice that gap of it.
-  double nearest = INFINITY, overhang = INFINITY;
+  // Patches touching x or hanging over it whose whole height above the
+  // patch's plane, h, is under a tenth of `inward` (a slab 1 mm thick lying
+  // on a floor, a rug 1 mm above it, a lamp hung just under a ceiling):
+  // the light around x changes within a few h of them, far less than an
+  // element, so the side's value is taken 10 h in (at most a tenth of the
+  // way to its triangles' centroid). Taken at x, half lit, it darkened the
+  // lit side's interpolation over a whole element (the field's floor power
+  // 6.4% below its elements' beside a rug 1 mm up). A taller patch touching
+  // x (a block standing on the floor) keeps the hair below.
+  const double small = 0.1 * length;
+  double step = 0.0;
+  bool flat = false;  // touching a patch that lies in the plane (a lamp set in a ceiling)
   for (int q = 0; q < static_cast<int>(m.scene.patches.size()); ++q) {
     if (q == patch) continue;
     const double distance = m.occlusion.distance(q, x);
-    if (distance <= 1e-9 * diagonal) {
-      ++report.on_other_surface;
-      // Far enough that the shadow rays (single precision) see the side,
-      // near enough that the value is the side's limit: 1e-5 of the scene's
-      // size, at most a tenth of the way to the centroid of the triangles.
-      if (length > 0.0) return x + std::min(1e-5 * diagonal / length, 0.1) * inward;
-      // No area around the vertex in its patch (a T-vertex on a crease that
-      // only zero-area triangles use): off q within the patch's plane, to
-      // the side the patch lies on. Gathered on the crease itself, such
-      // vertices of a non-convex furnace came out 41% low.
-      const Vec3& nq = m.scene.patches[static_cast<size_t>(q)].normal;
-      const Vec3 across = nq - glm::dot(nq, normal) * normal;
-      if (!(glm::length(across) > 1e-6)) return x;  // q lies in the patch's plane
-      const Vec3 step = 1e-5 * diagonal * glm::normalize(across);
-      return m.occlusion.distance(patch, x + step) <= m.occlusion.distance(patch, x - step) ? x + step : x - step;
-    }
-    if (!(distance < std::min(nearest, 0.1 * length))) continue;
+    const bool touching = distance <= 1e-9 * diagonal;
+    if (!touching && !(distance < small)) continue;
     double lo = INFINITY, hi = -INFINITY;
     for (int v : m.scene.patches[static_cast<size_t>(q)].outer) {
       const double h = glm::dot(m.scene.vertices[static_cast<size_t>(v)] - x, normal);
       lo = std::min(lo, h);
       hi = std::max(hi, h);
     }
-    if (lo > 1e-9 * diagonal && hi - lo <= 1e-9 * diagonal + 1e-6 * hi && distance <= 2.0 * hi) {
-      nearest = distance;
-      overhang = hi;
+    if (lo >= -1e-9 * diagonal && hi > 1e-9 * diagonal && hi < small && distance <= 2.0 * hi) {
+      if (touching) ++report.on_other_surface;
+      step = std::max(step, std::min(10.0 * hi, small));
+      continue;
     }
-  }
-  // On such an overhang's outline (the mesher cuts the patch there,
-  // overhang_segments) the light changes within a few gaps of it, far less
-  // than an element: each side's value is taken ten gaps into that side (at
-  // most a tenth of the way to its triangles' centroid). Taken on the
-  // outline, half lit, it darkened the lit side's interpolation over a whole
-  // element (a floor's mean 3.4% low beside a rug 1 mm above it).
-  if (overhang < INFINITY) {
+    if (!touching) continue;
+    if (lo >= -1e-9 * diagonal && hi <= 1e-9 * diagonal) {
+      flat = true;
+      continue;
+    }
     ++report.on_other_surface;
-    return x + std::min(10.0 * overhang / length, 0.1) * inward;
+    // Far enough that the shadow rays (single precision) see the side,
+    // near enough that the value is the side's limit: 1e-5 of the scene's
+    // size, at most a tenth of the way to the centroid of the triangles.
+    if (length > 0.0) return x + std::min(1e-5 * diagonal / length, 0.1) * inward;
+    // No area around the vertex in its patch (a T-vertex on a crease that
+    // only zero-area triangles use): off q within the patch's plane, to
+    // the side the patch lies on. Gathered on the crease itself, such
+    // vertices of a non-convex furnace came out 41% low.
+    const Vec3& nq = m.scene.patches[static_cast<size_t>(q)].normal;
+    const Vec3 across = nq - glm::dot(nq, normal) * normal;
+    if (!(glm::length(across) > 1e-6)) return x;  // q lies in the patch's plane
+    const Vec3 hair = 1e-5 * diagonal * glm::normalize(across);
+    return m.occlusion.distance(patch, x + hair) <= m.occlusion.distance(patch, x - hair) ? x + hair : x - hair;
+  }
+  if (step > 0.0) {
+    ++report.on_other_surface;
+    return x + (step / length) * inward;
+  }
+  if (flat && length > 0.0) {
+    ++report.on_other_surface;
+    return x + std::min(1e-5 * diagonal / length, 0.1) * inward;
   }
   return x;
 }
