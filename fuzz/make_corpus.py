@@ -151,6 +151,14 @@ def main():
           b"mtllib scene.mtl\nusemtl lamp\nv 0 0 0\nv 2 0 0\nv 2 2 0\nv 0 2 0\nv 0.5 0.5 0\nv 1.5 0.5 0\n"
           b"v 1 0.50000001 0\nv 1 0.5000000001 0\nv 1.2 0.5000000001 1\nv 1 0.5000000001 1\n"
           b"o floor\nf 1 2 3 4\no strip\nf 5 6 7\no panel\nf 8 9 10" + MARK + lamp)
+    # A rug 1 mm above a floor and a tilted one over it (overhang lines, cut
+    # along their projected outlines), and a slab 1 mm thick lying on it.
+    write("fuzz_mesh", "rug_overhang",
+          b"mtllib scene.mtl\nusemtl lamp\nv 0 0 0\nv 0 0 4\nv 4 0 4\nv 4 0 0\n"
+          b"v 1 0.001 1\nv 1 0.001 3\nv 3 0.001 3\nv 3 0.001 1\n"
+          b"v 1.5 0.002 1.5\nv 1.5 0.002 2.5\nv 2.5 0.0021 2.5\nv 2.5 0.0021 1.5\n"
+          b"v 0.2 0 0.2\nv 0.8 0 0.2\nv 0.8 0.001 0.2\nv 0.2 0.001 0.2\n"
+          b"o floor\nf 1 2 3 4\no rug\nf 5 6 7 8\no tilted\nf 9 10 11 12\no slab_side\nf 13 14 15 16" + MARK + lamp)
 
     formats = [(0, "ply_ascii", ply_ascii()), (0, "ply_binary", ply_binary()), (1, "stl_ascii", stl_ascii()),
                (1, "stl_binary", stl_binary()), (2, "off", off()), (3, "gltf", gltf()), (4, "glb", glb())]
