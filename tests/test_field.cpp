@@ -147,6 +147,21 @@ TEST(Field, AVertexOnAContactLineTakesTheValueOfItsOwnSide) {
   EXPECT_GE(r.field.on_other_surface, under + outside);
 }
 
+// The power of a patch as its field shows it (each triangle's corner values'
+// mean times its area) and as its elements hold it.
+std::pair<double, double> field_and_element_power(const MethodResult& r, int patch) {
+  double field = 0.0, elements = 0.0;
+  for (int t = 0; t < r.mesh.triangle_count(); ++t) {
+    if (r.mesh.patch[static_cast<size_t>(t)] != patch) continue;
+    double mean = 0.0;
+    for (int d : r.solution.nodal.corners[static_cast<size_t>(t)])
+      mean += r.solution.nodal.radiosity[static_cast<size_t>(d)].x / 3.0;
+    field += r.mesh.area(t) * mean;
+    elements += r.mesh.area(t) * r.solution.element[static_cast<size_t>(t)].x;
+  }
+  return {field, elements};
+}
+
 TEST(Field, BesideARugAMillimetreAboveTheFloorTheFloorKeepsItsLight) {
   // The floor is cut along the rug's outline (a contact line at the mesh's
   // scale). Its vertices there used to take the value on the outline itself,
@@ -156,14 +171,7 @@ TEST(Field, BesideARugAMillimetreAboveTheFloorTheFloorKeepsItsLight) {
   const Scene scene = test::room_with_panel(0.001, 1.0);
   const int floor = patch_named(scene, "floor");
   const MethodResult r = solve(scene, "matrix", 0.5, DiscontinuityMode::contacts);
-  double field = 0.0, elements = 0.0;
-  for (int t = 0; t < r.mesh.triangle_count(); ++t) {
-    if (r.mesh.patch[static_cast<size_t>(t)] != floor) continue;
-    double mean = 0.0;
-    for (int d : r.solution.nodal.corners[static_cast<size_t>(t)]) mean += r.solution.nodal.radiosity[static_cast<size_t>(d)].x / 3.0;
-    field += r.mesh.area(t) * mean;
-    elements += r.mesh.area(t) * r.solution.element[static_cast<size_t>(t)].x;
-  }
+  const auto [field, elements] = field_and_element_power(r, floor);
   std::printf("floor power beside a rug 1 mm up: field %.5f, elements %.5f\n", field, elements);
   EXPECT_NEAR(field / elements, 1.0, 0.01);
   // On the outline: a dark vertex under the rug and a lit one beside it.
@@ -186,26 +194,10 @@ TEST(Field, BesideASlabAMillimetreThickTheFloorKeepsItsLight) {
   // value, half lit by the 1 mm side: the field's floor power came out 2.9%
   // below its elements'. A touching patch under a tenth of the element's
   // scale high is a detail below it, like a rug's gap.
-  std::vector<RawFace> faces = test::box_faces("room", 0, Vec3(-2, 0, -2), Vec3(2, 4, 2), false);
-  faces[5].name = "floor";
-  for (const RawFace& f : test::box_faces("slab", 0, Vec3(-1, 0, -1), Vec3(1, 0.001, 1))) faces.push_back(f);
-  RawFace lamp;
-  lamp.name = "lamp";
-  lamp.material = 1;
-  lamp.points = {{-0.25, 3.5, -0.25}, {0.25, 3.5, -0.25}, {0.25, 3.5, 0.25}, {-0.25, 3.5, 0.25}};
-  faces.push_back(lamp);
-  const Scene scene =
-      build_scene(faces, {test::material("white", Rgb(0.7)), test::material("lamp", Rgb(0.0), Rgb(10.0))}, "slab");
+  const Scene scene = test::room_with(test::box_faces("slab", 1, Vec3(-1, 0, -1), Vec3(1, 0.001, 1)));
   const int floor = patch_named(scene, "floor");
   const MethodResult r = solve(scene, "matrix", 0.5, DiscontinuityMode::contacts);
-  double field = 0.0, elements = 0.0;
-  for (int t = 0; t < r.mesh.triangle_count(); ++t) {
-    if (r.mesh.patch[static_cast<size_t>(t)] != floor) continue;
-    double mean = 0.0;
-    for (int d : r.solution.nodal.corners[static_cast<size_t>(t)]) mean += r.solution.nodal.radiosity[static_cast<size_t>(d)].x / 3.0;
-    field += r.mesh.area(t) * mean;
-    elements += r.mesh.area(t) * r.solution.element[static_cast<size_t>(t)].x;
-  }
+  const auto [field, elements] = field_and_element_power(r, floor);
   std::printf("floor power around a slab 1 mm thick: field %.5f, elements %.5f\n", field, elements);
   EXPECT_NEAR(field / elements, 1.0, 0.01);
 }

@@ -78,24 +78,31 @@ inline std::vector<double> patch_areas(const Scene& s, const Mesh& m) {
   return area;
 }
 
-// A closed room [-2, 2] x [0, 4] x [-2, 2] (white, 0.7; its bottom face named
-// "floor", the others "room"), a lamp 0.5 x 0.5 facing down at y = 3.5
-// (emitting 10), and a one-sided panel "panel" [-s, s]^2 at height h facing
-// up (grey, 0.5): a rug just above the floor, or a table top.
-inline Scene room_with_panel(double h, double s) {
+// A closed room [-2, 2] x [0, 4] x [-2, 2] (material 0, white 0.7; its
+// bottom face named "floor", the others "room"), a lamp 0.5 x 0.5 facing
+// down at y = 3.5 (material 2, emitting 10), and `extra` (material 1 is
+// grey, 0.5).
+inline Scene room_with(const std::vector<RawFace>& extra) {
   std::vector<RawFace> faces = box_faces("room", 0, Vec3(-2, 0, -2), Vec3(2, 4, 2), false);
   faces[5].name = "floor";
-  RawFace lamp, panel;
+  RawFace lamp;
   lamp.name = "lamp";
   lamp.material = 2;
   lamp.points = {{-0.25, 3.5, -0.25}, {0.25, 3.5, -0.25}, {0.25, 3.5, 0.25}, {-0.25, 3.5, 0.25}};
+  faces.push_back(lamp);
+  faces.insert(faces.end(), extra.begin(), extra.end());
+  return build_scene(faces, {material("white", Rgb(0.7)), material("grey", Rgb(0.5)), material("lamp", Rgb(0.0), Rgb(10.0))},
+                     "room");
+}
+
+// room_with a one-sided panel "panel" [-s, s]^2 (grey) at height h facing
+// up: a rug just above the floor, or a table top.
+inline Scene room_with_panel(double h, double s) {
+  RawFace panel;
   panel.name = "panel";
   panel.material = 1;
   panel.points = {{-s, h, -s}, {-s, h, s}, {s, h, s}, {s, h, -s}};
-  faces.push_back(lamp);
-  faces.push_back(panel);
-  return build_scene(faces, {material("white", Rgb(0.7)), material("grey", Rgb(0.5)), material("lamp", Rgb(0.0), Rgb(10.0))},
-                     "room_with_panel");
+  return room_with({panel});
 }
 
 // Rebuilds a scene from its patches (outer loops) with every point mapped by
