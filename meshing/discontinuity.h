@@ -46,7 +46,8 @@ struct DiscontinuitySegment {
 std::vector<DiscontinuitySegment> contact_segments(const Scene& scene);
 
 // Overhang outlines: where every vertex of a patch q lies in front of patch
-// p, nearer than `max_gap` to its plane (a lamp hung just under a ceiling, a
+// p, nearer than `max_gap` to its plane, and q is within about 25 degrees of
+// parallel to p (|cos| >= 0.9: a lamp hung just under a ceiling, a
 // rug laid just above a floor, a picture on a wall), q's loops projected
 // onto p's plane and clipped to p, as contact segments of p (other = q). At
 // a mesh's resolution such a gap is a contact: p is dark under q and lit

@@ -230,7 +230,10 @@ std::vector<DiscontinuitySegment> overhang_segments(const Scene& scene, double m
     std::sort(near.begin(), near.end());
     for (int qi : near) {
       const Poly& o = polys[static_cast<size_t>(qi)];
-      if (static_cast<size_t>(qi) == p) continue;
+      // Only a face that covers the patch (within about 25 degrees of
+      // parallel): a steep one near it (a wall's foot a hair above a floor,
+      // the lowest triangles of a scanned statue) would project a sliver.
+      if (static_cast<size_t>(qi) == p || std::abs(glm::dot(o.normal, t.normal)) < 0.9) continue;
       bool in_front = true;
       for (const Vec3& x : o.loops[0]) {
         const double d = t.dist(x);

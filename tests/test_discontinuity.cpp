@@ -681,6 +681,13 @@ TEST(Contacts, ARugAMillimetreAboveTheFloorCutsItAlongItsOutline) {
   EXPECT_TRUE(overhang_segments(s, 0.0009).empty());
   EXPECT_TRUE(overhang_segments(test::room_with_panel(0.01, 1.0), 0.01).size() == 4u);
   EXPECT_TRUE(overhang_segments(test::room_with_panel(0.0101, 1.0), 0.01).empty());
+  // A steep face as near (a strip standing 1 mm above the floor, 4 mm
+  // tall) covers nothing: no line.
+  RawFace strip;
+  strip.name = "strip";
+  strip.material = 1;
+  strip.points = {{-1, 0.001, 0}, {1, 0.001, 0}, {1, 0.005, 0}, {-1, 0.005, 0}};
+  EXPECT_TRUE(overhang_segments(test::room_with({strip}), 0.01).empty());
 
   MeshingOptions o;
   o.max_edge = 0.5;
