@@ -256,6 +256,10 @@ Vec3 FieldEvaluator::evaluation_point(const Vec3& x, int patch, const Vec3& inwa
   // lit side's interpolation over a whole element (the field's floor power
   // 6.4% below its elements' beside a rug 1 mm up). A taller patch touching
   // x (a block standing on the floor) keeps the hair below.
+  // Far enough that the shadow rays (single precision) see the side, near
+  // enough that the value is the side's limit: 1e-5 of the scene's size, at
+  // most a tenth of the way to the centroid of the triangles.
+  auto hair_in = [&] { return x + std::min(1e-5 * diagonal / length, 0.1) * inward; };
   const double small = 0.1 * length;
   double step = 0.0;
   bool flat = false;  // touching a patch that lies in the plane (a lamp set in a ceiling)
@@ -271,7 +275,6 @@ Vec3 FieldEvaluator::evaluation_point(const Vec3& x, int patch, const Vec3& inwa
       hi = std::max(hi, h);
     }
     if (lo >= -1e-9 * diagonal && hi > 1e-9 * diagonal && hi < small && distance <= 2.0 * hi) {
-      if (touching) ++report.on_other_surface;
       step = std::max(step, std::min(10.0 * hi, small));
       continue;
     }
@@ -281,10 +284,7 @@ Vec3 FieldEvaluator::evaluation_point(const Vec3& x, int patch, const Vec3& inwa
       continue;
     }
     ++report.on_other_surface;
-    // Far enough that the shadow rays (single precision) see the side,
-    // near enough that the value is the side's limit: 1e-5 of the scene's
-    // size, at most a tenth of the way to the centroid of the triangles.
-    if (length > 0.0) return x + std::min(1e-5 * diagonal / length, 0.1) * inward;
+    if (length > 0.0) return hair_in();
     // No area around the vertex in its patch (a T-vertex on a crease that
     // only zero-area triangles use): off q within the patch's plane, to
     // the side the patch lies on. Gathered on the crease itself, such
@@ -301,7 +301,7 @@ Vec3 FieldEvaluator::evaluation_point(const Vec3& x, int patch, const Vec3& inwa
   }
   if (flat && length > 0.0) {
     ++report.on_other_surface;
-    return x + std::min(1e-5 * diagonal / length, 0.1) * inward;
+    return hair_in();
   }
   return x;
 }
