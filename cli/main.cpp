@@ -215,7 +215,6 @@ int run(Params& p, bool solving) {
   const Mesh mesh = mesh_scene(scene, info.meshing, &info.mesh_report);
   info.seconds.push_back({"mesh", rep.end()});
   for (const std::string& w : info.mesh_report.warnings) rep.note("warning: " + w);
-  for (const std::string& w : info.mesh_report.shadow.warnings) rep.note("warning: " + w);
   rep.note(std::to_string(scene.patches.size()) + " patches, " + std::to_string(mesh.triangle_count()) +
            " elements (max edge " + std::to_string(info.meshing.max_edge) + ")");
 
@@ -382,10 +381,8 @@ int quality(Params& p) {
     mesh = mesh_scene(scene, mo, &report);
     lines = report.discontinuities;
     for (const Patch& patch : scene.patches) names.push_back(patch.name);
-    if (!p.quiet) {
+    if (!p.quiet)
       for (const std::string& w : report.warnings) std::fprintf(stderr, "[radmesh] warning: %s\n", w.c_str());
-      for (const std::string& w : report.shadow.warnings) std::fprintf(stderr, "[radmesh] warning: %s\n", w.c_str());
-    }
   }
   const TriangleQuality q = compute_quality(mesh);
   const auto rows = patch_quality(static_cast<int>(names.size()), mesh, q, lines);

@@ -66,7 +66,6 @@ nlohmann::json make_summary(const RunInfo& info, const Scene& scene, const Mesh&
                          {"aspect_ratio_max", percentile(quality.aspect_ratio, 1.0)}};
   doc["warnings"] = scene.report.warnings;
   for (const std::string& w : info.mesh_report.warnings) doc["warnings"].push_back(w);
-  for (const std::string& w : info.mesh_report.shadow.warnings) doc["warnings"].push_back(w);
   if (result)
     for (const std::string& w : result->warnings) doc["warnings"].push_back(w);
   if (info.meshing.discontinuity == DiscontinuityMode::full) {

@@ -85,6 +85,17 @@ std::vector<Box3> poly_boxes(const std::vector<Poly>& polys) {
   return boxes;
 }
 
+// The patches whose boxes come within `margin` of `box`, in patch order (as
+// a scan would find them), into `out`.
+void near_patches(const BoxTree& tree, const Box3& box, double margin, std::vector<int>& out) {
+  out.clear();
+  tree.overlapping(box, margin, [&](int q) {
+    out.push_back(q);
+    return true;
+  });
+  std::sort(out.begin(), out.end());
+}
+
 // Where polygon `o` meets the plane of `t`: segments (pairs of points).
 std::vector<std::pair<Vec3, Vec3>> slice(const Poly& o, const Poly& t, double eps) {
   const EK::Plane_3 plane(to_exact(t.origin), EK::Vector_3(t.normal.x, t.normal.y, t.normal.z));
@@ -186,12 +197,7 @@ std::vector<DiscontinuitySegment> contact_segments(const Scene& scene) {
   const BoxTree tree(boxes);
   std::vector<int> near;
   for (size_t p = 0; p < polys.size(); ++p) {
-    near.clear();
-    tree.overlapping(boxes[p], eps, [&](int q) {
-      near.push_back(q);
-      return true;
-    });
-    std::sort(near.begin(), near.end());  // in patch order, as a scan would find them
+    near_patches(tree, boxes[p], eps, near);
     for (int qi : near) {
       const size_t q = static_cast<size_t>(qi);
       if (p == q) continue;
@@ -222,12 +228,7 @@ std::vector<DiscontinuitySegment> overhang_segments(const Scene& scene, double m
   std::vector<int> near;
   for (size_t p = 0; p < polys.size(); ++p) {
     const Poly& t = polys[p];
-    near.clear();
-    tree.overlapping(boxes[p], max_gap, [&](int q) {
-      near.push_back(q);
-      return true;
-    });
-    std::sort(near.begin(), near.end());
+    near_patches(tree, boxes[p], max_gap, near);
     for (int qi : near) {
       const Poly& o = polys[static_cast<size_t>(qi)];
       // Only a face that covers the patch (within about 25 degrees of

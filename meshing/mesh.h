@@ -75,7 +75,9 @@ struct MeshReport {
   int crossings = 0;           // exact crossings between lines, where both were split
   int rounding_crossings = 0;  // crossings CGAL still found after rounding (0 expected)
   int thin_faces_unrefined = 0;  // faces narrower than the separation floor, left as their outline's triangulation
-  std::vector<std::string> warnings;  // per face left unrefined for a narrow gap (not a sliver): where and why
+  // Every meshing warning: per face left unrefined for a narrow gap (not a
+  // sliver), where and why; then the shadow pass's (shadow.warnings).
+  std::vector<std::string> warnings;
   ShadowReport shadow;         // what the shadow-line pass did and skipped
   std::vector<DiscontinuitySegment> discontinuities;  // the lines inserted, for export
 };

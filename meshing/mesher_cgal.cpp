@@ -252,6 +252,7 @@ public:
       report->warnings = warnings_;
       for (const auto& [p, n] : rounding_crossings_) report->rounding_crossings += n;
       report->shadow = shadow_report_;
+      report->warnings.insert(report->warnings.end(), shadow_report_.warnings.begin(), shadow_report_.warnings.end());
       report->discontinuities = discontinuities_;
     }
     return mesh;
