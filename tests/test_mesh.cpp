@@ -203,6 +203,45 @@ TEST(Mesh, ANearlyTouchingLineLeavesItsFaceUnrefinedInsteadOfCuttingItThatFine) 
   }
 }
 
+TEST(Mesh, AWallBesideACarpetAMillimetreUpIsLeftUncutUnlessItsElementsAreTheUnknowns) {
+  // A carpet 1 mm above the floor of a 4 m room, touching the four walls:
+  // its edge is a contact line 1 mm up each wall, joined to the wall's
+  // sides, and the mesher cut it and the wall's foot about 1 mm apart
+  // (about 4,000 points each, 38,501 elements; the hierarchical solve then
+  // stopped at its memory limit). Each wall is now left as the
+  // triangulation of its outline and lines, and said; the matrix method's
+  // option cuts it as before.
+  RawFace carpet;
+  carpet.name = "carpet";
+  carpet.material = 1;
+  const double h = 1e-3;
+  carpet.points = {{-2, h, -2}, {-2, h, 2}, {2, h, 2}, {2, h, -2}};
+  const Scene s = test::room_with({carpet});
+  for (const bool refine : {false, true}) {
+    MeshingOptions o;
+    o.discontinuity = DiscontinuityMode::contacts;
+    o.refine_narrow_strips = refine;
+    MeshReport report;
+    const Mesh m = mesh_scene(s, o, &report);
+    EXPECT_EQ(report.thin_faces_unrefined, refine ? 0 : 4);
+    ASSERT_EQ(report.warnings.size(), refine ? 0u : 4u);
+    for (const std::string& w : report.warnings)
+      EXPECT_TRUE(test::contains(w, "face 'room': two of its edges or lines run side by side 0.001 apart")) << w;
+    std::vector<int> count(s.patches.size(), 0);
+    for (int t = 0; t < m.triangle_count(); ++t) ++count[static_cast<size_t>(m.patch[static_cast<size_t>(t)])];
+    for (int wall = 0; wall < 4; ++wall) {
+      // Cut about 1 mm apart along its 4 m foot, or its outline's points
+      // (those the floor and ceiling share with it, about --max-edge apart).
+      if (refine)
+        EXPECT_GT(count[static_cast<size_t>(wall)], 4000) << wall;
+      else
+        EXPECT_LT(count[static_cast<size_t>(wall)], 100) << wall;
+    }
+    const std::vector<double> area = test::patch_areas(s, m);
+    for (size_t p = 0; p < area.size(); ++p) EXPECT_NEAR(area[p], s.patch_area(static_cast<int>(p)), 1e-9) << p;
+  }
+}
+
 TEST(Mesh, AVertexNextToAThinHolesEdgeDoesNotCrashTheMesher) {
   // A 2 x 2 floor with a triangle 1 long and 1e-8 high lying in it (cut
   // out as a hole) and a panel standing on a vertex 1e-10 from that
