@@ -66,12 +66,13 @@ struct MeshingOptions {
   // (estimated from the patch areas, before any meshing) is refused with a
   // message naming the size that fits, instead of meshing for hours.
   double max_elements = 2e7;
-  // Where two edges or lines of a patch run side by side nearer than the
-  // separation floor over more than 1,500 times their gap (a carpet's edge
-  // 1 mm up a 4 m wall), CGAL's mesher cuts both about a gap apart along
-  // that stretch. false (for methods that refine by themselves): the patch
-  // is left as the triangulation of its outline and lines, with a warning.
-  // true (the matrix method, whose elements are its unknowns): it is cut so.
+  // Where two edges or lines of a patch run side by side far closer than
+  // max_edge (a carpet's edge 1 mm up a 4 m wall), CGAL's mesher may cut
+  // both about their gap apart along them. false (for methods that refine
+  // by themselves): a patch whose refinement makes more than 15 x the
+  // points its size and edges ask for is left as the triangulation of its
+  // outline and lines, with a warning. true (the matrix method, whose
+  // elements are its unknowns): it is cut so.
   bool refine_narrow_strips = false;
 };
 

@@ -34,6 +34,7 @@
 #include <cstdint>
 #include <map>
 #include <numbers>
+#include <optional>
 #include <set>
 #include <sstream>
 #include <unordered_map>
@@ -733,7 +734,7 @@ private:
     const double floor = opt_.min_separation_fraction * opt_.max_edge;
     const bool sliver = width < floor && perimeter > 200.0 * width;
     const std::string gap = refine && !sliver ? narrow(cdt, patch, frame, floor) : "";
-    if (refine && (sliver || !gap.empty())) {
+    if (refine && (sliver || !gap.empty() || dense_.count(p) > 0)) {
       refine = false;
       if (thin_.insert(p).second && !gap.empty())
         warnings_.push_back(where(patch.file, patch.line) + "face '" + patch.name + "': " + gap +
@@ -741,7 +742,11 @@ private:
                             " would cut that edge about as finely along its length: left as the triangulation of its "
                             "outline and lines (the hierarchical method still splits it where its links ask)");
     }
+    // The triangulation before refinement, kept while a dense patch may
+    // fall back to it (below).
+    std::optional<CDT> unrefined;
     if (refine) {
+      if (!opt_.refine_narrow_strips) unrefined.emplace(cdt);
       const double s = std::sin(opt_.min_angle * std::numbers::pi / 180.0);
       Mesher mesher(cdt, Criteria(s * s, opt_.max_edge, opt_.min_separation_fraction * opt_.max_edge));
       // What the edge length asks for: the points there are, the constrained
@@ -767,8 +772,10 @@ private:
       // edges) stops at the bound with an error instead of meshing for
       // minutes.
       double points = 0.0;
-      while (mesher.step_by_step_refine_mesh())
-        if (++points > budget) {
+      const double dense = kDense * asked + kDenseMin;
+      while (mesher.step_by_step_refine_mesh()) {
+        if (unrefined && ++points > dense) break;
+        if (!unrefined && ++points > budget) {
           std::ostringstream m;
           m << where(patch.file, patch.line) << "face '" << patch.name << "': refining its mesh to --max-edge "
             << format_number(h) << " takes more than " << format_number(std::floor(budget)) << " points"
@@ -781,6 +788,24 @@ private:
                "contacts or off";
           throw GeometryError(m.str());
         }
+      }
+      if (unrefined && points > dense) {
+        dense_.insert(p);
+        thin_.insert(p);
+        warnings_.push_back(where(patch.file, patch.line) + "face '" + patch.name + "': refining it to --max-edge " +
+                            format_number(h) + " made more than " + format_number(std::floor(dense)) + " points (" +
+                            format_number(kDense) + " x the " + format_number(std::ceil(asked)) +
+                            " its size and edges ask for, + " + format_number(kDenseMin) +
+                            "): edges or lines on it run side by side much closer than that (a carpet's edge 1 mm "
+                            "up a wall), and it was cut about as finely along them: left as the triangulation of its "
+                            "outline and lines (the hierarchical method still splits it where its links ask)");
+        refine = false;
+      } else {
+        mark_domain(cdt, on_boundary);
+      }
+    }
+    if (unrefined && !refine) {
+      cdt = *unrefined;
       mark_domain(cdt, on_boundary);
     }
 
@@ -872,17 +897,19 @@ private:
   // mesher. At 1e-3 from the wall the floor is refined as before (10^3
   // points along the box).
   static constexpr double kNarrowPoints = 1e4;
-  // Two constrained edges (outline or lines) side by side nearer than the
-  // floor: the mesher cuts both about their gap apart along the stretch
-  // they share, and the elements it makes there each take their own links.
-  // A carpet 1 mm above a floor, touching the walls: the line of its edge
-  // 1 mm up each wall and the wall's foot were cut into about 4,000 points
-  // each, 41,190 elements in all (8 faces), and the hierarchical solve
-  // stopped at its memory limit after 83 M links (now 172 elements, 5 s).
-  // The stretch over the gap, summed over such pairs, is the points it asks
-  // for; at 10^3 (a panel 1 mm from a 4 m edge, 1 m long, the check above)
-  // the patch is refined. MeshingOptions::refine_narrow_strips turns it off.
-  static constexpr double kNarrowStrip = 1.5e3;
+  // A patch whose refinement makes more than kDense x the points its size
+  // and edges ask for, + kDenseMin, is left as the triangulation of its
+  // outline and lines (unless MeshingOptions::refine_narrow_strips): CGAL's
+  // mesher cuts two constrained edges running side by side about their gap
+  // apart along them, and each element made there takes its own links. A
+  // carpet 1 mm above a floor, touching the walls: its edge, a contact line
+  // 1 mm up each wall joined to the wall's sides, and the wall's foot were
+  // cut about 1 mm apart (107 x what each wall asks for; 38,501 elements
+  // for 8 faces), and the hierarchical solve stopped at its memory limit
+  // after 83 M links. Ordinary faces make 0.5-9 x (the Cornell box 1.1, a
+  // sphere room 8.2); lines side by side that CGAL leaves alone (a panel
+  // 1 mm from a wall, a partition 1 mm thick) under 1.
+  static constexpr double kDense = 15.0, kDenseMin = 100.0;
   static constexpr size_t kCollinearRun = 1000;  // see mesh_patch
   // What makes it narrow, or "".
   std::string narrow(const CDT& cdt, const Patch& patch, const Frame& frame, double floor) const {
@@ -913,56 +940,7 @@ private:
                  format_number(std::min(along, len - along)) + " from that edge's nearer end";
         }
       }
-    return opt_.refine_narrow_strips ? "" : narrow_strip(cdt, frame, floor);
-  }
-
-  // The pairs of constrained edges that run side by side nearer than the
-  // floor (kNarrowStrip), or "": over each pair's shared stretch, its
-  // length over the larger gap at its ends.
-  std::string narrow_strip(const CDT& cdt, const Frame& frame, double floor) const {
-    std::vector<std::pair<Point2, Point2>> edges;
-    std::vector<Box3> boxes;
-    for (auto e = cdt.finite_edges_begin(); e != cdt.finite_edges_end(); ++e)
-      if (cdt.is_constrained(*e)) {
-        const Point2 a = e->first->vertex(CDT::cw(e->second))->point();
-        const Point2 b = e->first->vertex(CDT::ccw(e->second))->point();
-        edges.emplace_back(a, b);
-        boxes.push_back(flat_box(a.bbox() + b.bbox()));
-      }
-    const BoxTree tree(boxes);
-    double points = 0.0, longest = 0.0, gap_at = 0.0;
-    Point2 where_at(0.0, 0.0);
-    for (size_t i = 0; i < edges.size(); ++i) {
-      const auto& [a, b] = edges[i];
-      const K::Vector_2 ab = b - a;
-      const double len = std::sqrt(ab.squared_length());
-      if (!(len > 0.0)) continue;
-      const K::Vector_2 u = ab / len;
-      tree.overlapping(boxes[i], floor, [&](int j) {
-        if (static_cast<size_t>(j) <= i) return true;
-        const auto& [c, d] = edges[static_cast<size_t>(j)];
-        const double tc = u * (c - a), td = u * (d - a);
-        const double sc = CGAL::determinant(u, c - a), sd = CGAL::determinant(u, d - a);
-        const double t0 = std::max(0.0, std::min(tc, td)), t1 = std::min(len, std::max(tc, td));
-        if (!(t1 > t0) || !(std::abs(td - tc) > 0.0)) return true;
-        auto offset = [&](double t) { return std::abs(sc + (sd - sc) * (t - tc) / (td - tc)); };
-        const double gap = std::max(offset(t0), offset(t1));
-        if (!(gap < floor) || !(gap > 100.0 * eps_) || sc * sd < 0.0) return true;
-        points += (t1 - t0) / gap;
-        if (t1 - t0 > longest) {
-          longest = t1 - t0;
-          gap_at = gap;
-          where_at = a + (0.5 * (t0 + t1)) * u;
-        }
-        return true;
-      });
-    }
-    if (!(points > kNarrowStrip)) return "";
-    const Vec3 at = frame.to3(where_at);
-    return "two of its edges or lines run side by side " + format_number(gap_at) + " apart over " +
-           format_number(longest) + " (around (" + format_number(at.x) + ", " + format_number(at.y) + ", " +
-           format_number(at.z) + ")), nearer than the separation floor " + format_number(floor) + ", about " +
-           format_number(std::round(points)) + " gap widths along in all";
+    return "";
   }
 
   static bool is_on_constraint(CDT& cdt, CDT::Vertex_handle v) {
@@ -998,6 +976,7 @@ private:
   MeshingOptions opt_;
   bool refine_ = true;
   double eps_ = 0.0;
+  std::set<int> dense_;  // patches refinement made too dense (kDense): unrefined in later rounds
   std::vector<Vec3> positions_;
   std::vector<Segment> segments_;
   std::vector<int> patch_segments_;  // patch p's segments: [patch_segments_[p], patch_segments_[p + 1])

@@ -208,9 +208,10 @@ TEST(Mesh, AWallBesideACarpetAMillimetreUpIsLeftUncutUnlessItsElementsAreTheUnkn
   // its edge is a contact line 1 mm up each wall, joined to the wall's
   // sides, and the mesher cut it and the wall's foot about 1 mm apart
   // (about 4,000 points each, 38,501 elements; the hierarchical solve then
-  // stopped at its memory limit). Each wall is now left as the
-  // triangulation of its outline and lines, and said; the matrix method's
-  // option cuts it as before.
+  // stopped at its memory limit). Refining it past 15 x the points its
+  // size and edges ask for, each wall is now left as the triangulation of
+  // its outline and lines, and said; the matrix method's option cuts it as
+  // before.
   RawFace carpet;
   carpet.name = "carpet";
   carpet.material = 1;
@@ -226,7 +227,9 @@ TEST(Mesh, AWallBesideACarpetAMillimetreUpIsLeftUncutUnlessItsElementsAreTheUnkn
     EXPECT_EQ(report.thin_faces_unrefined, refine ? 0 : 4);
     ASSERT_EQ(report.warnings.size(), refine ? 0u : 4u);
     for (const std::string& w : report.warnings)
-      EXPECT_TRUE(test::contains(w, "face 'room': two of its edges or lines run side by side 0.001 apart")) << w;
+      EXPECT_TRUE(test::contains(w, "face 'room': refining it to --max-edge ") &&
+                  test::contains(w, " its size and edges ask for, + 100): edges or lines on it run side by side"))
+          << w;
     std::vector<int> count(s.patches.size(), 0);
     for (int t = 0; t < m.triangle_count(); ++t) ++count[static_cast<size_t>(m.patch[static_cast<size_t>(t)])];
     for (int wall = 0; wall < 4; ++wall) {
