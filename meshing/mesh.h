@@ -82,7 +82,9 @@ struct MeshReport {
   int shadow_segments = 0;     // D1/D2 segments inserted as constraints
   int crossings = 0;           // exact crossings between lines, where both were split
   int rounding_crossings = 0;  // crossings CGAL still found after rounding (0 expected)
-  int thin_faces_unrefined = 0;  // faces narrower than the separation floor, left as their outline's triangulation
+  // Faces left as their outline's triangulation: narrower than the
+  // separation floor, or refined too densely (MeshingOptions::refine_narrow_strips).
+  int thin_faces_unrefined = 0;
   // Every meshing warning: per face left unrefined for a narrow gap (not a
   // sliver), where and why; then the shadow pass's (shadow.warnings).
   std::vector<std::string> warnings;

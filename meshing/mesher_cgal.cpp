@@ -774,8 +774,8 @@ private:
       double points = 0.0;
       const double dense = kDense * asked + kDenseMin;
       while (mesher.step_by_step_refine_mesh()) {
-        if (unrefined && ++points > dense) break;
-        if (!unrefined && ++points > budget) {
+        if (++points > dense && unrefined) break;
+        if (points > budget) {
           std::ostringstream m;
           m << where(patch.file, patch.line) << "face '" << patch.name << "': refining its mesh to --max-edge "
             << format_number(h) << " takes more than " << format_number(std::floor(budget)) << " points"
@@ -796,8 +796,8 @@ private:
                             format_number(h) + " made more than " + format_number(std::floor(dense)) + " points (" +
                             format_number(kDense) + " x the " + format_number(std::ceil(asked)) +
                             " its size and edges ask for, + " + format_number(kDenseMin) +
-                            "): edges or lines on it run side by side much closer than that (a carpet's edge 1 mm "
-                            "up a wall), and it was cut about as finely along them: left as the triangulation of its "
+                            "): edges or lines on it run side by side far closer than --max-edge (a carpet's edge 1 "
+                            "mm up a wall), and it was cut about as finely along them: left as the triangulation of its "
                             "outline and lines (the hierarchical method still splits it where its links ask)");
         refine = false;
       } else {

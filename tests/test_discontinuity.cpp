@@ -660,7 +660,7 @@ TEST(DiscontinuityRegression, NearCoincidentShadowLinesStopAtTheElementBoundNotM
   EXPECT_LE(mesh_scene(s, o, &report).triangle_count(), 100000);
   EXPECT_GE(report.thin_faces_unrefined, 1);
   ASSERT_FALSE(report.warnings.empty());
-  EXPECT_NE(report.warnings[0].find("edges or lines on it run side by side much closer than that"), std::string::npos)
+  EXPECT_NE(report.warnings[0].find("edges or lines on it run side by side far closer than --max-edge"), std::string::npos)
       << report.warnings[0];
   o.refine_narrow_strips = true;
   const std::string msg = test::message_of<GeometryError>([&] { mesh_scene(s, o); });
