@@ -904,8 +904,9 @@ private:
   // apart along them, and each element made there takes its own links. A
   // carpet 1 mm above a floor, touching the walls: its edge, a contact line
   // 1 mm up each wall joined to the wall's sides, and the wall's foot were
-  // cut about 1 mm apart (107 x what each wall asks for; 38,501 elements
-  // for 8 faces), and the hierarchical solve stopped at its memory limit
+  // cut about 1 mm apart (at the hierarchical method's edge length 107 x
+  // what each wall asks for, 41,190 elements for 8 faces), and the
+  // hierarchical solve stopped at its memory limit
   // after 83 M links. Ordinary faces make 0.5-9 x (the Cornell box 1.1, a
   // sphere room 8.2); lines side by side that CGAL leaves alone (a panel
   // 1 mm from a wall, a partition 1 mm thick) under 1.

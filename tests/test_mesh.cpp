@@ -203,6 +203,15 @@ TEST(Mesh, ANearlyTouchingLineLeavesItsFaceUnrefinedInsteadOfCuttingItThatFine) 
   }
 }
 
+// A carpet [-s, s]^2 (grey) 1 mm above the floor of test::room_with.
+static RawFace carpet(double s) {
+  RawFace c;
+  c.name = "carpet";
+  c.material = 1;
+  c.points = {{-s, 1e-3, -s}, {-s, 1e-3, s}, {s, 1e-3, s}, {s, 1e-3, -s}};
+  return c;
+}
+
 TEST(Mesh, AWallBesideACarpetAMillimetreUpIsLeftUncutUnlessItsElementsAreTheUnknowns) {
   // A carpet 1 mm above the floor of a 4 m room, touching the four walls:
   // its edge is a contact line 1 mm up each wall, joined to the wall's
@@ -212,12 +221,7 @@ TEST(Mesh, AWallBesideACarpetAMillimetreUpIsLeftUncutUnlessItsElementsAreTheUnkn
   // size and edges ask for, each wall is now left as the triangulation of
   // its outline and lines, and said; the matrix method's option cuts it as
   // before.
-  RawFace carpet;
-  carpet.name = "carpet";
-  carpet.material = 1;
-  const double h = 1e-3;
-  carpet.points = {{-2, h, -2}, {-2, h, 2}, {2, h, 2}, {2, h, -2}};
-  const Scene s = test::room_with({carpet});
+  const Scene s = test::room_with({carpet(2.0)});
   for (const bool refine : {false, true}) {
     MeshingOptions o;
     o.discontinuity = DiscontinuityMode::contacts;
@@ -250,12 +254,9 @@ TEST(Mesh, AFloorUnderACarpetAMillimetreShortOfTheWallsIsLeftUncut) {
   // floor, is drawn on the floor as overhang lines 1 mm inside the floor's
   // edge, and the floor was cut about 1 mm apart along them (39,647
   // elements; the hierarchical run was still going after 300 s at 11.5 GB).
-  RawFace carpet;
-  carpet.name = "carpet";
-  carpet.material = 1;
-  const double h = 1e-3, g = 2.0 - 1e-3;
-  carpet.points = {{-g, h, -g}, {-g, h, g}, {g, h, g}, {g, h, -g}};
-  const Scene s = test::room_with({carpet});
+  const Scene s = test::room_with({carpet(2.0 - 1e-3)});
+  const int floor = test::patch_named(s, "floor");
+  ASSERT_GE(floor, 0);
   MeshingOptions o;
   o.discontinuity = DiscontinuityMode::contacts;
   MeshReport report;
@@ -263,11 +264,11 @@ TEST(Mesh, AFloorUnderACarpetAMillimetreShortOfTheWallsIsLeftUncut) {
   EXPECT_EQ(report.thin_faces_unrefined, 1);
   ASSERT_EQ(report.warnings.size(), 1u);
   EXPECT_TRUE(test::contains(report.warnings[0], "face 'floor': refining it to --max-edge ")) << report.warnings[0];
-  int floor = 0;
-  for (int t = 0; t < m.triangle_count(); ++t) floor += m.patch[static_cast<size_t>(t)] == 5;
-  EXPECT_LT(floor, 200);
+  int triangles = 0;
+  for (int t = 0; t < m.triangle_count(); ++t) triangles += m.patch[static_cast<size_t>(t)] == floor;
+  EXPECT_LT(triangles, 200);
   const std::vector<double> area = test::patch_areas(s, m);
-  EXPECT_NEAR(area[5], 16.0, 1e-9);
+  EXPECT_NEAR(area[static_cast<size_t>(floor)], 16.0, 1e-9);
 }
 
 TEST(Mesh, AVertexNextToAThinHolesEdgeDoesNotCrashTheMesher) {
