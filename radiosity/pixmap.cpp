@@ -15,6 +15,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdint>
+#include <map>
 #include <numbers>
 #include <numeric>
 #include <sstream>
@@ -101,6 +102,12 @@ void for_each_piece(const Pixmap& pm, const St tri[3], F&& f) {
 }
 
 // ---- the layout ------------------------------------------------------------
+
+// Whether texel idx is its own square and nothing else: wholly covered and
+// holding no sliver of a neighbour.
+bool plain_square(const Pixmap& pm, long long idx) {
+  return pm.whole[idx] && pm.area[idx] <= (1.0 + 1e-9) * pm.texel_u * pm.texel_v;
+}
 
 struct UnionFind {
   std::vector<int> parent;
@@ -617,6 +624,21 @@ struct PixmapSolver::Impl {
   std::vector<int> display_pixmap;          // per display vertex
   std::vector<char> display_dark;           // per display vertex: of triangles inside closed objects
   std::vector<long long> display_texel;     // per display triangle: global texel
+  // Per pixmap: its display triangles are [display_first[k],
+  // display_first[k + 1]), and its lit area's extent, which tells when the
+  // pixmap is narrow for a shooter (narrow_receiver).
+  std::vector<size_t> display_first;
+  struct Extent {
+    Vec3 centre{0.0};    // area centroid
+    double radius = 0.0;  // farthest vertex from it
+    double width = 0.0;   // area / (2 radius): a strip's width, a disc's 1.6 radii
+  };
+  std::vector<Extent> extent;
+  // The display triangles of texels that are not a plain square, as (global
+  // owner texel, display triangle), sorted: the polygons such a texel shoots from.
+  std::vector<std::pair<long long, int>> sliver_pieces;
+  // Shadow rays for the receivers the hemicube's pixels are too coarse for.
+  std::unique_ptr<Visibility> vis;
 
   Impl(const Scene& s, const PixmapOptions& o, const SolveOptions& so) : scene(s), options(o), solve(so) {}
 
@@ -629,6 +651,18 @@ struct PixmapSolver::Impl {
   }
 
   Row compute_row(int s, Hemicube& cube, long long& spread_pixels) const;
+  bool narrow_receiver(int k, const Shooter& sh, double pixel, double reach) const;
+  // What a narrow pixmap receives from a shooter: its far
+  // texels through `add` (far_sum in all), its near ones (those within
+  // `reach`) from each source texel.
+  struct NarrowPart {
+    double far_sum = 0.0;
+    std::vector<uint32_t> near;   // increasing global texel
+    std::vector<float> near_f;    // near.size() x sources
+    std::vector<double> exact;    // per source texel: the sum over `near`
+  };
+  void receive_narrow(int k, const Shooter& sh, double reach, const std::function<void(int, double)>& add,
+                      NarrowPart& out) const;
   void build_display();
 };
 
@@ -696,6 +730,10 @@ Row PixmapSolver::Impl::compute_row(int s, Hemicube& cube, long long& spread_pix
   std::vector<double> near_hemicube(static_cast<size_t>(npm), 0.0);
   std::vector<std::vector<double>> near_exact(static_cast<size_t>(npm), std::vector<double>(nsrc, 0.0));
   std::vector<long long> over(static_cast<size_t>(npm), 0);
+  // Per pixmap narrow for this shooter (narrow_receiver): the delta form
+  // factors of the pixels that saw it, and the factors from the block's
+  // centre put in their place (its near texels' go to near_exact).
+  std::vector<double> pixels_dropped(static_cast<size_t>(npm), 0.0), exact_put(static_cast<size_t>(npm), 0.0);
   // The near field. A hemicube sees from one point, and the shooter's
   // exchange with texels closer than a few times its size (across an edge
   // it shares with them) is not that of its centre: there F is integrated
@@ -726,7 +764,12 @@ Row PixmapSolver::Impl::compute_row(int s, Hemicube& cube, long long& spread_pix
     if (k == sh.pixmap) return;
     const Pixmap& pm = layout.pixmaps[k];
     const double h = glm::dot(pm.origin - sh.centre, pm.normal);
-    if (!(h < 0.0)) return;  // the shooter is not in front of this pixmap
+    const bool narrow = narrow_receiver(k, sh, cube.pixel_size(), reach);
+    // A shooter whose centre is not in front of this pixmap sends it nothing,
+    // unless the pixmap is narrow: then each source texel near it is taken
+    // on its own (a block around a picture's corner, its centre a few
+    // millimetres above the picture's underside, has texels right under it).
+    if (!(h < 0.0) && !narrow) return;
     const std::array<Vec3, 4> corners = {point_of(pm, 0, 0), point_of(pm, pm.width, 0),
                                          point_of(pm, pm.width, pm.height), point_of(pm, 0, pm.height)};
     std::vector<double> acc;
@@ -828,6 +871,10 @@ Row PixmapSolver::Impl::compute_row(int s, Hemicube& cube, long long& spread_pix
         for (int x = x0; x <= x1; ++x) {
           const int id = F.id[static_cast<size_t>(y) * F.width + x];
           if (id < 0 || layout.pixmap_of_patch[id] != k) continue;
+          if (narrow) {
+            pixels_dropped[k] += cube.delta(f, x, y);
+            continue;
+          }
           double s, t;
           if (!hit(cube.pixel_x(x), cube.pixel_y(f, y), s, t)) continue;
           int centre_owner = owner_at(s, t);
@@ -857,11 +904,19 @@ Row PixmapSolver::Impl::compute_row(int s, Hemicube& cube, long long& spread_pix
           spread(s0, s1, t0, t1, delta, centre_owner);
         }
     }
+    if (narrow) {
+      NarrowPart part;
+      receive_narrow(k, sh, reach, add, part);
+      exact_put[k] = part.far_sum;
+      near_parts[k] = std::move(part.near);
+      near_values[k] = std::move(part.near_f);
+      near_exact[k] = std::move(part.exact);
+    }
     // The near field: every whole texel within reach that the hemicube saw,
     // or that the pixel toward its centre shows (a texel a hair away from
     // the shooter fills no pixel centre of its own).
     std::vector<char> near_texel;
-    if (reach > 0.0) {
+    if (reach > 0.0 && !narrow) {
       const double cs = pm.s_of(sh.centre), ct = pm.t_of(sh.centre);
       const int i0 = std::max(0, static_cast<int>(std::floor(cs - reach / pm.texel_u)));
       const int i1 = std::min(pm.width - 1, static_cast<int>(std::ceil(cs + reach / pm.texel_u)));
@@ -911,7 +966,9 @@ Row PixmapSolver::Impl::compute_row(int s, Hemicube& cube, long long& spread_pix
   Row row;
   for (int k = 0; k < npm; ++k) {
     for (const RowEntry& e : far_parts[k]) far += e.f;
-    hemicube += near_hemicube[k];
+    // What the hemicube gave the narrow pixmaps counts, so that the row keeps
+    // the hemicube's sum (the pixels' rows, 1 in a closed scene).
+    hemicube += near_hemicube[k] + pixels_dropped[k] - exact_put[k];
     for (size_t q = 0; q < nsrc; ++q) exact[q] += near_exact[k][q];
     row.far.insert(row.far.end(), far_parts[k].begin(), far_parts[k].end());
     row.near.insert(row.near.end(), near_parts[k].begin(), near_parts[k].end());
@@ -931,6 +988,7 @@ void PixmapSolver::Impl::build_display() {
   std::vector<std::vector<int>> triangles_of(layout.pixmaps.size());
   for (int t = 0; t < coarse.triangle_count(); ++t) triangles_of[layout.pixmap_of_patch[coarse.patch[t]]].push_back(t);
   for (size_t k = 0; k < layout.pixmaps.size(); ++k) {
+    display_first.push_back(display.triangles.size());
     const Pixmap& pm = layout.pixmaps[k];
     // Welding: points within 1e-9 texel of each other are one vertex.
     std::unordered_map<long long, std::vector<int>> lit_cells;
@@ -987,6 +1045,174 @@ void PixmapSolver::Impl::build_display() {
       });
     }
   }
+  display_first.push_back(display.triangles.size());
+  for (size_t k = 0; k < layout.pixmaps.size(); ++k)
+    for (size_t d = display_first[k]; d < display_first[k + 1]; ++d) {
+      const long long g = display_texel[d];
+      if (g >= 0 && !plain_square(layout.pixmaps[k], g - layout.pixmaps[k].first))
+        sliver_pieces.emplace_back(g, static_cast<int>(d));
+    }
+  std::sort(sliver_pieces.begin(), sliver_pieces.end());
+  extent.resize(layout.pixmaps.size());
+  for (size_t k = 0; k < layout.pixmaps.size(); ++k) {
+    Extent& e = extent[k];
+    double area = 0.0;
+    for (size_t d = display_first[k]; d < display_first[k + 1]; ++d) {
+      if (display_texel[d] < 0) continue;
+      const auto& t = display.triangles[d];
+      const double a = triangle_area(display.positions[t[0]], display.positions[t[1]], display.positions[t[2]]);
+      e.centre += a * (display.positions[t[0]] + display.positions[t[1]] + display.positions[t[2]]) / 3.0;
+      area += a;
+    }
+    if (!(area > 0.0)) continue;
+    e.centre /= area;
+    for (size_t d = display_first[k]; d < display_first[k + 1]; ++d)
+      if (display_texel[d] >= 0)
+        for (int v : display.triangles[d]) e.radius = std::max(e.radius, glm::length(display.positions[v] - e.centre));
+    e.width = area / (2.0 * e.radius);
+  }
+}
+
+bool PixmapSolver::Impl::narrow_receiver(int k, const Shooter& sh, double pixel, double reach) const {
+  // Pixmap k is narrow for shooter sh when, at its nearest point to the
+  // hemicube's centre, it is
+  // - narrower than kSubPixel pixels of the top face's centre (where pixels
+  //   subtend the widest angle): the item buffer, which samples pixel
+  //   centres, would see it in no pixel or in whole rows of them, and its
+  //   share would alias with the shooter's position (a 1 mm strip 3 m under
+  //   a lamp came out at 0.2 and at 2.5 times its radiosity at hemicube
+  //   resolutions 128 and 512); or
+  // - narrower than a source texel and within `reach` of the block, where
+  //   the near field's points on the source texels would see it edge on
+  //   (a picture's 1 mm edge beside the wall it hangs on got a twentieth of
+  //   the wall's light).
+  constexpr double kSubPixel = 4.0;
+  const Extent& e = extent[k];
+  if (!(e.width > 0.0)) return false;
+  const Pixmap& own = layout.pixmaps[sh.pixmap];
+  const bool sub_texel = e.width < reach / kNearField;
+  const double resolved = e.width / (kSubPixel * pixel);  // nearer than this, the pixels resolve it
+  auto narrow_at = [&](double d) { return d >= resolved || (sub_texel && d < reach); };
+  const double centre = glm::length(e.centre - sh.centre);
+  const double lo = std::max(0.0, centre - e.radius), hi = centre + e.radius;
+  if (narrow_at(lo) == narrow_at(hi) && (!sub_texel || lo >= reach || hi < reach)) return narrow_at(lo);
+  double nearest = INFINITY;
+  for (size_t d = display_first[k]; d < display_first[k + 1]; ++d) {
+    if (display_texel[d] < 0) continue;
+    const auto& t = display.triangles[d];
+    nearest = std::min(nearest, distance_to_triangle(sh.centre, make_triangle(display.positions[t[0]], display.positions[t[1]],
+                                                                               display.positions[t[2]], layout.pixmaps[k].normal)));
+  }
+  return narrow_at(nearest);
+}
+
+void PixmapSolver::Impl::receive_narrow(int k, const Shooter& sh, double reach,
+                                        const std::function<void(int, double)>& add, NarrowPart& out) const {
+  // Per lit display triangle (a piece of one texel). Beyond `reach`, as the
+  // hemicube would: Lambert's factor from the block's centre, seen or not
+  // by one shadow ray to the piece's centroid. Within it, from each source
+  // texel by reciprocity, F = A_piece / A_texel x F(piece -> texel), the
+  // latter Lambert's factor from three points of the piece (a rule exact
+  // for quadratics) to each polygon of the texel, seen or not by a ray
+  // between the centroids: a piece is narrow, so its points see what it
+  // sees, and a face a millimetre off a wall gets the half of its light that
+  // comes from the wall right beside it (from the block's centre the wall
+  // sees it edge on).
+  const Pixmap& pm = layout.pixmaps[k];
+  const Pixmap& own = layout.pixmaps[sh.pixmap];
+  const size_t nsrc = sh.texels.size();
+  std::vector<Vec3> far_to;
+  std::vector<double> far_f;
+  std::vector<int> far_texel;
+  struct Piece {
+    int texel;
+    std::array<Vec3, 3> v;
+    double area;
+  };
+  std::vector<Piece> near_pieces;
+  for (size_t d = display_first[k]; d < display_first[k + 1]; ++d) {
+    if (display_texel[d] < 0) continue;
+    const auto& t = display.triangles[d];
+    const std::array<Vec3, 3> p = {display.positions[t[0]], display.positions[t[1]], display.positions[t[2]]};
+    const Vec3 c = (p[0] + p[1] + p[2]) / 3.0;
+    const int texel = static_cast<int>(display_texel[d] - pm.first);
+    if (glm::length(c - sh.centre) < reach) {
+      near_pieces.push_back({texel, p, triangle_area(p[0], p[1], p[2])});
+      continue;
+    }
+    const double f = point_polygon_form_factor(sh.centre, own.normal, p.data(), 3, pm.normal);
+    if (!(f > 0.0)) continue;
+    far_to.push_back(c);
+    far_f.push_back(f);
+    far_texel.push_back(texel);
+  }
+  if (!far_to.empty()) {
+    const std::vector<Vec3> from(far_to.size(), sh.centre);
+    std::vector<unsigned char> seen(far_to.size());
+    vis->visible_off_surfaces(from.data(), own.normal, far_to.data(), pm.normal, far_to.size(), -1, -1, seen.data());
+    for (size_t i = 0; i < far_to.size(); ++i)
+      if (seen[i]) {
+        add(far_texel[i], far_f[i]);
+        out.far_sum += far_f[i];
+      }
+  }
+  out.exact.assign(nsrc, 0.0);
+  if (near_pieces.empty()) return;
+  // The source texels' polygons: a plain texel's square, else the pieces it
+  // owns (a texel along an outline may own a sliver on its far side).
+  struct Polygon {
+    size_t q;  // its texel, in sh.texels
+    std::array<Vec3, 4> v;
+    size_t count;
+  };
+  std::vector<Polygon> polygons;
+  for (size_t q = 0; q < nsrc; ++q) {
+    const int src = sh.texels[q];
+    if (plain_square(own, src)) {
+      const int i = src % own.width, j = src / own.width;
+      polygons.push_back({q, {point_of(own, i, j), point_of(own, i + 1, j), point_of(own, i + 1, j + 1), point_of(own, i, j + 1)}, 4});
+      continue;
+    }
+    const long long g = own.first + src;
+    for (auto it = std::lower_bound(sliver_pieces.begin(), sliver_pieces.end(), std::make_pair(g, -1));
+         it != sliver_pieces.end() && it->first == g; ++it) {
+      const auto& t = display.triangles[static_cast<size_t>(it->second)];
+      polygons.push_back({q, {display.positions[t[0]], display.positions[t[1]], display.positions[t[2]], Vec3(0.0)}, 3});
+    }
+  }
+  std::vector<Vec3> from, to;
+  for (const Piece& piece : near_pieces)
+    for (const Polygon& poly : polygons) {
+      from.push_back((piece.v[0] + piece.v[1] + piece.v[2]) / 3.0);
+      Vec3 c(0.0);
+      for (size_t m = 0; m < poly.count; ++m) c += poly.v[m];
+      to.push_back(c / static_cast<double>(poly.count));
+    }
+  std::vector<unsigned char> seen(from.size());
+  vis->visible_off_surfaces(from.data(), pm.normal, to.data(), own.normal, from.size(), -1, -1, seen.data());
+  std::map<int, std::vector<double>> per_texel;
+  for (size_t n = 0; n < near_pieces.size(); ++n) {
+    const Piece& piece = near_pieces[n];
+    std::vector<double>& per = per_texel[piece.texel];
+    per.resize(nsrc, 0.0);
+    for (size_t m = 0; m < polygons.size(); ++m) {
+      if (!seen[n * polygons.size() + m]) continue;
+      const Polygon& poly = polygons[m];
+      double f = 0.0;
+      for (int a = 0; a < 3; ++a) {
+        const Vec3 x = (4.0 * piece.v[a] + piece.v[(a + 1) % 3] + piece.v[(a + 2) % 3]) / 6.0;
+        f += point_polygon_form_factor(x, pm.normal, poly.v.data(), poly.count, own.normal);
+      }
+      per[poly.q] += piece.area * f / (3.0 * own.area[sh.texels[poly.q]]);
+    }
+  }
+  for (const auto& [texel, per] : per_texel) {
+    out.near.push_back(static_cast<uint32_t>(pm.first + texel));
+    for (size_t q = 0; q < nsrc; ++q) {
+      out.near_f.push_back(static_cast<float>(per[q]));
+      out.exact[q] += per[q];
+    }
+  }
 }
 
 PixmapSolver::PixmapSolver(const Scene& scene, const PixmapOptions& options, const SolveOptions& solve)
@@ -995,10 +1221,8 @@ PixmapSolver::PixmapSolver(const Scene& scene, const PixmapOptions& options, con
   check_options(options);
   m.coarse = outline_triangulation(scene);
   const double memory = memory_limit_bytes(solve);
-  {
-    const Visibility vis(scene);
-    m.layout = layout_of(scene, m.coarse, options, memory, &vis);
-  }
+  m.vis = std::make_unique<Visibility>(scene);
+  m.layout = layout_of(scene, m.coarse, options, memory, m.vis.get());
   if (m.layout.texels >= (1LL << 32)) throw NumericalError(scene.source + ": more than 2^32 texels; use a larger --texel-size");
   // The hemicube renders whole polygons (their coarsest triangulation): the
   // contact lines would only add triangles.

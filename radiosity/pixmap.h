@@ -54,7 +54,7 @@ struct Pixmap {
   // borders do not get the aliasing of a tiny area); -1 when not covered.
   std::vector<int> owner;
   std::vector<double> area;         // per texel: its area plus the slivers it holds (0 when owned)
-  std::vector<char> whole;          // per texel: wholly covered, holding no sliver (area = texel area)
+  std::vector<char> whole;          // per texel: an owner wholly covered (area >= texel area: it may hold slivers)
 
   long long texels() const { return static_cast<long long>(width) * height; }
   // Texel coordinates (s, t) of point x of the plane.
