@@ -1123,8 +1123,8 @@ bool PixmapSolver::Impl::narrow_receiver(int k, const Shooter& sh, double pixel,
 
 void PixmapSolver::Impl::receive_narrow(int k, const Shooter& sh, double reach, bool sky,
                                         const std::function<void(int, double)>& add, NarrowPart& out) const {
-  // Per lit display triangle (a piece of one texel). Beyond `reach`, as the
-  // hemicube would: Lambert's factor from the block's centre, seen or not
+  // Per lit display triangle (a piece of one texel). Beyond `reach` (its
+  // texel's centroid), as the hemicube would: Lambert's factor from the block's centre, seen or not
   // by one shadow ray to the piece's centroid. Within it, from each source
   // texel by reciprocity, F = A_piece / A_texel x F(piece -> texel), the
   // latter Lambert's factor from three points of the piece (a rule exact
@@ -1151,7 +1151,7 @@ void PixmapSolver::Impl::receive_narrow(int k, const Shooter& sh, double reach, 
     const std::array<Vec3, 3> p = {display.positions[t[0]], display.positions[t[1]], display.positions[t[2]]};
     const Vec3 c = (p[0] + p[1] + p[2]) / 3.0;
     const int texel = static_cast<int>(display_texel[d] - pm.first);
-    if (glm::length(c - sh.centre) < reach) {
+    if (glm::length(pm.centroid[texel] - sh.centre) < reach) {  // a texel is near or far as a whole
       near_pieces.push_back({texel, display.patch[d], p, triangle_area(p[0], p[1], p[2])});
       continue;
     }

@@ -4,8 +4,10 @@
 // (Cohen, Chen, Wallace & Greenberg 1988) shoots from the block with the most
 // unshot power through a hemicube item buffer of whole polygons; each pixel
 // that sees a pixmap spreads its delta form factor over the texels under its
-// footprint (virtual oversampling taken to its limit). The state (radiosity and unshot
-// radiosity per texel, in float) can be saved and resumed bit for bit.
+// footprint (virtual oversampling taken to its limit); a pixmap too narrow
+// for the pixels, or for the block near it, takes exact factors instead.
+// The state (radiosity and unshot radiosity per texel, in float) can be
+// saved and resumed bit for bit.
 #pragma once
 
 #include "meshing/geometry.h"
