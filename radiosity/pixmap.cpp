@@ -145,6 +145,12 @@ bool segments_cross(const St& p, const St& q, const St& a, const St& b) {
 
 Vec3 point_of(const Pixmap& pm, double s, double t) { return pm.origin + (s * pm.texel_u) * pm.u + (t * pm.texel_v) * pm.v; }
 
+// The square of texel idx (counter-clockwise around the pixmap's normal).
+std::array<Vec3, 4> texel_square(const Pixmap& pm, int idx) {
+  const int i = idx % pm.width, j = idx / pm.width;
+  return {point_of(pm, i, j), point_of(pm, i + 1, j), point_of(pm, i + 1, j + 1), point_of(pm, i, j + 1)};
+}
+
 // The texel of the 3 x 3 around (i, j) with the most coverage, at least
 // `min_coverage` and more than 0 (the first in row order on ties); -1 when none.
 int most_covered_around(const Pixmap& pm, int i, int j, double min_coverage) {
@@ -501,7 +507,8 @@ struct RowEntry {
 };
 
 // A shooter's row. The far texels take the hemicube's factor from the
-// block as a whole; the near ones, from each of the shooter's texels
+// block as a whole (a narrow pixmap's, Lambert's from the block's centre);
+// the near ones, from each of the shooter's texels
 // (sh.texels order) by Lambert's formula, so that a block straddling a
 // shadow shoots its lit and dark texels' power from where they are. Each
 // source texel i delivers far_scale[i] x its power along the far entries,
@@ -956,12 +963,10 @@ Row PixmapSolver::Impl::compute_row(int s, Hemicube& cube, long long& spread_pix
         if (f > 0.0) far_parts[k].push_back({static_cast<uint32_t>(pm.first + texel), static_cast<float>(f)});
         continue;
       }
-      const int i = texel % pm.width, j = texel / pm.width;
-      const Vec3 quad[4] = {point_of(pm, i, j), point_of(pm, i + 1, j), point_of(pm, i + 1, j + 1),
-                            point_of(pm, i, j + 1)};
+      const std::array<Vec3, 4> quad = texel_square(pm, texel);
       std::fill(per.begin(), per.end(), 0.0);
       for (const Source& src : sources)
-        per[src.i] += src.w * point_polygon_form_factor(src.x, own.normal, quad, 4, pm.normal);
+        per[src.i] += src.w * point_polygon_form_factor(src.x, own.normal, quad.data(), 4, pm.normal);
       near_hemicube[k] += f;
       near_parts[k].push_back(static_cast<uint32_t>(pm.first + texel));
       for (size_t q = 0; q < nsrc; ++q) {
@@ -1123,9 +1128,10 @@ bool PixmapSolver::Impl::narrow_receiver(int k, const Shooter& sh, double pixel,
 
 void PixmapSolver::Impl::receive_narrow(int k, const Shooter& sh, double reach, bool sky,
                                         const std::function<void(int, double)>& add, NarrowPart& out) const {
-  // Per lit display triangle (a piece of one texel). Beyond `reach` (its
-  // texel's centroid), as the hemicube would: Lambert's factor from the block's centre, seen or not
-  // by one shadow ray to the piece's centroid. Within it, from each source
+  // Per lit display triangle (a piece of one texel). Its texel's centroid
+  // beyond `reach`, as the hemicube would: Lambert's factor from the block's
+  // centre, seen or not by one shadow ray to the piece's centroid. Within
+  // it, from each source
   // texel by reciprocity, F = A_piece / A_texel x F(piece -> texel), the
   // latter Lambert's factor from three points of the piece (a rule exact
   // for quadratics) to each polygon of the texel, seen or not by a ray
@@ -1200,8 +1206,7 @@ void PixmapSolver::Impl::receive_narrow(int k, const Shooter& sh, double reach, 
   for (size_t q = 0; q < nsrc; ++q) {
     const int src = sh.texels[q];
     if (plain_square(own, src)) {
-      const int i = src % own.width, j = src / own.width;
-      polygons.push_back({q, {point_of(own, i, j), point_of(own, i + 1, j), point_of(own, i + 1, j + 1), point_of(own, i, j + 1)}, 4});
+      polygons.push_back({q, texel_square(own, src), 4});
       continue;
     }
     const long long g = own.first + src;
