@@ -19,6 +19,7 @@
 #include <numbers>
 #include <numeric>
 #include <sstream>
+#include <tuple>
 #include <unordered_map>
 
 namespace radmesh {
@@ -144,6 +145,56 @@ bool segments_cross(const St& p, const St& q, const St& a, const St& b) {
 }
 
 Vec3 point_of(const Pixmap& pm, double s, double t) { return pm.origin + (s * pm.texel_u) * pm.u + (t * pm.texel_v) * pm.v; }
+
+// The cut (Pixmap::cuts) of texel idx, or null when no contact line cuts it.
+const Pixmap::Cut* cut_of(const Pixmap& pm, int idx) {
+  if (pm.cuts.empty()) return nullptr;
+  const auto it = std::lower_bound(pm.cuts.begin(), pm.cuts.end(), idx,
+                                   [](const Pixmap::Cut& c, int texel) { return c.texel < texel; });
+  return it != pm.cuts.end() && it->texel == idx ? &*it : nullptr;
+}
+
+// The owner of the piece of coarse triangle t in texel idx.
+int owner_of_piece(const Pixmap& pm, int idx, int t) {
+  if (const Pixmap::Cut* cut = cut_of(pm, idx))
+    for (size_t q = 0; q < cut->triangles.size(); ++q)
+      if (std::find(cut->triangles[q].begin(), cut->triangles[q].end(), t) != cut->triangles[q].end())
+        return cut->owners[q];
+  return pm.owner[idx];
+}
+
+// The owner of point (s, t) for texel idx: where a contact line cuts the
+// texel, that of the part nearest the point (the one holding it, when it
+// lies in the texel), its triangles being those of `coarse`. A pixel's
+// footprint may reach across the wall, but its centre lies on the side the
+// pixel sees.
+int owner_of_point(const Pixmap& pm, const Mesh& coarse, int idx, double s, double t) {
+  const Pixmap::Cut* cut = cut_of(pm, idx);
+  if (!cut) return pm.owner[idx];
+  auto to_segment = [&](const St& a, const St& b) {
+    const double ds = b.s - a.s, dt = b.t - a.t, len2 = ds * ds + dt * dt;
+    const double h = len2 > 0.0 ? std::clamp(((s - a.s) * ds + (t - a.t) * dt) / len2, 0.0, 1.0) : 0.0;
+    return std::hypot(s - a.s - h * ds, t - a.t - h * dt);
+  };
+  double nearest = INFINITY;
+  int owner = pm.owner[idx];
+  for (size_t q = 0; q < cut->triangles.size(); ++q)
+    for (int tri : cut->triangles[q]) {
+      St v[3];
+      for (int c = 0; c < 3; ++c) v[c] = st_of(pm, coarse.positions[coarse.triangles[tri][c]]);
+      if ((v[1].s - v[0].s) * (v[2].t - v[0].t) == (v[1].t - v[0].t) * (v[2].s - v[0].s)) continue;  // no area
+      double e[3];
+      for (int c = 0; c < 3; ++c)
+        e[c] = (v[(c + 1) % 3].s - v[c].s) * (t - v[c].t) - (v[(c + 1) % 3].t - v[c].t) * (s - v[c].s);
+      const bool inside = (e[0] >= 0.0 && e[1] >= 0.0 && e[2] >= 0.0) || (e[0] <= 0.0 && e[1] <= 0.0 && e[2] <= 0.0);
+      const double d = inside ? 0.0 : std::min({to_segment(v[0], v[1]), to_segment(v[1], v[2]), to_segment(v[2], v[0])});
+      if (d < nearest) {
+        nearest = d;
+        owner = cut->owners[q];
+      }
+    }
+  return owner;
+}
 
 // The square of texel idx (counter-clockwise around the pixmap's normal).
 std::array<Vec3, 4> texel_square(const Pixmap& pm, int idx) {
@@ -284,6 +335,23 @@ PixmapLayout layout_of(const Scene& scene, const Mesh& coarse, const PixmapOptio
         contact_world[static_cast<size_t>(it->second)].push_back({coarse.positions[e[0]], coarse.positions[e[1]]});
   }
   for (int t = 0; t < coarse.triangle_count(); ++t) triangles_of[L.pixmap_of_patch[coarse.patch[t]]].push_back(t);
+  // Triangles joined across an edge that is not a contact line: within one
+  // texel, pieces of triangles so joined are one part of it.
+  std::unordered_map<uint64_t, std::array<int, 2>> across;
+  for (int t = 0; t < coarse.triangle_count(); ++t)
+    for (int c = 0; c < 3; ++c) {
+      auto [it, fresh] = across.try_emplace(undirected_edge_key(coarse.triangles[t][c], coarse.triangles[t][(c + 1) % 3]),
+                                            std::array<int, 2>{t, -1});
+      if (!fresh) it->second[1] = t;
+    }
+  for (const auto& e : coarse.feature_edges) across.erase(undirected_edge_key(e[0], e[1]));
+  auto joined = [&](int a, int b) {
+    for (int c = 0; c < 3; ++c) {
+      const auto it = across.find(undirected_edge_key(coarse.triangles[a][c], coarse.triangles[a][(c + 1) % 3]));
+      if (it != across.end() && (it->second[0] == b || it->second[1] == b)) return true;
+    }
+    return false;
+  };
   double bytes = 0.0;
   for (size_t k = 0; k < L.pixmaps.size(); ++k) {
     Pixmap& pm = L.pixmaps[k];
@@ -330,6 +398,13 @@ PixmapLayout layout_of(const Scene& scene, const Mesh& coarse, const PixmapOptio
     // floor): light never reaches there, and a shooter placed there would
     // shoot into the object's back faces. The coarse mesh is cut along the
     // contact lines, so each triangle is wholly inside or outside.
+    struct Piece {
+      int texel, triangle;
+      double area;
+      Vec3 moment;  // area x centroid
+      bool operator<(const Piece& o) const { return std::tie(texel, triangle) < std::tie(o.texel, o.triangle); }
+    };
+    std::vector<Piece> pieces;
     for (int t : triangles_of[k]) {
       if (L.enclosed[t]) {
         L.enclosed_area += coarse.area(t);
@@ -342,30 +417,138 @@ PixmapLayout layout_of(const Scene& scene, const Mesh& coarse, const PixmapOptio
         St c;
         area_centroid(poly, n, a, c);
         a = std::abs(a) * pm.texel_u * pm.texel_v;
-        const size_t idx = static_cast<size_t>(j) * pm.width + i;
+        const int idx = j * pm.width + i;
         pm.coverage[idx] += a;
         pm.centroid[idx] += a * point_of(pm, c.s, c.t);
+        if (a > 0.0) pieces.push_back({idx, t, a, a * point_of(pm, c.s, c.t)});
       });
     }
     const double cell_area = pm.texel_u * pm.texel_v;
+    // Texels cut into parts: pieces of triangles not joined across a
+    // non-contact edge (a thin wall stands across the texel: its footprint
+    // is a gap between them, or it stands on the line between them). One
+    // value and one centroid for both sides put the shooter inside the wall,
+    // or on one side shooting the other side's light: each part but the
+    // largest goes to the most covered neighbour holding a piece of one of
+    // its triangles (on its own side), when one is at least a quarter
+    // covered and not cut itself.
+    std::sort(pieces.begin(), pieces.end());
+    struct Move {
+      int from, to;
+      double area;
+      Vec3 moment;
+    };
+    std::vector<Move> moves;
+    std::vector<char> is_cut(pieces.empty() ? 0 : static_cast<size_t>(pm.texels()), 0);
+    std::vector<std::vector<std::vector<int>>> parts_of_cut;  // per cut texel (in pm.cuts order): parts' triangles
+    for (size_t a = 0; a < pieces.size();) {
+      size_t b = a;
+      while (b < pieces.size() && pieces[b].texel == pieces[a].texel) ++b;
+      if (b - a > 1) {
+        UnionFind uf(static_cast<int>(b - a));
+        for (size_t x = a; x < b; ++x)
+          for (size_t y = x + 1; y < b; ++y)
+            if (joined(pieces[x].triangle, pieces[y].triangle)) uf.unite(static_cast<int>(x - a), static_cast<int>(y - a));
+        std::vector<std::vector<int>> parts;
+        std::vector<int> part_of(b - a, -1);
+        for (size_t x = a; x < b; ++x) {
+          const int r = uf.find(static_cast<int>(x - a));
+          if (part_of[r] < 0) {
+            part_of[r] = static_cast<int>(parts.size());
+            parts.emplace_back();
+          }
+          parts[part_of[r]].push_back(static_cast<int>(x));
+        }
+        if (parts.size() > 1) {
+          Pixmap::Cut cut;
+          cut.texel = pieces[a].texel;
+          std::vector<std::vector<int>> triangles;
+          for (const auto& part : parts) {
+            triangles.emplace_back();
+            for (int x : part) triangles.back().push_back(pieces[x].triangle);
+          }
+          parts_of_cut.push_back(triangles);
+          is_cut[cut.texel] = 1;
+          pm.cuts.push_back(std::move(cut));
+        }
+      }
+      a = b;
+    }
+    auto pieces_of = [&](int texel) {
+      return std::equal_range(pieces.begin(), pieces.end(), Piece{texel, -1, 0.0, Vec3(0.0)},
+                              [](const Piece& x, const Piece& y) { return x.texel < y.texel; });
+    };
+    for (size_t c = 0; c < pm.cuts.size(); ++c) {
+      Pixmap::Cut& cut = pm.cuts[c];
+      const auto& parts = parts_of_cut[c];
+      auto part_area = [&](const std::vector<int>& tris, Vec3* moment) {
+        double area = 0.0;
+        const auto [lo, hi] = pieces_of(cut.texel);
+        for (auto it = lo; it != hi; ++it)
+          if (std::find(tris.begin(), tris.end(), it->triangle) != tris.end()) {
+            area += it->area;
+            if (moment) *moment += it->moment;
+          }
+        return area;
+      };
+      size_t largest = 0;
+      for (size_t q = 1; q < parts.size(); ++q)
+        if (part_area(parts[q], nullptr) > part_area(parts[largest], nullptr)) largest = q;
+      const int i = cut.texel % pm.width, j = cut.texel / pm.width;
+      for (size_t q = 0; q < parts.size(); ++q) {
+        cut.triangles.push_back(parts[q]);
+        cut.owners.push_back(-1);  // the texel's owner, set below
+        if (q == largest) continue;
+        int best = -1;
+        for (int dj = -1; dj <= 1; ++dj)
+          for (int di = -1; di <= 1; ++di) {
+            const int x = i + di, y = j + dj;
+            if ((di == 0 && dj == 0) || x < 0 || y < 0 || x >= pm.width || y >= pm.height) continue;
+            const int n = y * pm.width + x;
+            if (is_cut[n] || pm.coverage[n] < 0.25 * cell_area || (best >= 0 && pm.coverage[n] <= pm.coverage[best])) continue;
+            const auto [lo, hi] = pieces_of(n);
+            for (auto it = lo; it != hi; ++it)
+              if (std::find(parts[q].begin(), parts[q].end(), it->triangle) != parts[q].end()) {
+                best = n;
+                break;
+              }
+          }
+        if (best < 0) continue;
+        Vec3 moment(0.0);
+        const double area = part_area(parts[q], &moment);
+        moves.push_back({cut.texel, best, area, moment});
+        cut.owners.back() = best;
+      }
+    }
+    // What stays with each texel: its coverage less the parts moved away
+    // (coverage stays the area inside the texel); the centroid is the kept part's.
+    std::vector<double> kept(pm.coverage);
+    for (const Move& m : moves) {
+      kept[m.from] -= m.area;
+      pm.centroid[m.from] -= m.moment;
+    }
     // Owners: a texel less than a quarter covered gives its area to its
     // most covered neighbour that is at least a quarter covered.
     pm.owner.assign(static_cast<size_t>(pm.texels()), -1);
     pm.area.assign(static_cast<size_t>(pm.texels()), 0.0);
     for (long long idx = 0; idx < pm.texels(); ++idx)
-      if (pm.coverage[idx] > 0.0) pm.centroid[idx] /= pm.coverage[idx];
+      if (kept[idx] > 0.0) pm.centroid[idx] /= kept[idx];
     for (int j = 0; j < pm.height; ++j)
       for (int i = 0; i < pm.width; ++i) {
         const size_t idx = static_cast<size_t>(j) * pm.width + i;
         if (pm.coverage[idx] <= 0.0) continue;
         int best = static_cast<int>(idx);
-        if (pm.coverage[idx] < 0.25 * cell_area) {
+        if (kept[idx] < 0.25 * cell_area) {
           const int n = most_covered_around(pm, i, j, 0.25 * cell_area);
           if (n >= 0) best = n;
         }
         pm.owner[idx] = best;
-        pm.area[best] += pm.coverage[idx];
+        pm.area[best] += kept[idx];
       }
+    for (const Move& m : moves) pm.area[m.to] += m.area;  // an uncut texel at least a quarter covered owns itself
+    for (Pixmap::Cut& cut : pm.cuts)
+      for (int& o : cut.owners)
+        if (o < 0) o = pm.owner[cut.texel];
     pm.whole.assign(static_cast<size_t>(pm.texels()), 0);
     for (long long idx = 0; idx < pm.texels(); ++idx) {
       if (pm.owner[idx] == idx) ++L.covered;
@@ -815,7 +998,7 @@ Row PixmapSolver::Impl::compute_row(int s, Hemicube& cube, long long& spread_pix
     auto owner_at = [&](double s, double t) {
       const int i = std::clamp(static_cast<int>(std::floor(s)), 0, pm.width - 1);
       const int j = std::clamp(static_cast<int>(std::floor(t)), 0, pm.height - 1);
-      return pm.owner[static_cast<size_t>(j) * pm.width + i];
+      return owner_of_point(pm, coarse, j * pm.width + i, s, t);
     };
     auto add = [&](int texel, double f) {
       if (!(f > 0.0)) return;  // a zero weight would list the texel twice below
@@ -834,7 +1017,7 @@ Row PixmapSolver::Impl::compute_row(int s, Hemicube& cube, long long& spread_pix
     // its share to its owner; with no owner the share goes to `fallback`
     // (the owner under the pixel's centre).
     std::vector<double> ws, wt;
-    auto spread = [&](double s0, double s1, double t0, double t1, double f, int fallback) {
+    auto spread = [&](double s0, double s1, double t0, double t1, double f, int fallback, double sc, double tc) {
       s0 = std::clamp(s0, 0.0, static_cast<double>(pm.width));
       s1 = std::clamp(s1, 0.0, static_cast<double>(pm.width));
       t0 = std::clamp(t0, 0.0, static_cast<double>(pm.height));
@@ -842,7 +1025,7 @@ Row PixmapSolver::Impl::compute_row(int s, Hemicube& cube, long long& spread_pix
       const int i0 = std::min(pm.width - 1, static_cast<int>(s0)), i1 = std::min(pm.width - 1, static_cast<int>(s1));
       const int j0 = std::min(pm.height - 1, static_cast<int>(t0)), j1 = std::min(pm.height - 1, static_cast<int>(t1));
       if (i0 == i1 && j0 == j1) {
-        const int o = pm.owner[static_cast<size_t>(j0) * pm.width + i0];
+        const int o = owner_of_point(pm, coarse, j0 * pm.width + i0, sc, tc);
         add(o >= 0 ? o : fallback, f);
         return;
       }
@@ -860,7 +1043,7 @@ Row PixmapSolver::Impl::compute_row(int s, Hemicube& cube, long long& spread_pix
       const double norm = f / (overlaps(s0, s1, i0, i1, ws) * overlaps(t0, t1, j0, j1, wt));
       for (int j = j0; j <= j1; ++j)
         for (int i = i0; i <= i1; ++i) {
-          const int o = pm.owner[static_cast<size_t>(j) * pm.width + i];
+          const int o = owner_of_point(pm, coarse, j * pm.width + i, sc, tc);
           add(o >= 0 ? o : fallback, norm * ws[i - i0] * wt[j - j0]);
         }
       ++over[k];
@@ -918,7 +1101,7 @@ Row PixmapSolver::Impl::compute_row(int s, Hemicube& cube, long long& spread_pix
             t0 = std::min(t0, ct[q[e]]);
             t1 = std::max(t1, ct[q[e]]);
           }
-          spread(s0, s1, t0, t1, delta, centre_owner);
+          spread(s0, s1, t0, t1, delta, centre_owner, s, t);
         }
     }
     if (narrow) {
@@ -1060,7 +1243,7 @@ void PixmapSolver::Impl::build_display() {
       };
       const bool dark = layout.enclosed[t];
       for_each_piece(pm, tri, [&](int i, int j, const St* poly, int n) {
-        const int owner = pm.owner[static_cast<size_t>(j) * pm.width + i];
+        const int owner = owner_of_piece(pm, j * pm.width + i, t);
         emit(poly, n, owner >= 0 && !dark ? pm.first + owner : -1, dark || owner < 0);
       });
     }

@@ -57,6 +57,16 @@ struct Pixmap {
   std::vector<int> owner;
   std::vector<double> area;         // per texel: its area plus the slivers it holds (0 when owned)
   std::vector<char> whole;          // per texel: an owner wholly covered (area >= texel area: it may hold slivers)
+  // Texels a contact line cuts into parts (a thin wall standing across
+  // them): each part is a set of triangles of the layout's coarse mesh (the
+  // patches cut along their contact lines), held by the texel's owner or,
+  // all but the largest, by a neighbour on the part's side. Sorted by texel.
+  struct Cut {
+    int texel = -1;
+    std::vector<std::vector<int>> triangles;  // per part
+    std::vector<int> owners;                  // per part
+  };
+  std::vector<Cut> cuts;
 
   long long texels() const { return static_cast<long long>(width) * height; }
   // Texel coordinates (s, t) of point x of the plane.
