@@ -335,20 +335,24 @@ PixmapLayout layout_of(const Scene& scene, const Mesh& coarse, const PixmapOptio
         contact_world[static_cast<size_t>(it->second)].push_back({coarse.positions[e[0]], coarse.positions[e[1]]});
   }
   for (int t = 0; t < coarse.triangle_count(); ++t) triangles_of[L.pixmap_of_patch[coarse.patch[t]]].push_back(t);
-  // Triangles joined across an edge that is not a contact line: within one
-  // texel, pieces of triangles so joined are one part of it.
-  std::unordered_map<uint64_t, std::array<int, 2>> across;
+  // Triangles of one pixmap joined across an edge no other surface stands
+  // on (a wall's foot is an edge of the wall's triangles too; an overhang's
+  // or a shadow's line is not): within one texel, pieces of triangles so
+  // joined are one part of it.
+  std::unordered_map<uint64_t, int> pixmap_of_edge;  // -1: a wall stands on it
   for (int t = 0; t < coarse.triangle_count(); ++t)
     for (int c = 0; c < 3; ++c) {
-      auto [it, fresh] = across.try_emplace(undirected_edge_key(coarse.triangles[t][c], coarse.triangles[t][(c + 1) % 3]),
-                                            std::array<int, 2>{t, -1});
-      if (!fresh) it->second[1] = t;
+      const int k = L.pixmap_of_patch[coarse.patch[t]];
+      auto [it, fresh] = pixmap_of_edge.try_emplace(
+          undirected_edge_key(coarse.triangles[t][c], coarse.triangles[t][(c + 1) % 3]), k);
+      if (!fresh && it->second != k) it->second = -1;
     }
-  for (const auto& e : coarse.feature_edges) across.erase(undirected_edge_key(e[0], e[1]));
   auto joined = [&](int a, int b) {
     for (int c = 0; c < 3; ++c) {
-      const auto it = across.find(undirected_edge_key(coarse.triangles[a][c], coarse.triangles[a][(c + 1) % 3]));
-      if (it != across.end() && (it->second[0] == b || it->second[1] == b)) return true;
+      const int u = coarse.triangles[a][c], v = coarse.triangles[a][(c + 1) % 3];
+      const auto& tb = coarse.triangles[b];
+      const bool shared = (u == tb[0] || u == tb[1] || u == tb[2]) && (v == tb[0] || v == tb[1] || v == tb[2]);
+      if (shared && pixmap_of_edge.at(undirected_edge_key(u, v)) >= 0) return true;
     }
     return false;
   };
@@ -424,9 +428,9 @@ PixmapLayout layout_of(const Scene& scene, const Mesh& coarse, const PixmapOptio
       });
     }
     const double cell_area = pm.texel_u * pm.texel_v;
-    // Texels cut into parts: pieces of triangles not joined across a
-    // non-contact edge (a thin wall stands across the texel: its footprint
-    // is a gap between them, or it stands on the line between them). One
+    // Texels cut into parts: pieces of triangles not joined (a thin wall
+    // stands across the texel: its footprint is a gap between them, or it
+    // stands on the line between them). One
     // value and one centroid for both sides put the shooter inside the wall,
     // or on one side shooting the other side's light: each part but the
     // largest goes to the most covered neighbour holding a piece of one of
