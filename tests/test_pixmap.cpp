@@ -183,6 +183,19 @@ double area_mean(const PixmapLayout& L, const std::vector<std::vector<float>>& v
   return sum / area;
 }
 
+// The area mean of the first channel of the radiosity of the pixmap of
+// patch `name`, over its texels holding a value.
+double patch_mean(const Scene& scene, const PixmapLayout& L, const PixmapState& state, const std::string& name) {
+  const int k = L.pixmap_of_patch[test::patch_named(scene, name)];
+  double sum = 0.0, area = 0.0;
+  for (long long i = 0; i < L.pixmaps[k].texels(); ++i)
+    if (L.pixmaps[k].owner[i] == i) {
+      sum += state.radiosity[k][i * 3] * L.pixmaps[k].area[i];
+      area += L.pixmaps[k].area[i];
+    }
+  return sum / area;
+}
+
 SolveOptions threads(int n) {
   SolveOptions so;
   so.threads = n;
@@ -263,16 +276,7 @@ TEST(PixmapSolver, NoShooterSitsAcrossAWallStandingOnItsPatch) {
   const PixmapSolver solver(scene, o, threads(0));
   const PixmapRun run = solver.run(solver.initial_state());
   const PixmapLayout& L = solver.layout();
-  auto mean_of = [&](const std::string& name) {
-    const int k = L.pixmap_of_patch[test::patch_named(scene, name)];
-    double sum = 0.0, area = 0.0;
-    for (long long i = 0; i < L.pixmaps[k].texels(); ++i)
-      if (L.pixmaps[k].owner[i] == i) {
-        sum += run.state.radiosity[k][i * 3] * L.pixmaps[k].area[i];
-        area += L.pixmaps[k].area[i];
-      }
-    return sum / area;
-  };
+  auto mean_of = [&](const std::string& name) { return patch_mean(scene, L, run.state, name); };
   const double lit = mean_of("wall_lit"), sealed = std::max(mean_of("end"), mean_of("wall_sealed"));
   std::printf("divided room: lit side of the wall %.4f, sealed half at most %.3g\n", lit, sealed);
   EXPECT_GT(lit, 0.1);
@@ -295,16 +299,7 @@ TEST(PixmapSolver, ATexelAWallStandsAcrossIsSplitAndNeitherLeaksNorLosesLight) {
   const PixmapLayout& L = solver.layout();
   const Pixmap& floor = L.pixmaps[L.pixmap_of_patch[test::patch_named(scene, "floor")]];
   EXPECT_EQ(floor.cuts.size(), static_cast<size_t>(floor.height));  // the row of texels under the wall
-  auto mean_of = [&](const std::string& name) {
-    const int k = L.pixmap_of_patch[test::patch_named(scene, name)];
-    double sum = 0.0, area = 0.0;
-    for (long long i = 0; i < L.pixmaps[k].texels(); ++i)
-      if (L.pixmaps[k].owner[i] == i) {
-        sum += run.state.radiosity[k][i * 3] * L.pixmaps[k].area[i];
-        area += L.pixmaps[k].area[i];
-      }
-    return sum / area;
-  };
+  auto mean_of = [&](const std::string& name) { return patch_mean(scene, L, run.state, name); };
   const double lit = mean_of("wall_lit"), sealed = std::max(mean_of("end"), mean_of("wall_sealed"));
   const double escaped = run.state.power_escaped.x / run.power_emitted.x;
   std::printf("wall across a texel row: lit side %.4f, sealed half at most %.3g, escaped %.3g of the emitted\n", lit,
@@ -479,13 +474,7 @@ TEST(PixmapSolver, AStripNarrowerThanThePixelsGetsItsLightWhateverItsWidth) {
     const PixmapSolver solver(scene, o, threads(0));
     const PixmapRun run = solver.run(solver.initial_state());
     const PixmapLayout& L = solver.layout();
-    const int k = L.pixmap_of_patch[test::patch_named(scene, "strip")];
-    double sum = 0.0, area = 0.0;
-    for (long long i = 0; i < L.pixmaps[k].texels(); ++i)
-      if (L.pixmaps[k].owner[i] == i) {
-        sum += run.state.radiosity[k][i * 3] * L.pixmaps[k].area[i];
-        area += L.pixmaps[k].area[i];
-      }
+    const double mean = patch_mean(scene, L, run.state, "strip");
     const Vec3 lamp[4] = {{0, 2, 0}, {1, 2, 0}, {1, 2, 1}, {0, 2, 1}};
     double exact = 0.0;
     constexpr int kSamples = 400;
@@ -494,16 +483,17 @@ TEST(PixmapSolver, AStripNarrowerThanThePixelsGetsItsLightWhateverItsWidth) {
         exact += point_polygon_form_factor(Vec3((i + 0.5) / kSamples, 0.0, z0 + (j + 0.5) / 4 * w), Vec3(0, 1, 0), lamp, 4,
                                            Vec3(0, -1, 0));
     exact *= 0.7 / (4.0 * kSamples);
-    std::printf("strip %g wide: radiosity %.5f, exact %.5f\n", w, sum / area, exact);
-    EXPECT_NEAR(sum / area / exact, 1.0, 0.01) << "strip " << w << " wide";
+    std::printf("strip %g wide: radiosity %.5f, exact %.5f\n", w, mean, exact);
+    EXPECT_NEAR(mean / exact, 1.0, 0.01) << "strip " << w << " wide";
   }
 }
 
 TEST(PixmapSolver, APicturesMillimetreEdgesSeeHalfTheirViewInTheWallTheyHangOn) {
   // A picture 1 mm thick on a 4 x 4 wall of a closed room 1 deep: each
   // edge face, perpendicular to the wall and 1 mm high off it, has F = 1/2
-  // to the wall (the wall right beside it fills half its view). By reciprocity the wall's shooters must
-  // send sum_q A_q F(q -> edge) = A_edge / 2. From a block's centre, or
+  // to the wall (the wall right beside it fills half its view). By
+  // reciprocity the wall's shooters must send
+  // sum_q A_q F(q -> edge) = A_edge / 2. From a block's centre, or
   // from points on its texels, the wall sees an edge edge on: the hemicube
   // and the near field gave 0 to 0.5% of it. The texels (4/47) leave slivers
   // along the outline, held by the texels beyond them; the blocks around
