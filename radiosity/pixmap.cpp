@@ -168,7 +168,7 @@ int owner_of_piece(const Pixmap& pm, int idx, int t) {
 // lies in the texel), its triangles being those of `coarse`. A pixel's
 // footprint may reach across the wall, but its centre lies on the side the
 // pixel sees.
-int owner_of_point(const Pixmap& pm, const Mesh& coarse, int idx, double s, double t) {
+int owner_of_cut_point(const Pixmap& pm, const Mesh& coarse, int idx, double s, double t) {
   const Pixmap::Cut* cut = cut_of(pm, idx);
   if (!cut) return pm.owner[idx];
   auto to_segment = [&](const St& a, const St& b) {
@@ -194,6 +194,12 @@ int owner_of_point(const Pixmap& pm, const Mesh& coarse, int idx, double s, doub
       }
     }
   return owner;
+}
+
+// The same, fast where no texel is cut or the texel is whole (a cut texel
+// never is): the hemicube's hottest loop asks it for every pixel.
+inline int owner_of_point(const Pixmap& pm, const Mesh& coarse, int idx, double s, double t) {
+  return pm.cuts.empty() || pm.whole[idx] ? pm.owner[idx] : owner_of_cut_point(pm, coarse, idx, s, t);
 }
 
 // The square of texel idx (counter-clockwise around the pixmap's normal).
