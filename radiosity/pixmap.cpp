@@ -436,12 +436,11 @@ PixmapLayout layout_of(const Scene& scene, const Mesh& coarse, const PixmapOptio
     const double cell_area = pm.texel_u * pm.texel_v;
     // Texels cut into parts: pieces of triangles not joined (a thin wall
     // stands across the texel: its footprint is a gap between them, or it
-    // stands on the line between them). One
-    // value and one centroid for both sides put the shooter inside the wall,
-    // or on one side shooting the other side's light: each part but the
-    // largest goes to the most covered neighbour holding a piece of one of
-    // its triangles (on its own side), when one is at least a quarter
-    // covered and not cut itself.
+    // stands on the line between them). One value and one centroid for both
+    // sides put the shooter inside the wall, or on one side shooting the
+    // other side's light: each part but the largest goes to the most covered
+    // neighbour holding a piece of one of its triangles (on its own side),
+    // when one is at least a quarter covered and not cut itself.
     std::sort(pieces.begin(), pieces.end());
     struct Move {
       int from, to;
@@ -450,7 +449,6 @@ PixmapLayout layout_of(const Scene& scene, const Mesh& coarse, const PixmapOptio
     };
     std::vector<Move> moves;
     std::vector<char> is_cut(pieces.empty() ? 0 : static_cast<size_t>(pm.texels()), 0);
-    std::vector<std::vector<std::vector<int>>> parts_of_cut;  // per cut texel (in pm.cuts order): parts' triangles
     for (size_t a = 0; a < pieces.size();) {
       size_t b = a;
       while (b < pieces.size() && pieces[b].texel == pieces[a].texel) ++b;
@@ -472,12 +470,11 @@ PixmapLayout layout_of(const Scene& scene, const Mesh& coarse, const PixmapOptio
         if (parts.size() > 1) {
           Pixmap::Cut cut;
           cut.texel = pieces[a].texel;
-          std::vector<std::vector<int>> triangles;
           for (const auto& part : parts) {
-            triangles.emplace_back();
-            for (int x : part) triangles.back().push_back(pieces[x].triangle);
+            cut.triangles.emplace_back();
+            for (int x : part) cut.triangles.back().push_back(pieces[x].triangle);
           }
-          parts_of_cut.push_back(triangles);
+          cut.owners.assign(parts.size(), -1);  // -1: the texel's owner, set below
           is_cut[cut.texel] = 1;
           pm.cuts.push_back(std::move(cut));
         }
@@ -488,9 +485,8 @@ PixmapLayout layout_of(const Scene& scene, const Mesh& coarse, const PixmapOptio
       return std::equal_range(pieces.begin(), pieces.end(), Piece{texel, -1, 0.0, Vec3(0.0)},
                               [](const Piece& x, const Piece& y) { return x.texel < y.texel; });
     };
-    for (size_t c = 0; c < pm.cuts.size(); ++c) {
-      Pixmap::Cut& cut = pm.cuts[c];
-      const auto& parts = parts_of_cut[c];
+    for (Pixmap::Cut& cut : pm.cuts) {
+      const auto& parts = cut.triangles;
       auto part_area = [&](const std::vector<int>& tris, Vec3* moment) {
         double area = 0.0;
         const auto [lo, hi] = pieces_of(cut.texel);
@@ -506,8 +502,6 @@ PixmapLayout layout_of(const Scene& scene, const Mesh& coarse, const PixmapOptio
         if (part_area(parts[q], nullptr) > part_area(parts[largest], nullptr)) largest = q;
       const int i = cut.texel % pm.width, j = cut.texel / pm.width;
       for (size_t q = 0; q < parts.size(); ++q) {
-        cut.triangles.push_back(parts[q]);
-        cut.owners.push_back(-1);  // the texel's owner, set below
         if (q == largest) continue;
         int best = -1;
         for (int dj = -1; dj <= 1; ++dj)
@@ -527,7 +521,7 @@ PixmapLayout layout_of(const Scene& scene, const Mesh& coarse, const PixmapOptio
         Vec3 moment(0.0);
         const double area = part_area(parts[q], &moment);
         moves.push_back({cut.texel, best, area, moment});
-        cut.owners.back() = best;
+        cut.owners[q] = best;
       }
     }
     // What stays with each texel: its coverage less the parts moved away
