@@ -906,8 +906,7 @@ private:
   // 1 mm up each wall joined to the wall's sides, and the wall's foot were
   // cut about 1 mm apart (at the hierarchical method's edge length 107 x
   // what each wall asks for, 41,190 elements for 8 faces), and the
-  // hierarchical solve stopped at its memory limit
-  // after 83 M links. Ordinary faces make 0.5-9 x (the Cornell box 1.1, a
+  // hierarchical solve stopped at its memory limit after 83 M links. Ordinary faces make 0.5-9 x (the Cornell box 1.1, a
   // sphere room 8.2); lines side by side that CGAL leaves alone (a panel
   // 1 mm from a wall, a partition 1 mm thick) under 1.
   static constexpr double kDense = 15.0, kDenseMin = 100.0;

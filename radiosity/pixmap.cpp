@@ -846,9 +846,9 @@ struct PixmapSolver::Impl {
 
   Row compute_row(int s, Hemicube& cube, long long& spread_pixels) const;
   bool narrow_receiver(int k, const Shooter& sh, double pixel, double reach) const;
-  // What a narrow pixmap receives from a shooter: its far
-  // texels through `add` (far_sum in all), its near ones (those within
-  // `reach`) from each source texel.
+  // What a narrow pixmap receives from a shooter: its far texels through
+  // `add` (far_sum in all), its near ones (within `reach`) from each source
+  // texel.
   struct NarrowPart {
     // The share of its factor in front of other surfaces (the rest has open
     // sky behind it): what the hemicube gave those surfaces where it missed
@@ -1318,8 +1318,8 @@ void PixmapSolver::Impl::receive_narrow(int k, const Shooter& sh, double reach, 
   // Per lit display triangle (a piece of one texel). Its texel's centroid
   // beyond `reach`, as the hemicube would: Lambert's factor from the block's
   // centre, seen or not by one shadow ray to the piece's centroid. Within
-  // it, from each source
-  // texel by reciprocity, F = A_piece / A_texel x F(piece -> texel), the
+  // it, from each source texel by reciprocity,
+  // F = A_piece / A_texel x F(piece -> texel), the
   // latter Lambert's factor from three points of the piece (a rule exact
   // for quadratics) to each polygon of the texel, seen or not by a ray
   // between the centroids: a piece is narrow, so its points see what it
@@ -1335,6 +1335,7 @@ void PixmapSolver::Impl::receive_narrow(int k, const Shooter& sh, double reach, 
   struct Piece {
     int texel, patch;
     std::array<Vec3, 3> v;
+    Vec3 centroid;
     double area;
   };
   std::vector<Piece> near_pieces;
@@ -1345,7 +1346,7 @@ void PixmapSolver::Impl::receive_narrow(int k, const Shooter& sh, double reach, 
     const Vec3 c = (p[0] + p[1] + p[2]) / 3.0;
     const int texel = static_cast<int>(display_texel[d] - pm.first);
     if (glm::length(pm.centroid[texel] - sh.centre) < reach) {  // a texel is near or far as a whole
-      near_pieces.push_back({texel, display.patch[d], p, triangle_area(p[0], p[1], p[2])});
+      near_pieces.push_back({texel, display.patch[d], p, c, triangle_area(p[0], p[1], p[2])});
       continue;
     }
     const double f = point_polygon_form_factor(sh.centre, own.normal, p.data(), 3, pm.normal);
@@ -1388,6 +1389,11 @@ void PixmapSolver::Impl::receive_narrow(int k, const Shooter& sh, double reach, 
     size_t q;  // its texel, in sh.texels
     std::array<Vec3, 4> v;
     size_t count;
+    Vec3 centroid() const {
+      Vec3 c(0.0);
+      for (size_t m = 0; m < count; ++m) c += v[m];
+      return c / static_cast<double>(count);
+    }
   };
   std::vector<Polygon> polygons;
   for (size_t q = 0; q < nsrc; ++q) {
@@ -1403,14 +1409,12 @@ void PixmapSolver::Impl::receive_narrow(int k, const Shooter& sh, double reach, 
       polygons.push_back({q, {display.positions[t[0]], display.positions[t[1]], display.positions[t[2]], Vec3(0.0)}, 3});
     }
   }
-  std::vector<Vec3> from, to;
-  for (const Piece& piece : near_pieces)
-    for (const Polygon& poly : polygons) {
-      from.push_back((piece.v[0] + piece.v[1] + piece.v[2]) / 3.0);
-      Vec3 c(0.0);
-      for (size_t m = 0; m < poly.count; ++m) c += poly.v[m];
-      to.push_back(c / static_cast<double>(poly.count));
-    }
+  std::vector<Vec3> centres, from, to;
+  for (const Polygon& poly : polygons) centres.push_back(poly.centroid());
+  for (const Piece& piece : near_pieces) {
+    from.insert(from.end(), polygons.size(), piece.centroid);
+    to.insert(to.end(), centres.begin(), centres.end());
+  }
   std::vector<unsigned char> seen(from.size());
   vis->visible_off_surfaces(from.data(), pm.normal, to.data(), own.normal, from.size(), -1, -1, seen.data());
   std::map<int, std::vector<double>> per_texel;
@@ -1430,7 +1434,7 @@ void PixmapSolver::Impl::receive_narrow(int k, const Shooter& sh, double reach, 
       per[poly.q] += piece.area * f / (3.0 * own.area[sh.texels[poly.q]]);
       received += piece.area * f / (3.0 * sh.area);
     }
-    if (received > 0.0) look_behind((piece.v[0] + piece.v[1] + piece.v[2]) / 3.0, piece.patch, received);
+    if (received > 0.0) look_behind(piece.centroid, piece.patch, received);
   }
   if (weight > 0.0) out.behind = weight_behind / weight;
   for (const auto& [texel, per] : per_texel) {
