@@ -135,6 +135,17 @@ void Hemicube::render_face(int f, const std::vector<HemicubeTriangle>& triangles
     if (k < 3) continue;
     const bool front = glm::dot(t.normal, centre_ - t.a) > 0.0;
     const int id = front ? t.id : kBack;
+    // Depth (1 / the forward distance) from the triangle's plane: along the
+    // ray of screen point (x, y), n . (x right + y up + forward) / (n . da).
+    // Interpolated over the clipped polygon's fan instead, a sliver of it
+    // (a floor's edge seen along the screen's diagonal, a corner clipped
+    // at the near plane) gave a pixel centre on its edges a weight on that
+    // corner's huge depth, and the floor 4 m away showed through a wall.
+    const Vec3 n = glm::cross(t.b - t.a, t.c - t.a);
+    const double plane = glm::dot(n, da);
+    if (plane == 0.0) continue;  // seen edge on
+    const double dR = glm::dot(n, F.right) / plane, dU = glm::dot(n, F.up) / plane,
+                 dF = glm::dot(n, F.forward) / plane;
     double sx[10], sy[10], w[10];
     for (int i = 0; i < k; ++i) {
       w[i] = 1.0 / b[i].z;
@@ -164,7 +175,7 @@ void Hemicube::render_face(int f, const std::vector<HemicubeTriangle>& triangles
           const double e1 = sign * edge(sx[v2], sy[v2], sx[v0], sy[v0], px, py);
           const double e2 = sign * edge(sx[v0], sy[v0], sx[v1], sy[v1], px, py);
           if (e0 < 0.0 || e1 < 0.0 || e2 < 0.0) continue;
-          const double depth = (e0 * w[v0] + e1 * w[v1] + e2 * w[v2]) / area;
+          const double depth = dR * px + dU * py + dF;
           const size_t pix = static_cast<size_t>(y) * F.width + x;
           // Nearer wins; at a tie (within rounding) a front side beats a
           // back: the two sides of a panel are one quad written twice, and

@@ -163,6 +163,31 @@ int owner_of_piece(const Pixmap& pm, int idx, int t) {
   return pm.owner[idx];
 }
 
+// Calls touch(texel) for every texel whose closed square the segment a-b
+// (in texel coordinates) meets: column by column along its longer axis, the
+// rows its span there reaches, a texel's edges included.
+template <class Touch>
+void for_each_texel_on(const Pixmap& pm, St a, St b, Touch&& touch) {
+  const bool by_s = std::abs(b.s - a.s) >= std::abs(b.t - a.t);
+  const int n_major = by_s ? pm.width : pm.height, n_minor = by_s ? pm.height : pm.width;
+  double m0 = by_s ? a.s : a.t, m1 = by_s ? b.s : b.t, q0 = by_s ? a.t : a.s, q1 = by_s ? b.t : b.s;
+  if (m0 > m1) {
+    std::swap(m0, m1);
+    std::swap(q0, q1);
+  }
+  constexpr double kEdge = 1e-9;  // on a texel line: both texels
+  auto minor_at = [&](double m) { return m1 > m0 ? q0 + (q1 - q0) * (m - m0) / (m1 - m0) : q0; };
+  const int i0 = std::max(0, static_cast<int>(std::floor(m0 - kEdge)));
+  const int i1 = std::min(n_major - 1, static_cast<int>(std::floor(m1 + kEdge)));
+  for (int i = i0; i <= i1; ++i) {
+    const double lo = std::clamp(static_cast<double>(i), m0, m1), hi = std::clamp(i + 1.0, m0, m1);
+    const double qa = minor_at(lo), qb = minor_at(hi);
+    const int j0 = std::max(0, static_cast<int>(std::floor(std::min(qa, qb) - kEdge)));
+    const int j1 = std::min(n_minor - 1, static_cast<int>(std::floor(std::max(qa, qb) + kEdge)));
+    for (int j = j0; j <= j1; ++j) touch(by_s ? j * pm.width + i : i * pm.width + j);
+  }
+}
+
 // The owner of point (s, t) for texel idx: where a contact line cuts the
 // texel, that of the part nearest the point (the one holding it, when it
 // lies in the texel), its triangles being those of `coarse`. A pixel's
@@ -434,6 +459,21 @@ PixmapLayout layout_of(const Scene& scene, const Mesh& coarse, const PixmapOptio
       });
     }
     const double cell_area = pm.texel_u * pm.texel_v;
+    // The wall feet and the texels they touch.
+    for (int t : triangles_of[k])
+      for (int c = 0; c < 3; ++c) {
+        const int u = coarse.triangles[t][c], v = coarse.triangles[t][(c + 1) % 3];
+        if (pixmap_of_edge.at(undirected_edge_key(u, v)) >= 0) continue;
+        if (pm.wall_foot.empty()) pm.wall_foot.assign(static_cast<size_t>(pm.texels()), 0);
+        const St a = st_of(pm, coarse.positions[u]), b = st_of(pm, coarse.positions[v]);
+        const int foot = static_cast<int>(pm.feet.size());
+        pm.feet.push_back({a.s, a.t, b.s, b.t});
+        for_each_texel_on(pm, a, b, [&](int texel) {
+          pm.wall_foot[static_cast<size_t>(texel)] = 1;
+          pm.foot_at.emplace_back(texel, foot);
+        });
+      }
+    std::sort(pm.foot_at.begin(), pm.foot_at.end());
     // Texels cut into parts: pieces of triangles not joined (a thin wall
     // stands across the texel: its footprint is a gap between them, or it
     // stands on the line between them). One value and one centroid for both
@@ -1021,6 +1061,69 @@ Row PixmapSolver::Impl::compute_row(int s, Hemicube& cube, long long& spread_pix
     // its share to its owner; with no owner the share goes to `fallback`
     // (the owner under the pixel's centre).
     std::vector<double> ws, wt;
+    // A footprint a wall's foot crosses reaches the wall's other side,
+    // which the pixel does not see (the wall hides it): its texels whose
+    // part of the footprint lies beyond a foot, seen from the pixel's
+    // centre, get nothing, and the others share the pixel. Spread over both
+    // sides, the pixels seen just before a thin wall lit the room it seals
+    // (0.5% of the lit side's radiosity where the wall stood on a texel
+    // line). False when no foot touches the footprint.
+    std::vector<int> near_feet;
+    std::vector<double> kept_w;
+    auto cut_by_wall = [&](double s0, double s1, double t0, double t1, int i0, int i1, int j0, int j1, double f,
+                           int fallback, double sc, double tc) {
+      near_feet.clear();
+      for (int j = j0; j <= j1; ++j)
+        for (int i = i0; i <= i1; ++i) {
+          const int idx = j * pm.width + i;
+          if (!pm.wall_foot[static_cast<size_t>(idx)]) continue;
+          const auto range = std::equal_range(pm.foot_at.begin(), pm.foot_at.end(), std::pair{idx, 0},
+                                              [](const auto& x, const auto& y) { return x.first < y.first; });
+          for (auto it = range.first; it != range.second; ++it) near_feet.push_back(it->second);
+        }
+      if (near_feet.empty()) return false;
+      auto side = [](double as, double at, double bs, double bt, double ps, double pt) {
+        return (bs - as) * (pt - at) - (bt - at) * (ps - as);
+      };
+      const int ci = std::clamp(static_cast<int>(std::floor(sc)), i0, i1),
+                cj = std::clamp(static_cast<int>(std::floor(tc)), j0, j1);
+      kept_w.assign(ws.size() * wt.size(), 0.0);
+      double kept = 0.0;
+      for (int j = j0; j <= j1; ++j)
+        for (int i = i0; i <= i1; ++i) {
+          const double w = ws[i - i0] * wt[j - j0];
+          if (!(w > 0.0)) continue;
+          // The centre of the texel's part of the footprint.
+          const double qs = 0.5 * (std::max(s0, static_cast<double>(i)) + std::min(s1, i + 1.0));
+          const double qt = 0.5 * (std::max(t0, static_cast<double>(j)) + std::min(t1, j + 1.0));
+          bool beyond = false;
+          if (i != ci || j != cj)
+            for (const int n : near_feet) {
+              const Pixmap::Foot& e = pm.feet[static_cast<size_t>(n)];
+              if (side(sc, tc, qs, qt, e.s0, e.t0) * side(sc, tc, qs, qt, e.s1, e.t1) < 0.0 &&
+                  side(e.s0, e.t0, e.s1, e.t1, sc, tc) * side(e.s0, e.t0, e.s1, e.t1, qs, qt) < 0.0) {
+                beyond = true;
+                break;
+              }
+            }
+          if (beyond) continue;
+          kept_w[static_cast<size_t>(j - j0) * ws.size() + (i - i0)] = w;
+          kept += w;
+        }
+      if (!(kept > 0.0)) {
+        add(fallback, f);
+        return true;
+      }
+      for (int j = j0; j <= j1; ++j)
+        for (int i = i0; i <= i1; ++i) {
+          const double w = kept_w[static_cast<size_t>(j - j0) * ws.size() + (i - i0)];
+          if (!(w > 0.0)) continue;
+          const int o = owner_of_point(pm, coarse, j * pm.width + i, sc, tc);
+          add(o >= 0 ? o : fallback, f * w / kept);
+        }
+      ++over[k];
+      return true;
+    };
     auto spread = [&](double s0, double s1, double t0, double t1, double f, int fallback, double sc, double tc) {
       s0 = std::clamp(s0, 0.0, static_cast<double>(pm.width));
       s1 = std::clamp(s1, 0.0, static_cast<double>(pm.width));
@@ -1045,6 +1148,7 @@ Row PixmapSolver::Impl::compute_row(int s, Hemicube& cube, long long& spread_pix
         return b - a;
       };
       const double norm = f / (overlaps(s0, s1, i0, i1, ws) * overlaps(t0, t1, j0, j1, wt));
+      if (!pm.wall_foot.empty() && cut_by_wall(s0, s1, t0, t1, i0, i1, j0, j1, f, fallback, sc, tc)) return;
       for (int j = j0; j <= j1; ++j)
         for (int i = i0; i <= i1; ++i) {
           const int o = owner_of_point(pm, coarse, j * pm.width + i, sc, tc);

@@ -67,6 +67,17 @@ struct Pixmap {
     std::vector<int> owners;                  // per part
   };
   std::vector<Cut> cuts;
+  // Wall feet: the edges of this pixmap's triangles that another pixmap's
+  // triangles share (a wall standing on it, or the walls around it), in
+  // texel coordinates; per texel whether one touches it, edges included
+  // (empty where there is none), and (texel, foot) for each such touch,
+  // sorted.
+  struct Foot {
+    double s0, t0, s1, t1;
+  };
+  std::vector<Foot> feet;
+  std::vector<char> wall_foot;
+  std::vector<std::pair<int, int>> foot_at;
 
   long long texels() const { return static_cast<long long>(width) * height; }
   // Texel coordinates (s, t) of point x of the plane.

@@ -126,6 +126,43 @@ TEST(Hemicube, TheLitSideOfATwoSidedPanelIsSeenWhicheverComesFirst) {
   }
 }
 
+TEST(Hemicube, NothingShowsThroughAWall) {
+  // From the middle of a 2 x 2 wall lamp, a wall 2 away stands across the
+  // room, a floor under both. The floor's edge along the back (z = 0) runs
+  // on the screen's diagonal, as do the pixel centres that look at that
+  // edge 3.66 away past the wall; its corner under the lamp is clipped at
+  // the near plane. The floor's depth was interpolated over the clipped
+  // polygon's fan, whose sliver gave such a centre most of the clipped
+  // corner's depth: the floor won over the wall at 5 pixels, and a sealed
+  // room behind the wall got light. Every pixel whose ray crosses the wall
+  // must see the wall.
+  const double a = 1.9995;
+  std::vector<HemicubeTriangle> tris;
+  tris.push_back({{4, 0, 0}, {0, 0, 0}, {0, 0, 2}, {0, 1, 0}, 0});
+  tris.push_back({{4, 0, 0}, {0, 0, 2}, {4, 0, 2}, {0, 1, 0}, 0});
+  add_quad(tris, {a, 0, 0}, {a, 0, 2}, {a, 2, 2}, {a, 2, 0}, {-1, 0, 0}, 1);
+  const Vec3 centre(0, 1, 1);
+  for (int resolution : {64, 128, 256}) {
+    Hemicube cube(resolution);
+    cube.render(centre, Vec3(0, 1, 0), Vec3(0, 0, 1), tris);
+    int crossing = 0, through = 0;
+    for (int f = 0; f < 5; ++f) {
+      const Hemicube::Face& F = cube.faces()[f];
+      for (int y = 0; y < F.height; ++y)
+        for (int x = 0; x < F.width; ++x) {
+          const Vec3 d = F.forward + cube.pixel_x(x) * F.right + cube.pixel_y(f, y) * F.up;
+          if (!(d.x > 0.0)) continue;
+          const Vec3 p = centre + ((a - centre.x) / d.x) * d;
+          if (p.y < 1e-3 || p.y > 2.0 - 1e-3 || p.z < 1e-3 || p.z > 2.0 - 1e-3) continue;
+          ++crossing;
+          if (F.id[static_cast<size_t>(y) * F.width + x] != 1) ++through;
+        }
+    }
+    EXPECT_GT(crossing, resolution * resolution / 5) << resolution;  // the wall fills a quarter of the front face
+    EXPECT_EQ(through, 0) << resolution;
+  }
+}
+
 // ---- layout ------------------------------------------------------------------
 
 TEST(PixmapLayout, TexelAreasAddUpToThePatchesAndCoplanarNeighboursShareAGrid) {
@@ -307,6 +344,39 @@ TEST(PixmapSolver, ATexelAWallStandsAcrossIsSplitAndNeitherLeaksNorLosesLight) {
   EXPECT_GT(lit, 0.1);
   EXPECT_LT(sealed, 3e-3 * lit);
   EXPECT_LT(escaped, 1e-3);
+}
+
+TEST(PixmapSolver, AWallOnTheTexelLinesLetsNoLightThrough) {
+  // The same room with the wall's two faces a millimetre either side of a
+  // texel line (x = 2 at 0.1 and 0.08 texels). A pixel seen just before
+  // the wall's foot had its share spread over the texels under its
+  // footprint, on both sides of the wall: the sealed half got 0.46-0.64%
+  // of the lit side's radiosity. Such a footprint now gives all of it to
+  // the texel under the pixel's centre.
+  const Scene scene = divided_room(0.001);
+  for (double texel : {0.1, 0.08}) {
+    PixmapOptions o;
+    o.texel_size = texel;
+    o.hemicube_res = 64;
+    const PixmapSolver solver(scene, o, threads(0));
+    const PixmapRun run = solver.run(solver.initial_state());
+    const PixmapLayout& L = solver.layout();
+    const Pixmap& floor = L.pixmaps[L.pixmap_of_patch[test::patch_named(scene, "floor")]];
+    // The two columns the wall's faces stand in are marked, whole, and the
+    // one before them only where the room's walls stand too (its ends).
+    const int lit_column = static_cast<int>(std::floor(1.9995 / floor.texel_u));
+    ASSERT_EQ(static_cast<int>(std::floor(2.0005 / floor.texel_u)), lit_column + 1);
+    for (int j = 0; j < floor.height; ++j) {
+      const size_t row = static_cast<size_t>(j) * floor.width;
+      EXPECT_TRUE(floor.wall_foot[row + lit_column] && floor.wall_foot[row + lit_column + 1]) << texel << " " << j;
+      EXPECT_EQ(floor.wall_foot[row + lit_column - 1], j == 0 || j + 1 == floor.height) << texel << " " << j;
+    }
+    auto mean_of = [&](const std::string& name) { return patch_mean(scene, L, run.state, name); };
+    const double lit = mean_of("wall_lit"), sealed = std::max(mean_of("end"), mean_of("wall_sealed"));
+    std::printf("wall on the texel lines (%g): lit side %.4f, sealed half at most %.3g\n", texel, lit, sealed);
+    EXPECT_GT(lit, 0.1) << texel;
+    EXPECT_LT(sealed, 1e-6 * lit) << texel;
+  }
 }
 
 TEST(PixmapSolver, BlocksUnderALampHungJustBelowTheCeilingLoseNoMoreThanTheirTexels) {
