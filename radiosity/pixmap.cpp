@@ -459,11 +459,22 @@ PixmapLayout layout_of(const Scene& scene, const Mesh& coarse, const PixmapOptio
       });
     }
     const double cell_area = pm.texel_u * pm.texel_v;
-    // The wall feet and the texels they touch.
+    // The wall feet and the texels they touch: edges another pixmap's
+    // triangles share, with this one's on both sides (the edges all round,
+    // where the walls around meet it, have nothing beyond them to keep
+    // light from).
+    std::unordered_map<uint64_t, int> sides;
+    for (int t : triangles_of[k])
+      for (int c = 0; c < 3; ++c) {
+        const uint64_t key = undirected_edge_key(coarse.triangles[t][c], coarse.triangles[t][(c + 1) % 3]);
+        if (pixmap_of_edge.at(key) < 0) ++sides[key];
+      }
     for (int t : triangles_of[k])
       for (int c = 0; c < 3; ++c) {
         const int u = coarse.triangles[t][c], v = coarse.triangles[t][(c + 1) % 3];
-        if (pixmap_of_edge.at(undirected_edge_key(u, v)) >= 0) continue;
+        const auto it = sides.find(undirected_edge_key(u, v));
+        if (it == sides.end() || it->second < 2) continue;
+        it->second = 0;  // once
         if (pm.wall_foot.empty()) pm.wall_foot.assign(static_cast<size_t>(pm.texels()), 0);
         const St a = st_of(pm, coarse.positions[u]), b = st_of(pm, coarse.positions[v]);
         const int foot = static_cast<int>(pm.feet.size());

@@ -67,11 +67,10 @@ struct Pixmap {
     std::vector<int> owners;                  // per part
   };
   std::vector<Cut> cuts;
-  // Wall feet: the edges of this pixmap's triangles that another pixmap's
-  // triangles share (a wall standing on it, or the walls around it), in
-  // texel coordinates; per texel whether one touches it, edges included
-  // (empty where there is none), and (texel, foot) for each such touch,
-  // sorted.
+  // Wall feet: the edges between two of this pixmap's triangles that a
+  // third, another pixmap's, shares (a wall standing on it), in texel
+  // coordinates; per texel whether one touches it, edges included (empty
+  // where there is none), and (texel, foot) for each such touch, sorted.
   struct Foot {
     double s0, t0, s1, t1;
   };
