@@ -140,25 +140,23 @@ void Hemicube::render_face(int f, const std::vector<HemicubeTriangle>& triangles
     // Interpolated over the clipped polygon's fan instead, a sliver of it
     // (a floor's edge seen along the screen's diagonal, a corner clipped
     // at the near plane) gave a pixel centre on its edges a weight on that
-    // corner's huge depth, and the floor 4 m away showed through a wall.
+    // corner's huge depth, and a floor 3.7 m away showed through a wall 2 m away.
     const Vec3 n = glm::cross(t.b - t.a, t.c - t.a);
     const double plane = glm::dot(n, da);
     if (plane == 0.0) continue;  // seen edge on
     const double dR = glm::dot(n, F.right) / plane, dU = glm::dot(n, F.up) / plane,
                  dF = glm::dot(n, F.forward) / plane;
-    double sx[10], sy[10], w[10];
+    double sx[10], sy[10];
     for (int i = 0; i < k; ++i) {
-      w[i] = 1.0 / b[i].z;
-      sx[i] = b[i].x * w[i];
-      sy[i] = b[i].y * w[i];
+      sx[i] = b[i].x / b[i].z;
+      sy[i] = b[i].y / b[i].z;
     }
     // The clipped polygon is convex: a fan.
     for (int i = 1; i + 1 < k; ++i) {
       const int v0 = 0, v1 = i, v2 = i + 1;
-      double area = (sx[v1] - sx[v0]) * (sy[v2] - sy[v0]) - (sy[v1] - sy[v0]) * (sx[v2] - sx[v0]);
+      const double area = (sx[v1] - sx[v0]) * (sy[v2] - sy[v0]) - (sy[v1] - sy[v0]) * (sx[v2] - sx[v0]);
       if (area == 0.0) continue;
       const double sign = area > 0.0 ? 1.0 : -1.0;
-      area *= sign;
       const double xmin = std::min({sx[v0], sx[v1], sx[v2]}), xmax = std::max({sx[v0], sx[v1], sx[v2]});
       const double ymin = std::min({sy[v0], sy[v1], sy[v2]}), ymax = std::max({sy[v0], sy[v1], sy[v2]});
       const int x0 = std::max(0, static_cast<int>(std::ceil((xmin + 1.0) / pixel_ - 0.5)));
