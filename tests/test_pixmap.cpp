@@ -239,9 +239,6 @@ SolveOptions threads(int n) {
   return so;
 }
 
-// A 4 x 2 x 2 room cut in two by a floor-to-ceiling wall `thickness`
-// thick at x = 2, lit by its end wall at x = 0 (E = 1): the half beyond the
-// wall is sealed, and its true radiosity is 0.
 using NamedQuad = std::pair<std::string, std::array<std::array<double, 3>, 4>>;
 
 // An OBJ scene of quads (counter-clockwise seen from the side they face)
@@ -266,19 +263,28 @@ Scene quad_scene(const std::string& name, const std::vector<NamedQuad>& quads) {
   return read_obj_scene(dir + "/room.obj");
 }
 
-// A 4 x 2 x 2 room lit from one end, cut in two by a wall `thickness` thick.
+// The six walls of the closed box [0, x] x [0, y] x [0, z], facing in, named
+// in this order: floor (y = 0), ceiling, back (z = 0), front, the end at
+// x = 0 and the end at x = x; then `more` quads.
+std::vector<NamedQuad> box_room(double x, double y, double z, const std::array<std::string, 6>& names,
+                                const std::vector<NamedQuad>& more = {}) {
+  std::vector<NamedQuad> quads = {
+      {names[0], {{{0, 0, 0}, {0, 0, z}, {x, 0, z}, {x, 0, 0}}}}, {names[1], {{{0, y, 0}, {x, y, 0}, {x, y, z}, {0, y, z}}}},
+      {names[2], {{{0, 0, 0}, {x, 0, 0}, {x, y, 0}, {0, y, 0}}}}, {names[3], {{{0, 0, z}, {0, y, z}, {x, y, z}, {x, 0, z}}}},
+      {names[4], {{{0, 0, 0}, {0, y, 0}, {0, y, z}, {0, 0, z}}}}, {names[5], {{{x, 0, 0}, {x, 0, z}, {x, y, z}, {x, y, 0}}}},
+  };
+  quads.insert(quads.end(), more.begin(), more.end());
+  return quads;
+}
+
+// A 4 x 2 x 2 room cut in two by a floor-to-ceiling wall `thickness`
+// thick at x = 2, lit by its end wall at x = 0 (E = 1): the half beyond the
+// wall is sealed, and its true radiosity is 0.
 Scene divided_room(double thickness) {
   const double a = 2.0 - 0.5 * thickness, b = 2.0 + 0.5 * thickness;
-  return quad_scene("divided_room", {
-                                        {"floor", {{{0, 0, 0}, {0, 0, 2}, {4, 0, 2}, {4, 0, 0}}}},
-                                        {"ceiling", {{{0, 2, 0}, {4, 2, 0}, {4, 2, 2}, {0, 2, 2}}}},
-                                        {"back", {{{0, 0, 0}, {4, 0, 0}, {4, 2, 0}, {0, 2, 0}}}},
-                                        {"front", {{{0, 0, 2}, {0, 2, 2}, {4, 2, 2}, {4, 0, 2}}}},
-                                        {"light", {{{0, 0, 0}, {0, 2, 0}, {0, 2, 2}, {0, 0, 2}}}},
-                                        {"end", {{{4, 0, 0}, {4, 0, 2}, {4, 2, 2}, {4, 2, 0}}}},
-                                        {"wall_lit", {{{a, 0, 0}, {a, 0, 2}, {a, 2, 2}, {a, 2, 0}}}},
-                                        {"wall_sealed", {{{b, 0, 0}, {b, 2, 0}, {b, 2, 2}, {b, 0, 2}}}},
-                                    });
+  return quad_scene("divided_room", box_room(4, 2, 2, {"floor", "ceiling", "back", "front", "light", "end"},
+                                             {{"wall_lit", {{{a, 0, 0}, {a, 0, 2}, {a, 2, 2}, {a, 2, 0}}}},
+                                              {"wall_sealed", {{{b, 0, 0}, {b, 2, 0}, {b, 2, 2}, {b, 0, 2}}}}}));
 }
 
 TEST(PixmapLayout, ATableTopOverTheFloorLeavesNoFloorOut) {
@@ -391,16 +397,9 @@ TEST(PixmapSolver, BlocksUnderALampHungJustBelowTheCeilingLoseNoMoreThanTheirTex
   // block, and a group whose centroid falls on the other side of it (an L of
   // three open texels around a covered one) shoots texel by texel.
   const double gap = 0.01, top = 4.0 - gap, lo = 1.35, hi = 2.25;
-  const Scene scene = quad_scene(
-      "lamp_room", {
-                       {"floor", {{{0, 0, 0}, {0, 0, 4}, {4, 0, 4}, {4, 0, 0}}}},
-                       {"ceiling", {{{0, 4, 0}, {4, 4, 0}, {4, 4, 4}, {0, 4, 4}}}},
-                       {"back", {{{0, 0, 0}, {4, 0, 0}, {4, 4, 0}, {0, 4, 0}}}},
-                       {"front", {{{0, 0, 4}, {0, 4, 4}, {4, 4, 4}, {4, 0, 4}}}},
-                       {"left", {{{0, 0, 0}, {0, 4, 0}, {0, 4, 4}, {0, 0, 4}}}},
-                       {"right", {{{4, 0, 0}, {4, 0, 4}, {4, 4, 4}, {4, 4, 0}}}},
-                       {"light", {{{lo, top, lo}, {hi, top, lo}, {hi, top, hi}, {lo, top, hi}}}},
-                   });
+  const Scene scene =
+      quad_scene("lamp_room", box_room(4, 4, 4, {"floor", "ceiling", "back", "front", "left", "right"},
+                                       {{"light", {{{lo, top, lo}, {hi, top, lo}, {hi, top, hi}, {lo, top, hi}}}}}));
   const int floor = test::patch_named(scene, "floor"), light = test::patch_named(scene, "light");
   struct Result {
     double escaped, floor_mean, bound;
@@ -569,19 +568,15 @@ TEST(PixmapSolver, APicturesMillimetreEdgesSeeHalfTheirViewInTheWallTheyHangOn) 
   // along the outline, held by the texels beyond them; the blocks around
   // the picture's corners have their centres beyond the edges' planes.
   const double t = 0.001;
-  const Scene scene = quad_scene("picture", {
-                                                {"wall", {{{0, 0, 0}, {0, 4, 0}, {0, 4, 4}, {0, 0, 4}}}},
-                                                {"floor", {{{0, 0, 0}, {0, 0, 4}, {1, 0, 4}, {1, 0, 0}}}},
-                                                {"ceiling", {{{0, 4, 0}, {1, 4, 0}, {1, 4, 4}, {0, 4, 4}}}},
-                                                {"back", {{{0, 0, 0}, {1, 0, 0}, {1, 4, 0}, {0, 4, 0}}}},
-                                                {"front_wall", {{{0, 0, 4}, {0, 4, 4}, {1, 4, 4}, {1, 0, 4}}}},
-                                                {"end", {{{1, 0, 0}, {1, 0, 4}, {1, 4, 4}, {1, 4, 0}}}},
-                                                {"front", {{{t, 1.5, 1.5}, {t, 2.2, 1.5}, {t, 2.2, 2.5}, {t, 1.5, 2.5}}}},
-                                                {"top", {{{0, 2.2, 1.5}, {0, 2.2, 2.5}, {t, 2.2, 2.5}, {t, 2.2, 1.5}}}},
-                                                {"bottom", {{{0, 1.5, 1.5}, {t, 1.5, 1.5}, {t, 1.5, 2.5}, {0, 1.5, 2.5}}}},
-                                                {"left", {{{0, 1.5, 1.5}, {0, 2.2, 1.5}, {t, 2.2, 1.5}, {t, 1.5, 1.5}}}},
-                                                {"right", {{{0, 1.5, 2.5}, {t, 1.5, 2.5}, {t, 2.2, 2.5}, {0, 2.2, 2.5}}}},
-                                            });
+  const Scene scene =
+      quad_scene("picture", box_room(1, 4, 4, {"floor", "ceiling", "back", "front_wall", "wall", "end"},
+                                     {
+                                         {"front", {{{t, 1.5, 1.5}, {t, 2.2, 1.5}, {t, 2.2, 2.5}, {t, 1.5, 2.5}}}},
+                                         {"top", {{{0, 2.2, 1.5}, {0, 2.2, 2.5}, {t, 2.2, 2.5}, {t, 2.2, 1.5}}}},
+                                         {"bottom", {{{0, 1.5, 1.5}, {t, 1.5, 1.5}, {t, 1.5, 2.5}, {0, 1.5, 2.5}}}},
+                                         {"left", {{{0, 1.5, 1.5}, {0, 2.2, 1.5}, {t, 2.2, 1.5}, {t, 1.5, 1.5}}}},
+                                         {"right", {{{0, 1.5, 2.5}, {t, 1.5, 2.5}, {t, 2.2, 2.5}, {0, 2.2, 2.5}}}},
+                                     }));
   PixmapOptions o;
   o.texel_size = 4.0 / 47.0;
   o.hemicube_res = 32;
