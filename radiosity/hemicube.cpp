@@ -148,8 +148,9 @@ void Hemicube::render_face(int f, const std::vector<HemicubeTriangle>& triangles
                  dF = glm::dot(n, F.forward) / plane;
     double sx[10], sy[10];
     for (int i = 0; i < k; ++i) {
-      sx[i] = b[i].x / b[i].z;
-      sy[i] = b[i].y / b[i].z;
+      const double w = 1.0 / b[i].z;
+      sx[i] = b[i].x * w;
+      sy[i] = b[i].y * w;
     }
     // The clipped polygon is convex: a fan.
     for (int i = 1; i + 1 < k; ++i) {

@@ -1093,9 +1093,6 @@ Row PixmapSolver::Impl::compute_row(int s, Hemicube& cube, long long& spread_pix
           for (auto it = range.first; it != range.second; ++it) near_feet.push_back(it->second);
         }
       if (near_feet.empty()) return false;
-      auto side = [](double as, double at, double bs, double bt, double ps, double pt) {
-        return (bs - as) * (pt - at) - (bt - at) * (ps - as);
-      };
       const int ci = std::clamp(static_cast<int>(std::floor(sc)), i0, i1),
                 cj = std::clamp(static_cast<int>(std::floor(tc)), j0, j1);
       kept_w.assign(ws.size() * wt.size(), 0.0);
@@ -1105,14 +1102,13 @@ Row PixmapSolver::Impl::compute_row(int s, Hemicube& cube, long long& spread_pix
           const double w = ws[i - i0] * wt[j - j0];
           if (!(w > 0.0)) continue;
           // The centre of the texel's part of the footprint.
-          const double qs = 0.5 * (std::max(s0, static_cast<double>(i)) + std::min(s1, i + 1.0));
-          const double qt = 0.5 * (std::max(t0, static_cast<double>(j)) + std::min(t1, j + 1.0));
+          const St q{0.5 * (std::max(s0, static_cast<double>(i)) + std::min(s1, i + 1.0)),
+                     0.5 * (std::max(t0, static_cast<double>(j)) + std::min(t1, j + 1.0))};
           bool beyond = false;
           if (i != ci || j != cj)
             for (const int n : near_feet) {
               const Pixmap::Foot& e = pm.feet[static_cast<size_t>(n)];
-              if (side(sc, tc, qs, qt, e.s0, e.t0) * side(sc, tc, qs, qt, e.s1, e.t1) < 0.0 &&
-                  side(e.s0, e.t0, e.s1, e.t1, sc, tc) * side(e.s0, e.t0, e.s1, e.t1, qs, qt) < 0.0) {
+              if (segments_cross({sc, tc}, q, {e.s0, e.t0}, {e.s1, e.t1})) {
                 beyond = true;
                 break;
               }
