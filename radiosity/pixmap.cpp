@@ -617,29 +617,16 @@ PixmapLayout layout_of(const Scene& scene, const Mesh& coarse, const PixmapOptio
     // the other side's power.
     std::vector<std::pair<St, St>> lines;
     for (const auto& [a, c] : contact_world[k]) lines.push_back({st_of(pm, a), st_of(pm, c)});
-    // Per texel: the lines that may pass through it, found by walking each
-    // line in steps at most a texel long (each step's box), so that the cost
-    // is the lines' length in texels.
+    // Per texel: the lines that touch it (the cost is the lines' length in
+    // texels).
     std::vector<std::vector<int>> near_lines;
     if (!lines.empty()) {
       near_lines.resize(static_cast<size_t>(pm.texels()));
-      for (size_t e = 0; e < lines.size(); ++e) {
-        const auto& [a, c] = lines[e];
-        const int steps = 1 + static_cast<int>(std::ceil(std::max(std::abs(c.s - a.s), std::abs(c.t - a.t))));
-        for (int q = 0; q < steps; ++q) {
-          const St u = {a.s + (c.s - a.s) * q / steps, a.t + (c.t - a.t) * q / steps};
-          const St w = {a.s + (c.s - a.s) * (q + 1) / steps, a.t + (c.t - a.t) * (q + 1) / steps};
-          const int i0 = std::clamp(static_cast<int>(std::floor(std::min(u.s, w.s))), 0, pm.width - 1);
-          const int i1 = std::clamp(static_cast<int>(std::floor(std::max(u.s, w.s))), 0, pm.width - 1);
-          const int j0 = std::clamp(static_cast<int>(std::floor(std::min(u.t, w.t))), 0, pm.height - 1);
-          const int j1 = std::clamp(static_cast<int>(std::floor(std::max(u.t, w.t))), 0, pm.height - 1);
-          for (int j = j0; j <= j1; ++j)
-            for (int i = i0; i <= i1; ++i) {
-              auto& list = near_lines[static_cast<size_t>(j) * pm.width + i];
-              if (list.empty() || list.back() != static_cast<int>(e)) list.push_back(static_cast<int>(e));
-            }
-        }
-      }
+      for (size_t e = 0; e < lines.size(); ++e)
+        for_each_texel_on(pm, lines[e].first, lines[e].second, [&](int texel) {
+          auto& list = near_lines[static_cast<size_t>(texel)];
+          if (list.empty() || list.back() != static_cast<int>(e)) list.push_back(static_cast<int>(e));
+        });
     }
     // Whether the segment between the centroids of texels x and y of a
     // block crosses one of the block's contact lines (those near any of its
