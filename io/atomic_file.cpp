@@ -7,6 +7,19 @@
 
 namespace radmesh {
 
+namespace {
+
+void rename_into_place(const std::string& tmp, const std::string& path) {
+  std::error_code ec;
+  std::filesystem::rename(tmp, path, ec);
+  if (ec) {
+    std::filesystem::remove(tmp, ec);
+    throw IoError(path + ": cannot rename the finished file into place");
+  }
+}
+
+}  // namespace
+
 void write_file_atomically(const std::string& path, const std::function<void(std::ostream&)>& write) {
   const std::string tmp = path + ".tmp";
   {
@@ -28,12 +41,19 @@ void write_file_atomically(const std::string& path, const std::function<void(std
       throw IoError(path + ": write failed (disk full?)");
     }
   }
-  std::error_code ec;
-  std::filesystem::rename(tmp, path, ec);
-  if (ec) {
+  rename_into_place(tmp, path);
+}
+
+void write_file_atomically_by_name(const std::string& path, const std::function<void(const std::string&)>& write) {
+  const std::string tmp = path + ".tmp";
+  try {
+    write(tmp);
+  } catch (...) {
+    std::error_code ec;
     std::filesystem::remove(tmp, ec);
-    throw IoError(path + ": cannot rename the finished file into place");
+    throw;
   }
+  rename_into_place(tmp, path);
 }
 
 }  // namespace radmesh

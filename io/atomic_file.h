@@ -13,4 +13,9 @@ namespace radmesh {
 // file is removed.
 void write_file_atomically(const std::string& path, const std::function<void(std::ostream&)>& write);
 
+// For a writer that opens files by name (VTK's XML writers): calls
+// write(temporary) with the temporary file's name, then renames it onto
+// `path`; the temporary file is removed when write throws or the rename fails.
+void write_file_atomically_by_name(const std::string& path, const std::function<void(const std::string&)>& write);
+
 }  // namespace radmesh

@@ -58,16 +58,6 @@ vtkNew<vtkFloatArray> float_cells(const char* name, const std::vector<float>& va
   return a;
 }
 
-template <class Writer>
-void write_through_memory(Writer* writer, const std::string& path) {
-  writer->WriteToOutputStringOn();
-  io_detail::run_vtk_writer(writer, path);
-  const std::string bytes = writer->GetOutputString();
-  write_file_atomically(path, [&bytes](std::ostream& out) {
-    out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-  });
-}
-
 nlohmann::json vec(const Vec3& v) { return {v.x, v.y, v.z}; }
 
 }  // namespace
@@ -113,7 +103,7 @@ std::vector<std::string> write_pixmap_state(const std::string& out_dir, const Sc
     writer->SetInputData(image);
     writer->SetDataModeToBinary();
     writer->SetCompressorTypeToZLib();
-    write_through_memory(writer.Get(), path);
+    io_detail::write_xml_atomically(writer.Get(), path);
     written.push_back(path);
     nlohmann::json patches = nlohmann::json::array();
     for (int p : pm.patches) patches.push_back({{"index", p}, {"name", scene.patches[p].name}});

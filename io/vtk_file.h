@@ -1,7 +1,7 @@
-// Private to io/: running a VTK writer into memory so that its failures surface
-// as an IoError instead of text on stderr; the bytes then go to disk through
-// write_file_atomically. Includes VTK headers: include it from io/*.cpp and bench/*.cpp only,
-// never from a public header.
+// Private to io/: running a VTK writer so that its failures surface as an
+// IoError instead of text on stderr, and its file appears whole or not at all.
+// Includes VTK headers: include it from io/*.cpp and bench/*.cpp only, never
+// from a public header.
 #pragma once
 
 #include "meshing/errors.h"
@@ -40,8 +40,8 @@ public:
   std::string message;  // all errors seen, in order; empty when none
 };
 
-// Runs `writer` (a vtkXMLWriter or vtkImageWriter already set up to write to
-// memory, its input connected) and throws IoError "<path>: <VTK's reason>" if
+// Runs `writer` (a vtkXMLWriter or vtkImageWriter, its output and its input
+// set up) and throws IoError "<path>: <VTK's reason>" if
 // VTK reports an error. `path` only names the file in the message.
 template <class Writer>
 void run_vtk_writer(Writer* writer, const std::string& path) {
@@ -62,6 +62,18 @@ void run_vtk_writer(Writer* writer, const std::string& path) {
   writer->RemoveObservers(vtkCommand::ErrorEvent);
   writer->GetExecutive()->RemoveObservers(vtkCommand::ErrorEvent);
   if (!why.empty()) throw IoError(path + ": " + why);
+}
+
+// Runs an XML `writer` (its input connected) into a temporary file renamed
+// onto `path` once whole. Not through memory: the writer's string and the
+// copy it hands out held twice the file at once (1 GB more at the peak for
+// a pixmap run's 525 MB radiosity.vtu).
+template <class Writer>
+void write_xml_atomically(Writer* writer, const std::string& path) {
+  write_file_atomically_by_name(path, [&](const std::string& tmp) {
+    writer->SetFileName(tmp.c_str());
+    run_vtk_writer(writer, path);
+  });
 }
 
 }  // namespace radmesh::io_detail

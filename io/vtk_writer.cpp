@@ -39,39 +39,36 @@ void check_count(const std::string& path, const char* what, std::size_t count,
   }
 }
 
+// VTK arrays over our own vectors instead of copies: a grid is written from
+// vectors that outlive it, and the writer only reads them (1 = VTK never
+// frees them). A pixmap run's display mesh has tens of millions of
+// triangles, and each copy of a 3-component field held 24 bytes a triangle
+// more at the peak.
+static_assert(sizeof(Rgb) == 3 * sizeof(double) && sizeof(Vec3) == 3 * sizeof(double));
+template <class Array, class T>
+vtkNew<Array> view_array(const char* name, const T* values, std::size_t count, int components) {
+  vtkNew<Array> array;
+  array->SetName(name);
+  array->SetNumberOfComponents(components);
+  array->SetArray(const_cast<T*>(values), static_cast<vtkIdType>(count) * components, 1);
+  return array;
+}
+
 // A named 3-component double array, one tuple per entry of `values`.
 vtkNew<vtkDoubleArray> rgb_array(const char* name, const std::vector<Rgb>& values) {
-  vtkNew<vtkDoubleArray> array;
-  array->SetName(name);
-  array->SetNumberOfComponents(3);
-  array->SetNumberOfTuples(static_cast<vtkIdType>(values.size()));
-  for (std::size_t i = 0; i < values.size(); ++i) {
-    const double rgb[3] = {values[i].r, values[i].g, values[i].b};
-    array->SetTypedTuple(static_cast<vtkIdType>(i), rgb);
-  }
-  return array;
+  return view_array<vtkDoubleArray>(name, reinterpret_cast<const double*>(values.data()), values.size(), 3);
 }
 
 // A named 1-component double array.
 vtkNew<vtkDoubleArray> scalar_array(const char* name, const std::vector<double>& values) {
-  vtkNew<vtkDoubleArray> array;
-  array->SetName(name);
-  array->SetNumberOfValues(static_cast<vtkIdType>(values.size()));
-  for (std::size_t i = 0; i < values.size(); ++i) {
-    array->SetValue(static_cast<vtkIdType>(i), values[i]);
-  }
-  return array;
+  return view_array<vtkDoubleArray>(name, values.data(), values.size(), 1);
 }
 
 // A grid of VTK_TRIANGLE cells over `points` (double precision).
 vtkNew<vtkUnstructuredGrid> triangle_grid(const std::string& path, const std::vector<Vec3>& points,
                                           const std::vector<std::array<int, 3>>& triangles) {
   vtkNew<vtkPoints> vtk_points;
-  vtk_points->SetDataTypeToDouble();
-  vtk_points->SetNumberOfPoints(static_cast<vtkIdType>(points.size()));
-  for (std::size_t i = 0; i < points.size(); ++i) {
-    vtk_points->SetPoint(static_cast<vtkIdType>(i), points[i].x, points[i].y, points[i].z);
-  }
+  vtk_points->SetData(view_array<vtkDoubleArray>("Points", reinterpret_cast<const double*>(points.data()), points.size(), 3));
 
   vtkNew<vtkIdTypeArray> offsets;
   vtkNew<vtkIdTypeArray> connectivity;
@@ -108,11 +105,20 @@ void add_mesh_cell_data(const std::string& path, vtkCellData* cell_data, const S
   check_count(path, "TriangleQuality::min_angle", quality.min_angle.size(), n);
   check_count(path, "TriangleQuality::aspect_ratio", quality.aspect_ratio.size(), n);
 
+  // Filled in place: no copy of a cell array is held (a pixmap run's display
+  // mesh has tens of millions of triangles).
   vtkNew<vtkIntArray> patch_id;
   patch_id->SetName("patch_id");
   patch_id->SetNumberOfValues(static_cast<vtkIdType>(n));
-  std::vector<double> area(n);
-  std::vector<Rgb> reflectance(n), emission(n);
+  vtkNew<vtkDoubleArray> area, reflectance, emission;
+  area->SetName("area");
+  area->SetNumberOfValues(static_cast<vtkIdType>(n));
+  for (vtkDoubleArray* a : {reflectance.Get(), emission.Get()}) {
+    a->SetNumberOfComponents(3);
+    a->SetNumberOfTuples(static_cast<vtkIdType>(n));
+  }
+  reflectance->SetName("reflectance");
+  emission->SetName("emission");
   for (std::size_t t = 0; t < n; ++t) {
     const int p = mesh.patch[t];
     if (p < 0 || static_cast<std::size_t>(p) >= scene.patches.size() ||
@@ -122,33 +128,31 @@ void add_mesh_cell_data(const std::string& path, vtkCellData* cell_data, const S
                     " has patch " + std::to_string(p) + " without a valid material");
     }
     const Material& material = scene.materials[scene.patches[p].material];
-    patch_id->SetValue(static_cast<vtkIdType>(t), p);
-    area[t] = mesh.area(static_cast<int>(t));
-    reflectance[t] = material.reflectance;
-    emission[t] = material.emission;
+    const auto i = static_cast<vtkIdType>(t);
+    patch_id->SetValue(i, p);
+    area->SetValue(i, mesh.area(static_cast<int>(t)));
+    const double rho[3] = {material.reflectance.r, material.reflectance.g, material.reflectance.b};
+    const double e[3] = {material.emission.r, material.emission.g, material.emission.b};
+    reflectance->SetTypedTuple(i, rho);
+    emission->SetTypedTuple(i, e);
   }
   cell_data->AddArray(patch_id);
-  cell_data->AddArray(scalar_array("area", area));
+  cell_data->AddArray(area);
   cell_data->AddArray(scalar_array("min_angle", quality.min_angle));
   cell_data->AddArray(scalar_array("aspect_ratio", quality.aspect_ratio));
-  cell_data->AddArray(rgb_array("reflectance", reflectance));
-  cell_data->AddArray(rgb_array("emission", emission));
+  cell_data->AddArray(reflectance);
+  cell_data->AddArray(emission);
 }
 
 // Binary, LZ4-compressed .vtu (on the Cornell box 0.14 s for what zlib level 1
-// wrote in 0.31 s, files 1.4x larger), built in memory and written through a
-// temporary file.
+// wrote in 0.31 s, files 1.4x larger), written to a temporary file renamed
+// into place.
 void write_grid(const std::string& path, vtkUnstructuredGrid* grid) {
   vtkNew<vtkXMLUnstructuredGridWriter> writer;
   writer->SetInputData(grid);
   writer->SetDataModeToBinary();
   writer->SetCompressorTypeToLZ4();
-  writer->WriteToOutputStringOn();
-  io_detail::run_vtk_writer(writer.Get(), path);
-  const std::string bytes = writer->GetOutputString();
-  write_file_atomically(path, [&bytes](std::ostream& out) {
-    out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-  });
+  io_detail::write_xml_atomically(writer.Get(), path);
 }
 
 // Named integer cell arrays, one value per cell (n cells).
@@ -156,10 +160,7 @@ void add_int_cell_fields(const std::string& path, vtkCellData* data,
                          const std::vector<std::pair<std::string, std::vector<int>>>& fields, std::size_t n) {
   for (const auto& [name, values] : fields) {
     check_count(path, name.c_str(), values.size(), n);
-    vtkNew<vtkIntArray> a;
-    a->SetName(name.c_str());
-    for (int v : values) a->InsertNextValue(v);
-    data->AddArray(a);
+    data->AddArray(view_array<vtkIntArray>(name.c_str(), values.data(), values.size(), 1));
   }
 }
 
