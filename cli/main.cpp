@@ -492,7 +492,7 @@ int main(int argc, char** argv) {
   run_cmd->add_option("--rays", run_p.solve.rays, "shadow rays per element pair (default 16)")
       ->check(CLI::Range(1, 4096));
   run_cmd->add_option("--max-memory", run_p.solve.max_memory_gb,
-                      "GiB the matrix method's form factors, or the whole run while the hierarchical method solves, may use (default 0 = half the memory)")
+                      "GiB the matrix method's form factors, the pixmap method's texels (with their display and files) and cached rows, or the whole run while the hierarchical method solves, may use (default 0 = half the memory)")
       ->check(CLI::Range(0.0, 1e6));
   run_cmd->add_option("--probe", run_p.probe_file,
                       "probe file: lines 'label x y z nx ny nz'; writes probes.csv")
