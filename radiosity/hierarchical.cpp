@@ -69,6 +69,8 @@ public:
     quadrature_ = opt.quadrature;
     quadrature_.max_level = std::max(quadrature_.max_level, 3);  // links of near elements: one link, many points
     grow();
+    for (int r = 0; r < out_.tree.root_count(); ++r) mean_root_area_ += tri_[static_cast<size_t>(r)].area;
+    if (out_.tree.root_count() > 0) mean_root_area_ /= out_.tree.root_count();
   }
 
   // The first linking (every pair of roots whose patches can see each
@@ -511,7 +513,7 @@ private:
   // and with l.visible left at 1 they see the same): its rays are not cast.
   // On the Cornell box 8% of the pairs the linking examined (62 k of 744 k).
   bool split_whatever_visible(int p, const Link& l) const {
-    const double rb = max3(rho_[static_cast<size_t>(p)]) * max3(B_[static_cast<size_t>(l.source)]);
+    const double rb = max3(rho_[static_cast<size_t>(p)]) * max3(B_[static_cast<size_t>(l.source)]) * pw(p);
     return rb * l.spread > hopt_.epsilon * scale_ && l.spread > 0.5 * l.f && (splittable(p) || splittable(l.source));
   }
 
@@ -519,7 +521,7 @@ private:
   // rho_p * B_q * (spread of F over p), plus the whole transport
   // rho_p B_q F V when the link is partly visible (a shadow boundary crosses it).
   double link_error(int p, const Link& l) const {
-    const double rb = max3(rho_[static_cast<size_t>(p)]) * max3(B_[static_cast<size_t>(l.source)]);
+    const double rb = max3(rho_[static_cast<size_t>(p)]) * max3(B_[static_cast<size_t>(l.source)]) * pw(p);
     const double unseen = l.partial() ? l.f * l.visible : 0.0;
     return rb * (l.spread + unseen);
   }
@@ -1384,6 +1386,12 @@ private:
   double code_radius(int code) const {
     return code >= 0 ? tri_[static_cast<size_t>(code)].radius : ct_.cluster(cluster_of(code)).radius;
   }
+  // The oracle's weight for receiver `code` (HierarchicalOptions::area_weight).
+  double pw(int code) const {
+    if (!(hopt_.area_weight > 0.0)) return 1.0;
+    const double a = code_area(code);
+    return a >= mean_root_area_ ? 1.0 : std::pow(a / mean_root_area_, hopt_.area_weight);
+  }
   double code_area(int code) const {
     return code >= 0 ? tri_[static_cast<size_t>(code)].area : ct_.cluster(cluster_of(code)).area;
   }
@@ -1795,7 +1803,7 @@ private:
   // The oracle for a link with a cluster at one end: rho_p B_q times its
   // kernel error factor, plus the whole transport when partly visible.
   double cluster_link_error(int p, const Link& l) const {
-    const double rb = code_rho(p) * code_radiosity(l.source);
+    const double rb = code_rho(p) * code_radiosity(l.source) * pw(p);
     const double unseen = l.partial() ? l.f * l.visible : 0.0;
     return rb * (l.spread + unseen);
   }
@@ -1886,7 +1894,7 @@ private:
             l.source = q;
             const double shape = cluster_shape_error(p, q);
             if (shape == 0.0) continue;
-            const double rb = code_rho(p) * code_radiosity(q);
+            const double rb = code_rho(p) * code_radiosity(q) * pw(p);
             if (shape < 0.0 || rb * shape > hopt_.epsilon * scale_ || small_code(p) || small_code(q)) {
               split[i] = 1;
               continue;
@@ -1948,6 +1956,7 @@ private:
   ProgressFn progress_;
   VisibilityEstimator visibility_;
   double min_area_ = 0.0, max_emission_ = 0.0;
+  double mean_root_area_ = 0.0;  // the oracle's area weight's reference (pw)
   double diagonal_ = 0.0;  // the scene's, once (Scene::diagonal visits every vertex)
   double limit_ = 0.0;          // memory limit, bytes
   double held_before_ = 0.0;    // the process's resident memory when the solver began, bytes
@@ -2081,9 +2090,10 @@ namespace {
 
 void check_hierarchical_options(const Scene& scene, const SolveOptions& options, const HierarchicalOptions& hopt) {
   check_solve_options(options);
-  if (!(hopt.epsilon > 0.0) || !(hopt.min_area >= 0.0) || hopt.max_rounds < 0 || !(hopt.baum_relative >= 0.0) ||
+  if (!(hopt.epsilon > 0.0) || !(hopt.area_weight >= 0.0 && hopt.area_weight <= 2.0) || !(hopt.min_area >= 0.0) || hopt.max_rounds < 0 || !(hopt.baum_relative >= 0.0) ||
       !(hopt.baum_absolute >= 0.0) || !(hopt.marginal_refinement >= 1.0))
-    throw InputError("hierarchical options out of range: epsilon " + format_number(hopt.epsilon) + ", min area " +
+    throw InputError("hierarchical options out of range: epsilon " + format_number(hopt.epsilon) + ", area weight " +
+                     format_number(hopt.area_weight) + " (0 to 2), min area " +
                      format_number(hopt.min_area) + ", rounds " + std::to_string(hopt.max_rounds) + ", baum " +
                      format_number(hopt.baum_relative) + " / " + format_number(hopt.baum_absolute) +
                      ", marginal refinement " + format_number(hopt.marginal_refinement));

@@ -51,6 +51,13 @@ struct HierarchicalOptions {
   // link's form factor), plus rho_p * B_q * F when the link is partly visible
   // (some shadow rays blocked): links across shadow boundaries go first.
   double epsilon = 1e-3;
+  // The oracle's error for a receiver smaller than the mean root (initial
+  // triangle) is weighted by (its area / the mean root's)^area_weight: 0 =
+  // off (a radiosity error, the same threshold at every size), 1 = the
+  // transported power's error below the mean root's size. Small receivers
+  // are then linked more coarsely: object means move little, single small
+  // faces more (README, "Area-weighted oracle").
+  double area_weight = 0.0;
   // Elements are not split below this area; 0 = (scene diagonal / 150)^2 / 2.
   double min_area = 0.0;
   // Refinement rounds after the first solve (each: refine links where the

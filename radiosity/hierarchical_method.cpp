@@ -86,6 +86,10 @@ Method make_hierarchical_method() {
   m.options = {
       {"epsilon", Kind::real, "", "link refinement threshold, relative to the largest reflected radiosity",
        d.epsilon, 1e-9, 1.0, {}},
+      {"area_weight", Kind::real, "",
+       "weigh the oracle's error for a receiver smaller than the mean initial triangle by (its area / that "
+       "area)^this: 0 = off, 1 = the transported power's error (fewer links on small elements)",
+       d.area_weight, 0.0, 2.0, {}},
       {"tvertex", Kind::choice, "",
        "vertex values on a neighbour's unsplit edge: free (from the finer side), anchor (the edge's interpolant, "
        "no shading jump) or split (split neighbours until no T-vertex is left, no zero-area triangles)",
@@ -126,6 +130,7 @@ Method make_hierarchical_method() {
                const SolveCallbacks& cb) {
     HierarchicalOptions ho;
     ho.epsilon = o.number("epsilon");
+    ho.area_weight = o.number("area_weight");
     ho.tvertex = parse_tvertex_mode(o.text("tvertex"));
     ho.min_area = o.number("min_area");
     ho.baum_relative = o.number("baum");

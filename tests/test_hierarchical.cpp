@@ -78,6 +78,37 @@ TEST(Hierarchical, FurnaceIsUniform) {
   EXPECT_GT(h.stats.rounds, 1);
 }
 
+TEST(Hierarchical, AreaWeightLinksSmallReceiversMoreCoarselyAndKeepsFurnaceAndBalance) {
+  // The oracle's error weighted by (receiver area / mean root area)^1 below
+  // the mean root: fewer links where receivers are small, and nothing that
+  // physics fixes may move: the furnace stays E / (1 - rho) at every leaf
+  // (rows sum to 1 whatever the links), and an open scene's power balances.
+  HierarchicalOptions weighted;
+  weighted.area_weight = 1.0;
+  {
+    const Scene s = read_obj_scene(kData + "/furnace_cube/furnace_cube.obj");
+    const Mesh m = coarse_mesh(s, 0.5);
+    HierarchicalOptions ho = weighted;
+    ho.epsilon = 0.02;
+    ho.min_area = 2e-3;
+    const HierarchicalSolution h = solve_hierarchical(s, m, {}, ho);
+    const Material& mat = s.material_of(0);
+    const double expected = mat.emission.x / (1.0 - mat.reflectance.x);
+    for (const Rgb& b : h.solution.element) EXPECT_NEAR(b.x, expected, 1e-5 * expected);
+  }
+  const Scene s = read_obj_scene(kData + "/box_on_floor/box_on_floor.obj");
+  const Mesh m = coarse_mesh(s, 1.0);
+  const HierarchicalSolution plain = solve_hierarchical(s, m, {}, {});
+  const HierarchicalSolution h = solve_hierarchical(s, m, {}, weighted);
+  std::printf("[hierarchical] area weight 1: %lld links, %d leaves; 0: %lld links, %d leaves\n", h.stats.links,
+              h.stats.leaves, plain.stats.links, plain.stats.leaves);
+  EXPECT_LT(h.stats.links, plain.stats.links);
+  EXPECT_LT(std::abs(relative_imbalance(h.solution.stats)), 1e-4);
+  HierarchicalOptions bad;
+  bad.area_weight = 3.0;
+  EXPECT_THROW(solve_hierarchical(s, m, {}, bad), InputError);
+}
+
 TEST(Hierarchical, CornellBoxAgreesWithTheMatrixSolveAndBalancesEnergy) {
   const Scene s = read_obj_scene(kData + "/cornell_box/cornell_box.obj");
   const Mesh coarse = coarse_mesh(s, 200.0);
