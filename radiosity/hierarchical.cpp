@@ -2090,8 +2090,9 @@ namespace {
 
 void check_hierarchical_options(const Scene& scene, const SolveOptions& options, const HierarchicalOptions& hopt) {
   check_solve_options(options);
-  if (!(hopt.epsilon > 0.0) || !(hopt.area_weight >= 0.0 && hopt.area_weight <= 2.0) || !(hopt.min_area >= 0.0) || hopt.max_rounds < 0 || !(hopt.baum_relative >= 0.0) ||
-      !(hopt.baum_absolute >= 0.0) || !(hopt.marginal_refinement >= 1.0))
+  if (!(hopt.epsilon > 0.0) || !(hopt.area_weight >= 0.0 && hopt.area_weight <= 2.0) || !(hopt.min_area >= 0.0) ||
+      hopt.max_rounds < 0 || !(hopt.baum_relative >= 0.0) || !(hopt.baum_absolute >= 0.0) ||
+      !(hopt.marginal_refinement >= 1.0))
     throw InputError("hierarchical options out of range: epsilon " + format_number(hopt.epsilon) + ", area weight " +
                      format_number(hopt.area_weight) + " (0 to 2), min area " +
                      format_number(hopt.min_area) + ", rounds " + std::to_string(hopt.max_rounds) + ", baum " +
