@@ -563,8 +563,6 @@ void check_stl(const std::string& path) {
   if (!ended) throw InputError(path + ": no 'endsolid' at the end (truncated file)");
 }
 
-}  // namespace
-
 // Checks an OFF header before assimp sees it: assimp 5.2 allocates the
 // arrays its vertex and face counts declare before reading the body (a
 // fuzzed face count of 46 digits asked for 7.6 GB). The counts must be whole
@@ -617,6 +615,8 @@ void check_off_header(const std::string& path) {
         format_number(2.0 * numbers - 1.0) + " bytes, the file has " + format_number(body) +
         " after the counts (truncated, or a wrong count)");
 }
+
+}  // namespace
 
 SceneSource read_assimp_source(const std::string& path, bool check_materials) {
   check_input_file(path, "a scene file");

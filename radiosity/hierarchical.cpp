@@ -513,17 +513,20 @@ private:
   // and with l.visible left at 1 they see the same): its rays are not cast.
   // On the Cornell box 8% of the pairs the linking examined (62 k of 744 k).
   bool split_whatever_visible(int p, const Link& l) const {
-    const double rb = max3(rho_[static_cast<size_t>(p)]) * max3(B_[static_cast<size_t>(l.source)]) * pw(p);
-    return rb * l.spread > hopt_.epsilon * scale_ && l.spread > 0.5 * l.f && (splittable(p) || splittable(l.source));
+    return element_weight(p, l.source) * l.spread > hopt_.epsilon * scale_ && l.spread > 0.5 * l.f && (splittable(p) || splittable(l.source));
   }
 
   // The oracle: the error of gathering over this link at this level, as
   // rho_p * B_q * (spread of F over p), plus the whole transport
   // rho_p B_q F V when the link is partly visible (a shadow boundary crosses it).
   double link_error(int p, const Link& l) const {
-    const double rb = max3(rho_[static_cast<size_t>(p)]) * max3(B_[static_cast<size_t>(l.source)]) * pw(p);
     const double unseen = l.partial() ? l.f * l.visible : 0.0;
-    return rb * (l.spread + unseen);
+    return element_weight(p, l.source) * (l.spread + unseen);
+  }
+  // What the oracle multiplies a link's form-factor error by: rho_p B_q,
+  // weighed by the receiver's area (pw).
+  double element_weight(int p, int q) const {
+    return max3(rho_[static_cast<size_t>(p)]) * max3(B_[static_cast<size_t>(q)]) * pw(p);
   }
   bool wants_refinement(int p, const Link& l) const { return link_error(p, l) > hopt_.epsilon * scale_; }
 
@@ -1803,10 +1806,11 @@ private:
   // The oracle for a link with a cluster at one end: rho_p B_q times its
   // kernel error factor, plus the whole transport when partly visible.
   double cluster_link_error(int p, const Link& l) const {
-    const double rb = code_rho(p) * code_radiosity(l.source) * pw(p);
     const double unseen = l.partial() ? l.f * l.visible : 0.0;
-    return rb * (l.spread + unseen);
+    return cluster_weight(p, l.source) * (l.spread + unseen);
   }
+  // element_weight for a link with a cluster at one end.
+  double cluster_weight(int p, int q) const { return code_rho(p) * code_radiosity(q) * pw(p); }
   bool wants_cluster_refinement(int p, const Link& l) const {
     return cluster_link_error(p, l) > hopt_.epsilon * scale_;
   }
@@ -1894,8 +1898,7 @@ private:
             l.source = q;
             const double shape = cluster_shape_error(p, q);
             if (shape == 0.0) continue;
-            const double rb = code_rho(p) * code_radiosity(q) * pw(p);
-            if (shape < 0.0 || rb * shape > hopt_.epsilon * scale_ || small_code(p) || small_code(q)) {
+            if (shape < 0.0 || cluster_weight(p, q) * shape > hopt_.epsilon * scale_ || small_code(p) || small_code(q)) {
               split[i] = 1;
               continue;
             }

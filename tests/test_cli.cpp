@@ -356,7 +356,7 @@ INSTANTIATE_TEST_SUITE_P(
                       BadRun{"run DATA/cornell_box/cornell_box.obj --max-edge 0.0001", "would make at least"},
                       BadRun{"mesh DATA/cornell_box/cornell_box.obj --max-edge 0.01", "use --max-edge"},
                       BadRun{"run DATA/cornell_box/cornell_box.obj --max-edge 1e-300", "at least 10^606 elements"},
-                      // 545 k texels: about 0.36 GB at the peak (0.6 GB before radiosity.vtu was
+                      // 545 k texels: 0.42 GB at the peak (0.62 GB before radiosity.vtu was
                       // written from views), where only their grids were counted (0.05 GB)
                       BadRun{"run DATA/cornell_box/cornell_box.obj --method pixmap --texel-size 2 --max-memory 0.25",
                              "need more than the 0.25 GiB allowed"}),
