@@ -136,6 +136,35 @@ Box3 flat_box(const CGAL::Bbox_2& b) {
   return r;
 }
 
+// Which of a list of 2-D segments (the first in order) holds an edge: both
+// its ends within `tol` of the segment.
+class SegmentsHolding {
+ public:
+  SegmentsHolding(const std::vector<std::pair<K::Segment_2, int>>& segments, double tol)
+      : segments_(segments), tol_(tol), tree_(boxes(segments)) {}
+  int first_holding(const Point2& p0, const Point2& p1) const {
+    int first = -1;
+    tree_.overlapping(flat_box(p0.bbox() + p1.bbox()), tol_, [&](int i) {
+      const K::Segment_2& s = segments_[static_cast<size_t>(i)].first;
+      if ((first < 0 || i < first) && CGAL::squared_distance(p0, s) <= tol_ * tol_ &&
+          CGAL::squared_distance(p1, s) <= tol_ * tol_)
+        first = i;
+      return true;
+    });
+    return first;
+  }
+
+ private:
+  static std::vector<Box3> boxes(const std::vector<std::pair<K::Segment_2, int>>& segments) {
+    std::vector<Box3> b(segments.size());
+    for (size_t i = 0; i < segments.size(); ++i) b[i] = flat_box(segments[i].first.bbox());
+    return b;
+  }
+  const std::vector<std::pair<K::Segment_2, int>>& segments_;
+  double tol_;
+  BoxTree tree_;
+};
+
 // Marks the faces inside the patch: odd nesting depth, counting only the
 // constrained edges for which `on_boundary` holds (interior constraints,
 // the discontinuity lines, do not change what is inside).
@@ -176,6 +205,7 @@ public:
       : scene_(scene), opt_(opt), refine_(refine) {
     positions_ = scene.vertices;
     eps_ = 1e-9 * std::max(scene.diagonal(), std::numeric_limits<double>::min());
+    near_ = 100.0 * eps_;
     collect_segments();
     if (refine_) {
       find_overlaps();
@@ -398,7 +428,12 @@ private:
     // else the first constraint point made so far within eps_, else a new
     // one: scene vertices found through a box tree, the points made in
     // cells of 4 eps_ (a scan over both for every point took 70% of the
-    // meshing of a field of 128 x 128 boxes, 65,536 contact lines).
+    // meshing of a field of 128 x 128 boxes, 65,536 contact lines). A line's
+    // end within near_ of a corner of its own patch is that corner: an
+    // overhang clipped to a tilted face's corner ended 1e-7 of the diagonal
+    // from it, and CGAL's mesher crashed refining towards it. (Not any
+    // point within near_: an end moved onto another patch's boundary point
+    // lies off its own patch's boundary, which crashed the mesher too.)
     std::vector<Box3> vertex_boxes(scene_.vertices.size());
     for (size_t v = 0; v < vertex_boxes.size(); ++v) vertex_boxes[v].add(positions_[v]);
     const BoxTree vertex_tree(vertex_boxes);
@@ -413,6 +448,22 @@ private:
       return std::array<long long, 3>{index(p.x - origin.x), index(p.y - origin.y), index(p.z - origin.z)};
     };
     std::map<std::array<long long, 3>, std::vector<int>> extra;  // constraint points made so far, by cell
+    // The nearest of `own` (sorted scene vertex ids) within near_ of p, or -1.
+    auto own_corner = [&](const Vec3& p, const std::vector<int>& own) {
+      Box3 at;
+      at.add(p);
+      int best = -1;
+      double best_d = near_;
+      vertex_tree.overlapping(at, near_, [&](int v) {
+        const double d = glm::length(positions_[static_cast<size_t>(v)] - p);
+        if (std::binary_search(own.begin(), own.end(), v) && (d < best_d || (d == best_d && v < best))) {
+          best = v;
+          best_d = d;
+        }
+        return true;
+      });
+      return best;
+    };
     auto id_of = [&](const Vec3& p) {
       Box3 at;
       at.add(p);
@@ -443,7 +494,15 @@ private:
     for (size_t s = 0; s < segments_.size(); ++s) segments_of[static_cast<size_t>(segments_[s].patch)].push_back(s);
     for (size_t p = 0; p < by_patch.size(); ++p) {
       if (by_patch[p].empty()) continue;
-      const Frame frame = make_frame(scene_, scene_.patches[p]);
+      const Patch& patch = scene_.patches[p];
+      const Frame frame = make_frame(scene_, patch);
+      std::vector<int> own = patch.outer;
+      for (const auto& hole : patch.holes) own.insert(own.end(), hole.begin(), hole.end());
+      std::sort(own.begin(), own.end());
+      auto end_id = [&](const Vec3& q) {
+        const int corner = own_corner(q, own);
+        return corner >= 0 ? corner : id_of(q);
+      };
       // Exact crossings of the patch's lines, as parameters along each line.
       std::vector<std::vector<std::pair<double, Vec3>>> cuts(by_patch[p].size());
       std::vector<EK::Segment_2> seg2;
@@ -484,10 +543,10 @@ private:
         // Crossings lie strictly inside (more than eps from either end), so
         // the sorted cuts start at d.a and end at d.b.
         std::sort(c.begin(), c.end(), [](auto& x, auto& y) { return x.first < y.first; });
-        const int first = id_of(c[0].second);
+        const int first = end_id(c[0].second);
         int prev = first;
         for (size_t i = 1; i < c.size(); ++i) {
-          const int cur = id_of(c[i].second);
+          const int cur = i + 1 < c.size() ? id_of(c[i].second) : end_id(c[i].second);
           if (cur != prev) constraints_[p].push_back({prev, cur, d.kind});
           prev = cur;
         }
@@ -610,12 +669,10 @@ private:
         prev = cur;
       }
     }
-    struct Line2 {
-      K::Segment_2 seg;
-      CGAL::Bbox_2 box;
-      int kind;
-    };
-    std::vector<Line2> lines2;
+    // The line pieces as inserted, each with its line's kind: a line chained
+    // through a point that lies near it (within near_) bends there, and the
+    // edges the mesher makes on it lie on its pieces, not on the line.
+    std::vector<std::pair<K::Segment_2, int>> lines2;
     // The last round (no refinement) keeps the patch's interior points from
     // its last refined mesh; those the mesher put on a line are chained into
     // it, so the line is not crossed by a sliver.
@@ -634,7 +691,6 @@ private:
       (void)kind;
       for (const int g : {a, b}) ends.push_back({frame.to2(positions_[static_cast<size_t>(g)]), g});
     }
-    const double on_tol = 100.0 * eps_;
     // The candidates (kept points on a line, then the ends) in a box tree:
     // a scan over all of them for every line was quadratic on a floor with
     // thousands of contact lines.
@@ -650,14 +706,14 @@ private:
       CDT::Vertex_handle va = insert_vertex(a), vb = insert_vertex(b);
       const K::Segment_2 seg(va->point(), vb->point());
       const CGAL::Bbox_2 sb = seg.bbox();
-      const CGAL::Bbox_2 near(sb.xmin() - on_tol, sb.ymin() - on_tol, sb.xmax() + on_tol, sb.ymax() + on_tol);
+      const CGAL::Bbox_2 near(sb.xmin() - near_, sb.ymin() - near_, sb.xmax() + near_, sb.ymax() + near_);
       std::vector<std::pair<double, int>> chain;
       auto chain_if_on = [&](const Point2& q, int g) {
-        if (g == a || g == b || !CGAL::do_overlap(q.bbox(), near) || CGAL::squared_distance(q, seg) > on_tol * on_tol)
+        if (g == a || g == b || !CGAL::do_overlap(q.bbox(), near) || CGAL::squared_distance(q, seg) > near_ * near_)
           return;
         const double da = std::sqrt(CGAL::squared_distance(q, va->point()));
         const double db = std::sqrt(CGAL::squared_distance(q, vb->point()));
-        if (da > on_tol && db > on_tol) chain.push_back({da, g});  // inside the line, not at an end
+        if (da > near_ && db > near_) chain.push_back({da, g});  // inside the line, not at an end
       };
       candidate_tree.overlapping(flat_box(near), 0.0, [&](int i) {
         chain_if_on(candidates[static_cast<size_t>(i)].first, candidates[static_cast<size_t>(i)].second);
@@ -668,13 +724,14 @@ private:
                               [](const auto& x, const auto& y) { return x.second == y.second; }),
                   chain.end());
       CDT::Vertex_handle prev = va;
-      for (const auto& [d, g] : chain) {
-        CDT::Vertex_handle cur = insert_vertex(g);
-        if (cur != prev) cdt.insert_constraint(prev, cur);
+      auto piece = [&](CDT::Vertex_handle cur) {
+        if (cur == prev) return;
+        cdt.insert_constraint(prev, cur);
+        lines2.push_back({K::Segment_2(prev->point(), cur->point()), constraint[2]});
         prev = cur;
-      }
-      if (prev != vb) cdt.insert_constraint(prev, vb);
-      lines2.push_back({seg, seg.bbox(), constraint[2]});
+      };
+      for (const auto& chained : chain) piece(insert_vertex(chained.second));
+      piece(vb);
     }
     if (!refine)
       for (const Steiner& st : steiner_[p])
@@ -692,32 +749,31 @@ private:
         << "': the triangulation with its discontinuity lines is not valid after rounding";
       throw GeometryError(m.str());
     }
-    // The kind of discontinuity line an edge lies on (both ends on one line;
-    // points the mesher adds on a line lie on it too), or -1 for none.
-    const double tol2 = eps_ * eps_;
-    std::vector<Box3> line_boxes(lines2.size());
-    for (size_t i = 0; i < lines2.size(); ++i) line_boxes[i] = flat_box(lines2[i].box);
-    const BoxTree line_tree(line_boxes);
+    // The kind of discontinuity line an edge lies on (both ends on one
+    // piece; points the mesher adds on a piece lie on it too), or -1 for none.
+    const SegmentsHolding line_pieces(lines2, eps_);
     auto line_kind = [&](const Point2& p0, const Point2& p1) {
-      const CGAL::Bbox_2 eb = p0.bbox() + p1.bbox();
-      int first = -1;  // the first line in order that holds the edge
-      line_tree.overlapping(flat_box(eb), eps_, [&](int i) {
-        const Line2& l = lines2[static_cast<size_t>(i)];
-        if ((first < 0 || i < first) && CGAL::squared_distance(p0, l.seg) <= tol2 &&
-            CGAL::squared_distance(p1, l.seg) <= tol2)
-          first = i;
-        return true;
-      });
-      return first < 0 ? -1 : lines2[static_cast<size_t>(first)].kind;
+      const int i = line_pieces.first_holding(p0, p1);
+      return i < 0 ? -1 : lines2[static_cast<size_t>(i)].second;
     };
     auto edge_points = [](const CDT::Edge& e) {
       return std::pair<Point2, Point2>(e.first->vertex(CDT::cw(e.second))->point(),
                                        e.first->vertex(CDT::ccw(e.second))->point());
     };
-    // A constrained edge is on the patch boundary unless it lies on a line.
+    // A constrained edge is on the patch boundary when it lies on one of the
+    // outline's (or a hole's) segments, whether or not a line runs along it
+    // too. (Asking "not on a line" instead lost the sliver between a line
+    // chained through a boundary point near it and that boundary: the
+    // chained piece off the boundary counted as boundary, found by fuzzing.)
+    std::vector<std::pair<K::Segment_2, int>> outline2;
+    for (size_t s : my_segments)
+      outline2.push_back({K::Segment_2(frame.to2(positions_[static_cast<size_t>(segments_[s].a)]),
+                                       frame.to2(positions_[static_cast<size_t>(segments_[s].b)])),
+                          0});
+    const SegmentsHolding outline(outline2, eps_);
     auto on_boundary = [&](const CDT::Edge& e) {
       const auto [p0, p1] = edge_points(e);
-      return line_kind(p0, p1) < 0;
+      return outline.first_holding(p0, p1) >= 0;
     };
     mark_domain(cdt, on_boundary);
 
@@ -830,7 +886,7 @@ private:
         }
       }
       const int g = static_cast<int>(positions_.size());
-      if (best >= 0 && best_d <= 100.0 * eps_ && is_on_constraint(cdt, v)) {
+      if (best >= 0 && best_d <= near_ && is_on_constraint(cdt, v)) {
         const Vec3 A = positions_[static_cast<size_t>(segments_[static_cast<size_t>(best)].a)];
         const Vec3 B = positions_[static_cast<size_t>(segments_[static_cast<size_t>(best)].b)];
         positions_.push_back(A + best_t * (B - A));
@@ -976,6 +1032,9 @@ private:
   MeshingOptions opt_;
   bool refine_ = true;
   double eps_ = 0.0;
+  // Closer than this, a line end is the point there, and a point is on a
+  // line: the mesher would otherwise split towards it without end.
+  double near_ = 0.0;
   std::set<int> dense_;  // patches refinement made too dense (kDense): unrefined in later rounds
   std::vector<Vec3> positions_;
   std::vector<Segment> segments_;

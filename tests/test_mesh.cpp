@@ -4,6 +4,7 @@
 #include "meshing/errors.h"
 #include "meshing/mesh.h"
 
+#include "tests/edited_obj.h"
 #include "tests/test_util.h"
 
 #include <gtest/gtest.h>
@@ -294,6 +295,51 @@ TEST(Mesh, AVertexNextToAThinHolesEdgeDoesNotCrashTheMesher) {
   const std::vector<double> area = test::patch_areas(s, m);
   EXPECT_NEAR(area[0] + area[1], 4.0, 1e-12);
   EXPECT_NEAR(area[2], 0.1, 1e-12);
+}
+
+TEST(Mesh, ALineChainedThroughABoundaryPointKeepsTheSliverBetweenThem) {
+  // A 1 x 1 panel standing on a lit floor, one foot 1e-10 from the
+  // floor's edge and the rest 1e-5 off it: a quad out of plane by 1e-5,
+  // split along its diagonal. One half's shadow line on the other runs
+  // from the foot to 7e-6 below the far corner, and passes within 1e-7 of
+  // a point on the diagonal, so it is chained through that point. The
+  // sliver between the chained line and the diagonal counted as outside
+  // (the line's piece off the diagonal was taken for a boundary): the
+  // half came out 3e-6 short of its 0.5 (found by fuzzing).
+  std::vector<RawFace> faces(2);
+  faces[0].name = "floor";
+  faces[0].points = {{0, 0, 0}, {0, 0, 4}, {4, 0, 4}, {4, 0, 0}};
+  faces[1].name = "panel";
+  faces[1].points = {{1e-10, 0, 1.5}, {1e-5, 1, 1.5}, {1e-5, 1, 2.5}, {1e-5, 0, 2.5}};
+  for (RawFace& f : faces) f.material = 0;
+  const Scene s = build_scene(faces, {test::material("lamp", Rgb(0.5), Rgb(1.0))}, "panel");
+  ASSERT_EQ(s.patches.size(), 3u);  // the floor and the panel's two halves
+  MeshReport report;
+  const Mesh m = mesh_scene(s, {}, &report);
+  ASSERT_GT(report.shadow_segments, 0);
+  const std::vector<double> area = test::patch_areas(s, m);
+  for (size_t p = 0; p < s.patches.size(); ++p)
+    EXPECT_NEAR(area[p] / s.patch_area(static_cast<int>(p)), 1.0, 1e-9) << p;  // the foot joins the floor's edge
+}
+
+TEST(Mesh, ALineEndingNextToAVertexDoesNotCrashTheMesher) {
+  // The Cornell box with the light's corner (213, 548.8, 332) raised by
+  // 0.1: the ceiling beside it tilts, and the flat ceiling behind it,
+  // within the overhang gap of that tilted face, is clipped to a 2e-4
+  // long line across its corner, ending 1e-4 (1e-7 of the diagonal) from
+  // the corner. CGAL's mesher dereferenced a null face refining it (a
+  // segmentation fault, found by fuzzing); the end is now the corner.
+  const std::string obj = test_files::write_edited_obj(
+      kData + "/cornell_box/cornell_box", std::filesystem::path(testing::TempDir()) / "cornell_light_corner_up",
+      [](const std::string& line, int) { return line == "v 213 548.8 332" ? std::string("v 213 548.9 332") : line; });
+  const Scene s = read_obj_scene(obj);
+  MeshingOptions o;
+  o.max_elements = 2e4;
+  MeshReport report;
+  const Mesh m = mesh_scene(s, resolve_meshing_options(s, o), &report);
+  const std::vector<double> area = test::patch_areas(s, m);
+  for (size_t p = 0; p < s.patches.size(); ++p)
+    EXPECT_NEAR(area[p] / s.patch_area(static_cast<int>(p)), 1.0, 1e-9) << s.patches[p].name;
 }
 
 TEST(Mesh, SameInputSameMesh) {
