@@ -99,16 +99,27 @@ inline void check_mesh(const Scene& scene, const Mesh& mesh) {
     if (p < 0 || p >= static_cast<int>(scene.patches.size())) defect("mesh patch index out of range");
     area[static_cast<size_t>(p)] += mesh.area(t);
   }
-  // Up to rounding, and up to points within the weld tolerance moved onto
-  // the patch's edges (the vertex of a face standing 1e-10 from a thin
-  // strip's edge joins that edge): the tolerance times the perimeter.
-  const double weld = SceneOptions{}.weld_tolerance * scene.diagonal();
+  // Up to rounding, and up to the perimeter times how far a boundary point
+  // may lie off where the patch's area puts it: points within the weld
+  // tolerance moved onto the patch's edges (the vertex of a face standing
+  // 1e-10 from a thin strip's edge joins that edge), and a planar face's
+  // vertices up to the planarity tolerance x its diameter off its plane
+  // (a point it shares with a face at an angle lands that far inside or
+  // outside its outline: 1.6e-6 of a unit face 5e-6 out of plane).
+  const SceneOptions tolerances;
+  const double weld = tolerances.weld_tolerance * scene.diagonal();
   for (size_t p = 0; p < area.size(); ++p) {
     const double want = scene.patch_area(static_cast<int>(p));
     const Patch& patch = scene.patches[p];
     double perimeter = loop_length(scene.loop_points(patch.outer));
     for (const auto& h : patch.holes) perimeter += loop_length(scene.loop_points(h));
-    if (std::abs(area[p] - want) > 1e-6 * want + weld * perimeter)
+    Vec3 lo(INFINITY), hi(-INFINITY);
+    for (const Vec3& q : scene.loop_points(patch.outer)) {
+      lo = glm::min(lo, q);
+      hi = glm::max(hi, q);
+    }
+    const double off_plane = tolerances.planarity_tolerance * glm::length(hi - lo);
+    if (std::abs(area[p] - want) > 1e-6 * want + (weld + off_plane) * perimeter)
       defect("patch " + std::to_string(p) + ": mesh area " + std::to_string(area[p]) + " != patch area " +
              std::to_string(want));
   }

@@ -499,6 +499,17 @@ private:
       std::vector<int> own = patch.outer;
       for (const auto& hole : patch.holes) own.insert(own.end(), hole.begin(), hole.end());
       std::sort(own.begin(), own.end());
+      // A piece lying on one of the patch's boundary segments (a line whose
+      // end moved onto a corner, along the edge it started on) is that edge
+      // already: inserted again over it, CGAL's mesher crashed.
+      auto along_boundary = [&](int a, int b) {
+        double t;
+        for (size_t s : segments_of[p])
+          if (on_line(s, positions_[static_cast<size_t>(a)], &t) && t >= -1e-9 && t <= 1.0 + 1e-9 &&
+              on_line(s, positions_[static_cast<size_t>(b)], &t) && t >= -1e-9 && t <= 1.0 + 1e-9)
+            return true;
+        return false;
+      };
       auto end_id = [&](const Vec3& q) {
         const int corner = own_corner(q, own);
         return corner >= 0 ? corner : id_of(q);
@@ -547,7 +558,7 @@ private:
         int prev = first;
         for (size_t i = 1; i < c.size(); ++i) {
           const int cur = i + 1 < c.size() ? id_of(c[i].second) : end_id(c[i].second);
-          if (cur != prev) constraints_[p].push_back({prev, cur, d.kind});
+          if (cur != prev && !along_boundary(prev, cur)) constraints_[p].push_back({prev, cur, d.kind});
           prev = cur;
         }
         for (int g : {first, prev})
