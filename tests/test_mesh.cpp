@@ -301,11 +301,12 @@ TEST(Mesh, ALineChainedThroughABoundaryPointKeepsTheSliverBetweenThem) {
   // A 1 x 1 panel standing on a lit floor, one foot 1e-10 from the
   // floor's edge and the rest 1e-5 off it: a quad out of plane by 1e-5,
   // split along its diagonal. One half's shadow line on the other runs
-  // from the foot to 7e-6 below the far corner, and passes within 1e-7 of
-  // a point on the diagonal, so it is chained through that point. The
-  // sliver between the chained line and the diagonal counted as outside
-  // (the line's piece off the diagonal was taken for a boundary): the
-  // half came out 3e-6 short of its 0.5 (found by fuzzing).
+  // from the foot to 7e-6 below the far corner, and passes 5.5e-7 (1e-7 of
+  // the scene's diagonal) from a point on the diagonal, so it is chained
+  // through that point. The sliver between the chained line and the
+  // diagonal counted as outside (the line's piece off the diagonal was
+  // taken for a boundary): the half came out 3e-6 short of its 0.5 (found
+  // by fuzzing).
   std::vector<RawFace> faces(2);
   faces[0].name = "floor";
   faces[0].points = {{0, 0, 0}, {0, 0, 4}, {4, 0, 4}, {4, 0, 0}};
