@@ -204,7 +204,8 @@ public:
   SceneMesher(const Scene& scene, const MeshingOptions& opt, bool refine)
       : scene_(scene), opt_(opt), refine_(refine) {
     positions_ = scene.vertices;
-    eps_ = 1e-9 * std::max(scene.diagonal(), std::numeric_limits<double>::min());
+    diagonal_ = std::max(scene.diagonal(), std::numeric_limits<double>::min());
+    eps_ = 1e-9 * diagonal_;
     near_ = 100.0 * eps_;
     collect_segments();
     if (refine_) {
@@ -800,14 +801,32 @@ private:
     const double width = 2.0 * patch_area / perimeter;
     const double floor = opt_.min_separation_fraction * opt_.max_edge;
     const bool sliver = width < floor && perimeter > 200.0 * width;
-    const std::string gap = refine && !sliver ? narrow(cdt, patch, frame, floor) : "";
+    // A line piece shorter than 1e-6 of the scene's size (a tilted panel's
+    // overhang clipped to a floor's edge in two pieces 2e-6 long): CGAL's
+    // mesher crashed refining around it (inexact constructions at that
+    // scale), and no light varies over it.
+    std::string gap;
+    if (refine && !sliver) {
+      for (const auto& [piece, kind] : lines2)
+        if (piece.squared_length() < kTinyPiece * kTinyPiece * diagonal_ * diagonal_) {
+          gap = "a piece of a discontinuity line on it is " + format_number(std::sqrt(piece.squared_length())) +
+                " long, under " + format_number(kTinyPiece) + " of the scene's size, and refining around it is not "
+                "reliable";
+          break;
+        }
+      if (gap.empty()) {
+        gap = narrow(cdt, patch, frame, floor);
+        if (!gap.empty())
+          gap += ", so refining it to --max-edge " + format_number(opt_.max_edge) +
+                 " would cut that edge about as finely along its length";
+      }
+    }
     if (refine && (sliver || !gap.empty() || dense_.count(p) > 0)) {
       refine = false;
       if (thin_.insert(p).second && !gap.empty())
         warnings_.push_back(where(patch.file, patch.line) + "face '" + patch.name + "': " + gap +
-                            ", so refining it to --max-edge " + format_number(opt_.max_edge) +
-                            " would cut that edge about as finely along its length: left as the triangulation of its "
-                            "outline and lines (the hierarchical method still splits it where its links ask)");
+                            ": left as the triangulation of its outline and lines (the hierarchical method still "
+                            "splits it where its links ask)");
     }
     // The triangulation before refinement, kept while a dense patch may
     // fall back to it (below).
@@ -964,6 +983,7 @@ private:
   // mesher. At 1e-3 from the wall the floor is refined as before (10^3
   // points along the box).
   static constexpr double kNarrowPoints = 1e4;
+  static constexpr double kTinyPiece = 1e-6;  // of the scene's diagonal (see mesh_patch)
   // A patch whose refinement makes more than kDense x the points its size
   // and edges ask for, + kDenseMin, is left as the triangulation of its
   // outline and lines (unless MeshingOptions::refine_narrow_strips): CGAL's
@@ -1042,6 +1062,7 @@ private:
   const Scene& scene_;
   MeshingOptions opt_;
   bool refine_ = true;
+  double diagonal_ = 0.0;  // the scene's
   double eps_ = 0.0;
   // Closer than this, a line end is the point there, and a point is on a
   // line: the mesher would otherwise split towards it without end.

@@ -343,6 +343,38 @@ TEST(Mesh, ALineEndingNextToAVertexDoesNotCrashTheMesher) {
     EXPECT_NEAR(area[p] / s.patch_area(static_cast<int>(p)), 1.0, 1e-9) << s.patches[p].name;
 }
 
+TEST(Mesh, ATinyLinePieceLeavesItsFaceUnrefinedInsteadOfCrashingTheMesher) {
+  // A floor quad bent 1 mm up at one corner (split in two triangles), a
+  // rug 1 mm up sharing that corner, and a panel 2 mm up tilted by 1e-4
+  // over both: the panel's overhang on one floor triangle is clipped by
+  // that triangle's diagonal into two pieces 2e-6 long (4e-7 of the
+  // scene's size). CGAL's mesher dereferenced a null face refining around
+  // them (a segmentation fault, found by fuzzing); the face is now left as
+  // the triangulation of its outline and lines, with a warning.
+  std::vector<RawFace> faces(4);
+  faces[0].name = "floor";
+  faces[0].points = {{0, 0, 0}, {1, 0.001, 3}, {4, 0, 4}, {4, 0, 0}};
+  faces[1].name = "rug";
+  faces[1].points = {{1, 0.001, 1}, {1, 0.001, 3}, {3, 0.001, 3}, {3, 0.001, 1}};
+  faces[2].name = "tilted";
+  faces[2].points = {{1.5, 0.002, 1.5}, {1.5, 0.002, 2.5}, {2.5, 0.0021, 2.5}, {2.5, 0.0021, 1.5}};
+  faces[3].name = "slab_side";
+  faces[3].points = {{0.2, 0, 0.2}, {0.8, 0, 0.2}, {0.8, 0.001, 0.2}, {0.2, 0.001, 0.2}};
+  for (RawFace& f : faces) f.material = 0;
+  const Scene s = build_scene(faces, {test::material("lamp", Rgb(0.5), Rgb(1.0))}, "tiny_piece");
+  ASSERT_EQ(s.patches.size(), 5u);  // the floor in two triangles
+  MeshingOptions o;
+  o.max_elements = 2e4;
+  MeshReport report;
+  const Mesh m = mesh_scene(s, resolve_meshing_options(s, o), &report);
+  EXPECT_TRUE(std::any_of(report.warnings.begin(), report.warnings.end(), [](const std::string& w) {
+    return test::contains(w, "a piece of a discontinuity line on it is ");
+  }));
+  const std::vector<double> area = test::patch_areas(s, m);
+  for (size_t p = 0; p < s.patches.size(); ++p)
+    EXPECT_NEAR(area[p] / s.patch_area(static_cast<int>(p)), 1.0, 1e-9) << s.patches[p].name;
+}
+
 TEST(Mesh, SameInputSameMesh) {
   const Scene s = read_obj_scene(kData + "/cornell_box/cornell_box.obj");
   const Mesh a = mesh_scene(s, {});
