@@ -864,7 +864,8 @@ private:
         if (points > budget) {
           std::ostringstream m;
           m << where(patch.file, patch.line) << "face '" << patch.name << "': refining its mesh to --max-edge "
-            << format_number(h) << " takes more than " << format_number(std::floor(budget)) << " points"
+            << format_number(h) << " takes more than " << format_number(std::max(0.0, std::floor(budget)))
+            << " points"
             << (budget < point_budget_ ? " (1000 x the " + format_number(std::ceil(asked)) +
                                              " its size and edges ask for, + 100000)"
                                        : " (what the other faces leave of " + format_number(opt_.max_elements) +
