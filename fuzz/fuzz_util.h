@@ -111,10 +111,11 @@ inline void check_mesh(const Scene& scene, const Mesh& mesh) {
   for (size_t p = 0; p < area.size(); ++p) {
     const double want = scene.patch_area(static_cast<int>(p));
     const Patch& patch = scene.patches[p];
-    double perimeter = loop_length(scene.loop_points(patch.outer));
+    const std::vector<Vec3> outer = scene.loop_points(patch.outer);
+    double perimeter = loop_length(outer);
     for (const auto& h : patch.holes) perimeter += loop_length(scene.loop_points(h));
     Vec3 lo(INFINITY), hi(-INFINITY);
-    for (const Vec3& q : scene.loop_points(patch.outer)) {
+    for (const Vec3& q : outer) {
       lo = glm::min(lo, q);
       hi = glm::max(hi, q);
     }

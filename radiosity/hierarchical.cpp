@@ -513,7 +513,8 @@ private:
   // and with l.visible left at 1 they see the same): its rays are not cast.
   // On the Cornell box 8% of the pairs the linking examined (62 k of 744 k).
   bool split_whatever_visible(int p, const Link& l) const {
-    return element_weight(p, l.source) * l.spread > hopt_.epsilon * scale_ && l.spread > 0.5 * l.f && (splittable(p) || splittable(l.source));
+    return element_weight(p, l.source) * l.spread > hopt_.epsilon * scale_ && l.spread > 0.5 * l.f &&
+           (splittable(p) || splittable(l.source));
   }
 
   // The oracle: the error of gathering over this link at this level, as
@@ -1898,7 +1899,8 @@ private:
             l.source = q;
             const double shape = cluster_shape_error(p, q);
             if (shape == 0.0) continue;
-            if (shape < 0.0 || cluster_weight(p, q) * shape > hopt_.epsilon * scale_ || small_code(p) || small_code(q)) {
+            if (shape < 0.0 || cluster_weight(p, q) * shape > hopt_.epsilon * scale_ || small_code(p) ||
+                small_code(q)) {
               split[i] = 1;
               continue;
             }

@@ -633,11 +633,13 @@ INSTANTIATE_TEST_SUITE_P(
                       ": line 13: a list of '30000000000000000000' values, but the line has 3 more"},
         // Found by fuzz_assimp_reader: assimp allocated what a face count of
         // 46 digits declared (7.6 GB) before reading the body.
-        FileErrorCase{"off_face_count_beyond_the_file", "mesh.off", "OFF\n3 5000000000 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n",
+        FileErrorCase{"off_face_count_beyond_the_file", "mesh.off",
+                      "OFF\n3 5000000000 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n",
                       ": OFF header line 2: 3 vertices and 5e+09 faces need at least 4e+10 bytes, the file has 29 "
                       "after the counts (truncated, or a wrong count)"},
         // Blank lines: long enough for the counts, one face short all the same.
-        FileErrorCase{"off_fewer_faces_than_stated", "mesh.off", "OFF\n3 2 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n\n\n\n\n\n\n",
+        FileErrorCase{"off_fewer_faces_than_stated", "mesh.off",
+                      "OFF\n3 2 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n\n\n\n\n\n\n",
                       ": Validation failed: aiMesh::mFaces[1].mIndices is nullptr (a face with no vertices: fewer "
                       "faces than the header states, a truncated file or a wrong count)"},
         FileErrorCase{"ply_index", "mesh.ply", PLY_HEAD(3, 1) "0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n",
