@@ -69,6 +69,10 @@ public:
     quadrature_ = opt.quadrature;
     quadrature_.max_level = std::max(quadrature_.max_level, 3);  // links of near elements: one link, many points
     grow();
+    // The roots, cut along the contact lines, lie wholly inside or outside
+    // closed objects (nothing lies inside anything in a convex enclosure).
+    if (!visibility_.convex_enclosure())
+      enclosed_warnings_ = enclosed_emitter_warnings(scene, el_, emitting_inside_objects(scene, el_, visibility_.rays()));
     for (int r = 0; r < out_.tree.root_count(); ++r) mean_root_area_ += tri_[static_cast<size_t>(r)].area;
     if (out_.tree.root_count() > 0) mean_root_area_ /= out_.tree.root_count();
   }
@@ -1186,6 +1190,7 @@ private:
     st.rays_skipped = o.stats.rays_skipped;
     st.pairs_unoccludable = o.stats.pairs_unoccludable;
     st.convex_enclosure = visibility_.convex_enclosure();
+    st.warnings = enclosed_warnings_;
     o.stats.clusters = static_cast<int>(ct_.size());
     o.stats.cluster_groups = static_cast<int>(ct_.group_count());
     o.stats.cluster_links = 0;
@@ -1977,6 +1982,7 @@ private:
   double scale_ = 0.0;
   QuadratureOptions quadrature_;
   ElementSet el_;  // per tree node
+  std::vector<std::string> enclosed_warnings_;  // emitting roots inside closed objects (SolveStats::warnings)
   std::vector<Triangle>& tri_ = el_.triangle;
   std::vector<Rgb>& rho_ = el_.reflectance;
   std::vector<Rgb>& emit_ = el_.emission;

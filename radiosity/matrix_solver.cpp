@@ -59,6 +59,9 @@ std::vector<double> compute_matrix(const Scene& scene, const ElementSet& el, con
   const auto t0 = Clock::now();
   const VisibilityEstimator visibility(scene, options.rays);
   st.convex_enclosure = visibility.convex_enclosure();
+  // Nothing lies inside anything in one convex enclosure.
+  if (!st.convex_enclosure)
+    st.warnings = enclosed_emitter_warnings(scene, el, emitting_inside_objects(scene, el, visibility.rays()));
 
   std::vector<double> F(static_cast<size_t>(n * n), 0.0);
   tbb::combinable<Counters> counters;

@@ -222,6 +222,7 @@ MethodResult run_method(const Method& method, const Scene& scene, const Mesh& me
   }
   // Otherwise the solver's own field stands: automatic falls back to the
   // fit, which is what nodal_method(automatic) gave the solver.
+  r.warnings.insert(r.warnings.end(), r.solution.stats.warnings.begin(), r.solution.stats.warnings.end());
   if (const std::string w = unlit_warning(scene, r); !w.empty()) r.warnings.push_back(w);
   return r;
 }

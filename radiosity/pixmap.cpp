@@ -124,17 +124,6 @@ struct UnionFind {
   }
 };
 
-// The tangent u of a plane with normal n: the coordinate axis least aligned
-// with n, made perpendicular, so that axis-aligned walls get axis-aligned grids.
-Vec3 tangent_of(const Vec3& n) {
-  int k = 0;
-  for (int i = 1; i < 3; ++i)
-    if (std::abs(n[i]) < std::abs(n[k])) k = i;
-  Vec3 axis(0.0);
-  axis[k] = 1.0;
-  return glm::normalize(axis - glm::dot(axis, n) * n);
-}
-
 St st_of(const Pixmap& pm, const Vec3& x) { return {pm.s_of(x), pm.t_of(x)}; }
 
 // Whether segments pq and ab cross (touching counts).
@@ -261,25 +250,6 @@ void check_options(const PixmapOptions& o) {
   Hemicube::check_resolution(o.hemicube_res);
 }
 
-// Whether point x of patch `patch` lies inside a closed object: every one of
-// 7 rays into its hemisphere (the normal and six at 60 degrees from it) hits
-// the back of a patch first.
-// `reach`: longer than any ray inside the scene.
-bool inside_object(const Scene& scene, const Visibility& vis, const Vec3& x, int patch, double reach) {
-  const Vec3 n = scene.patches[patch].normal;
-  const Vec3 u = tangent_of(n), v = glm::cross(n, u);
-  for (int r = 0; r < 7; ++r) {
-    Vec3 d = n;
-    if (r > 0) {
-      const double phi = (r - 1) * std::numbers::pi / 3.0;
-      d = 0.5 * n + 0.8660254037844386 * (std::cos(phi) * u + std::sin(phi) * v);
-    }
-    const int hit = vis.first_hit(x, d, reach, patch);
-    if (hit < 0 || glm::dot(scene.patches[hit].normal, d) < 0.0) return false;  // nothing, or a front face
-  }
-  return true;
-}
-
 // What a pixmap run holds per texel at its peak, besides the cached rows:
 // the texel grids and state, the display mesh and its values, and the
 // radiosity.vtu being written. Measured (peak resident memory / texels, one
@@ -346,16 +316,9 @@ PixmapLayout layout_of(const Scene& scene, const Mesh& coarse, const PixmapOptio
   // and is kept.
   L.enclosed.assign(static_cast<size_t>(coarse.triangle_count()), 0);
   if (vis) {
-    const double reach = 4.0 * scene.diagonal();
-    for (int t = 0; t < coarse.triangle_count(); ++t) {
-      const Vec3 c = coarse.centroid(t);
-      bool shut = inside_object(scene, *vis, c, coarse.patch[t], reach);
-      for (int k = 0; k < 3 && shut; ++k) {
-        const Vec3& v = coarse.positions[static_cast<size_t>(coarse.triangles[t][k])];
-        shut = inside_object(scene, *vis, v + 0.05 * (c - v), coarse.patch[t], reach);
-      }
-      L.enclosed[t] = shut;
-    }
+    const ElementSet el = make_elements(scene, coarse);
+    for (int t = 0; t < coarse.triangle_count(); ++t)
+      L.enclosed[t] = inside_closed_object(scene, *vis, el.triangle[t], coarse.patch[t]) ? 1 : 0;
   }
   // Each pixmap's frame and grid.
   std::vector<std::vector<int>> triangles_of(L.pixmaps.size());
@@ -859,6 +822,8 @@ struct PixmapSolver::Impl {
   std::vector<int> shooter_of;              // per global texel: its shooter (-1: none)
   double row_budget = 0.0;                  // bytes the cached rows may take
   Rgb power_emitted{0.0};                   // sum of E x area over the texels
+  Rgb power_enclosed{0.0};                  // E x area of the emitting triangles inside closed objects
+  std::vector<std::string> warnings;        // one per emitting patch with such triangles
   // The display mesh: geometry built once.
   Mesh display;
   std::vector<St> display_st;
@@ -1580,6 +1545,12 @@ PixmapSolver::PixmapSolver(const Scene& scene, const PixmapOptions& options, con
     for (long long i = 0; i < pm.texels(); ++i)
       if (pm.owner[i] == i) m.power_emitted += m.emission[k] * pm.area[i];
   }
+  {
+    const ElementSet el = make_elements(scene, m.coarse);
+    for (size_t t = 0; t < el.size(); ++t)
+      if (m.layout.enclosed[t]) m.power_enclosed += el.emission[t] * el.triangle[t].area;
+    m.warnings = enclosed_emitter_warnings(scene, el, m.layout.enclosed);
+  }
   m.shooter_of.assign(static_cast<size_t>(m.layout.texels), -1);
   for (size_t s = 0; s < m.layout.shooters.size(); ++s)
     for (int t : m.layout.shooters[s].texels) m.shooter_of[m.global(m.layout.shooters[s].pixmap, t)] = static_cast<int>(s);
@@ -1592,6 +1563,8 @@ PixmapSolver::~PixmapSolver() = default;
 const PixmapLayout& PixmapSolver::layout() const { return impl_->layout; }
 
 Rgb PixmapSolver::power_emitted() const { return impl_->power_emitted; }
+Rgb PixmapSolver::power_enclosed() const { return impl_->power_enclosed; }
+const std::vector<std::string>& PixmapSolver::warnings() const { return impl_->warnings; }
 
 PixmapState PixmapSolver::initial_state() const {
   const Impl& m = *impl_;
@@ -1831,7 +1804,11 @@ void PixmapSolver::display_mesh(const std::vector<std::vector<float>>& texels, M
   };
   for (size_t t = 0; t < mesh.triangles.size(); ++t) {
     const long long g = m.display_texel[t];
-    if (g < 0) continue;  // inside a closed object: no light
+    // Inside a closed object: no light, but what an emitter emits there
+    // (power_enclosed).
+    if (m.display_dark[static_cast<size_t>(mesh.triangles[t][0])])
+      solution.element[t] = m.emission[static_cast<size_t>(m.display_pixmap[static_cast<size_t>(mesh.triangles[t][0])])];
+    if (g < 0) continue;
     solution.element[t] = value(g);
     texel_of_triangle[t] = static_cast<int>(g - L.pixmaps[m.pixmap_of_global(g)].first);
   }
@@ -1842,7 +1819,10 @@ void PixmapSolver::display_mesh(const std::vector<std::vector<float>>& texels, M
   nodal.corners = mesh.triangles;
   nodal.radiosity.assign(mesh.positions.size(), Rgb(0.0));
   for (size_t v = 0; v < mesh.positions.size(); ++v) {
-    if (m.display_dark[v]) continue;
+    if (m.display_dark[v]) {
+      nodal.radiosity[v] = m.emission[static_cast<size_t>(m.display_pixmap[v])];
+      continue;
+    }
     const int k = m.display_pixmap[v];
     const Pixmap& pm = L.pixmaps[k];
     const St p = m.display_st[v];

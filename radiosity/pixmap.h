@@ -179,6 +179,12 @@ public:
   // Emitted power: E x area summed over the texels (the patches' E x area,
   // less the parts inside closed objects).
   Rgb power_emitted() const;
+  // What the parts of emitting patches inside closed objects emit (E x
+  // area): it goes into the objects, which no texel covers, and the method
+  // counts it as emitted and escaped, as the other methods do; and one
+  // warning per such patch (enclosed_emitter_warnings).
+  Rgb power_enclosed() const;
+  const std::vector<std::string>& warnings() const;
   // The state before any shot: B = unshot = E.
   PixmapState initial_state() const;
   // Shoots from `start` (initial_state() or a checked saved state) until the

@@ -32,8 +32,11 @@ MethodResult result_of(const std::shared_ptr<const PixmapSolver>& solver, const 
   st.elements = L.covered;
   st.convex_enclosure = convex;
   st.power_absorbed = state.power_absorbed;
-  st.power_escaped = state.power_escaped;
-  st.power_emitted = solver->power_emitted();
+  // What emitting parts inside closed objects emit goes into the objects:
+  // emitted and escaped, as the other methods count it.
+  st.power_escaped = state.power_escaped + solver->power_enclosed();
+  st.power_emitted = solver->power_emitted() + solver->power_enclosed();
+  st.warnings = solver->warnings();
   r.pixmaps = std::move(out);
   return r;
 }

@@ -50,6 +50,9 @@ struct SolveStats {
   Rgb power_absorbed{0.0};
   Rgb power_escaped{0.0};
   std::vector<std::string> skips;      // human-readable list of what was skipped and why
+  // What the solve found likely wrong with the scene (run_method adds them
+  // to MethodResult::warnings): emitters inside closed objects.
+  std::vector<std::string> warnings;
 };
 
 struct Solution {

@@ -1,5 +1,6 @@
 #include "radiosity/transport.h"
 
+#include "meshing/errors.h"
 #include "radiosity/occlusion.h"
 #include "radiosity/sampling.h"
 #include "radiosity/visibility.h"
@@ -7,6 +8,8 @@
 #include <tbb/task_arena.h>
 
 #include <array>
+#include <cmath>
+#include <numbers>
 #include <numeric>
 #include <mutex>
 #include <optional>
@@ -34,6 +37,72 @@ ElementSet make_elements(const Scene& scene, const Mesh& mesh) {
           mesh.positions[static_cast<size_t>(t[2])], mesh.zero_area(static_cast<int>(i)));
   }
   return e;
+}
+
+Vec3 tangent_of(const Vec3& n) {
+  int k = 0;
+  for (int i = 1; i < 3; ++i)
+    if (std::abs(n[i]) < std::abs(n[k])) k = i;
+  Vec3 axis(0.0);
+  axis[k] = 1.0;
+  return glm::normalize(axis - glm::dot(axis, n) * n);
+}
+
+namespace {
+
+// Whether every one of the 7 rays from point x of patch `patch` meets the
+// back of a face first (inside_closed_object).
+bool shut_in(const Scene& scene, const Visibility& vis, const Vec3& x, int patch) {
+  const Vec3 n = scene.patches[static_cast<size_t>(patch)].normal;
+  const Vec3 u = tangent_of(n), v = glm::cross(n, u);
+  for (int r = 0; r < 7; ++r) {
+    Vec3 d = n;
+    if (r > 0) {
+      const double phi = (r - 1) * std::numbers::pi / 3.0;
+      d = 0.5 * n + 0.8660254037844386 * (std::cos(phi) * u + std::sin(phi) * v);
+    }
+    if (vis.ray_end(x, d, patch) != Visibility::RayEnd::back) return false;  // nothing, or a front face
+  }
+  return true;
+}
+
+}  // namespace
+
+bool inside_closed_object(const Scene& scene, const Visibility& vis, const Triangle& t, int patch) {
+  const Vec3 c = t.centroid();
+  if (!shut_in(scene, vis, c, patch)) return false;
+  for (const Vec3& v : t.v)
+    if (!shut_in(scene, vis, v + 0.05 * (c - v), patch)) return false;
+  return true;
+}
+
+std::vector<char> emitting_inside_objects(const Scene& scene, const ElementSet& el, const Visibility& vis) {
+  std::vector<char> inside(el.size(), 0);
+  for (size_t e = 0; e < el.size(); ++e)
+    if (max3(el.emission[e]) > 0.0 && !el.zero_area[e])
+      inside[e] = inside_closed_object(scene, vis, el.triangle[e], el.patch[e]) ? 1 : 0;
+  return inside;
+}
+
+std::vector<std::string> enclosed_emitter_warnings(const Scene& scene, const ElementSet& el,
+                                                   const std::vector<char>& inside) {
+  std::vector<double> area(scene.patches.size(), 0.0), shut(scene.patches.size(), 0.0);
+  for (size_t e = 0; e < el.size(); ++e) {
+    const size_t p = static_cast<size_t>(el.patch[e]);
+    area[p] += el.triangle[e].area;
+    if (inside[e] && max3(el.emission[e]) > 0.0) shut[p] += el.triangle[e].area;
+  }
+  std::vector<std::string> out;
+  for (size_t p = 0; p < area.size(); ++p) {
+    if (!(shut[p] > 0.0)) continue;
+    const Patch& patch = scene.patches[p];
+    const double percent = std::round(1000.0 * shut[p] / area[p]) / 10.0;
+    out.push_back(where(patch.file, patch.line) + "emitting face '" + patch.name + "': " + format_number(percent) +
+                  "% of its area (" + format_number(shut[p]) + " of " + format_number(area[p]) +
+                  ") lies inside a closed object (every ray from there meets the back of a face): the light it "
+                  "emits there goes into the object and is counted as escaped power");
+  }
+  return out;
 }
 
 struct VisibilityEstimator::Impl {

@@ -12,6 +12,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <string>
 #include <vector>
 
 namespace radmesh {
@@ -34,6 +35,30 @@ struct ElementSet {
 
 // Every triangle of `mesh`, in order (zero-area ones flagged, Mesh::zero_area).
 ElementSet make_elements(const Scene& scene, const Mesh& mesh);
+
+// The tangent u of a plane with normal n: the coordinate axis least aligned
+// with n, made perpendicular, so that axis-aligned walls get axis-aligned
+// frames (the pixmaps' grids).
+Vec3 tangent_of(const Vec3& n);
+
+// Whether triangle t of patch `patch` lies inside a closed object (the
+// floor under a block): from its centroid and from a twentieth of the way
+// in from each corner, every one of 7 rays into its hemisphere (the normal
+// and six at 60 degrees from it) meets the back of a face first. A triangle
+// found shut at some of those points and open at others lies partly under
+// something open at its sides (a one-sided table top over a floor) and is
+// not inside.
+bool inside_closed_object(const Scene& scene, const Visibility& vis, const Triangle& t, int patch);
+
+// Per element of `el`: 1 where it emits and lies inside a closed object.
+// Light emitted there goes into the object, and every method counts it as
+// escaped power.
+std::vector<char> emitting_inside_objects(const Scene& scene, const ElementSet& el, const Visibility& vis);
+
+// One warning per emitting face with elements of `el` inside a closed object
+// (`inside`, per element), naming the share of its area they cover.
+std::vector<std::string> enclosed_emitter_warnings(const Scene& scene, const ElementSet& el,
+                                                   const std::vector<char>& inside);
 
 // Shadow rays of one pair: cast, or skipped because nothing can occlude.
 struct RayCount {
