@@ -308,12 +308,9 @@ PixmapLayout layout_of(const Scene& scene, const Mesh& coarse, const PixmapOptio
     L.pixmaps[L.pixmap_of_patch[p]].patches.push_back(p);
   }
 
-  // Triangles inside closed objects, by the ray test at their centroids and
-  // near their corners (a twentieth of the way in): a triangle the test
-  // finds shut at some points and open at others lies partly under
-  // something open at its sides (a table top, one-sided, 20 cm over a floor
-  // left the whole floor out when it covered a coarse triangle's centroid)
-  // and is kept.
+  // Triangles inside closed objects (inside_closed_object: tested at the
+  // centroid alone, a one-sided table top 20 cm over a floor left the whole
+  // floor out when it covered a coarse triangle's centroid).
   L.enclosed.assign(static_cast<size_t>(coarse.triangle_count()), 0);
   if (vis) {
     const ElementSet el = make_elements(scene, coarse);
