@@ -18,6 +18,7 @@
 #include <map>
 #include <numbers>
 #include <numeric>
+#include <span>
 #include <sstream>
 #include <tuple>
 #include <unordered_map>
@@ -837,9 +838,20 @@ struct PixmapSolver::Impl {
     double width = 0.0;   // area / (2 radius): a strip's width, a disc's 1.6 radii
   };
   std::vector<Extent> extent;
-  // The display triangles of texels that are not a plain square, as (global
-  // owner texel, display triangle), sorted: the polygons such a texel shoots from.
-  std::vector<std::pair<long long, int>> sliver_pieces;
+  // The lit display triangles of each global owner texel, pieces[
+  // pieces_begin[g] .. pieces_begin[g + 1]): the polygons a texel that is
+  // not a plain square shoots from, and the parts of a texel a line cuts.
+  std::vector<uint32_t> pieces_begin;
+  std::vector<int> pieces;
+  std::span<const int> pieces_of(long long g) const {
+    return {pieces.data() + pieces_begin[static_cast<size_t>(g)],
+            static_cast<size_t>(pieces_begin[static_cast<size_t>(g) + 1] - pieces_begin[static_cast<size_t>(g)])};
+  }
+  // The corners of display triangle d.
+  std::array<Vec3, 3> piece_corners(int d) const {
+    const auto& t = display.triangles[static_cast<size_t>(d)];
+    return {display.positions[t[0]], display.positions[t[1]], display.positions[t[2]]};
+  }
   // Shadow rays for the receivers the hemicube's pixels are too coarse for.
   std::unique_ptr<Visibility> vis;
 
@@ -868,8 +880,22 @@ struct PixmapSolver::Impl {
     std::vector<float> near_f;    // near.size() x sources
     std::vector<double> exact;    // per source texel: the sum over `near`
   };
-  void receive_narrow(int k, const Shooter& sh, double reach, bool sky, const std::function<void(int, double)>& add,
-                      NarrowPart& out) const;
+  // A source texel's polygon: a plain texel's square, else one of the
+  // pieces it owns (a texel along an outline may own a sliver on its far
+  // side).
+  struct SourcePolygon {
+    size_t q;  // its texel, in sh.texels
+    std::array<Vec3, 4> v;
+    size_t count;
+    Vec3 centroid() const {
+      Vec3 c(0.0);
+      for (size_t m = 0; m < count; ++m) c += v[m];
+      return c / static_cast<double>(count);
+    }
+  };
+  std::vector<SourcePolygon> source_polygons(const Shooter& sh) const;
+  void receive_narrow(int k, const Shooter& sh, double reach, bool sky, const std::vector<SourcePolygon>& polygons,
+                      const std::function<void(int, double)>& add, NarrowPart& out) const;
   void build_display();
 };
 
@@ -945,26 +971,18 @@ Row PixmapSolver::Impl::compute_row(int s, Hemicube& cube, long long& spread_pix
   // The near field. A hemicube sees from one point, and the shooter's
   // exchange with texels closer than a few times its size (across an edge
   // it shares with them) is not that of its centre: there F is integrated
-  // exactly instead, Lambert's formula to the texel from points spread over
-  // each source texel (2 x 2 per whole texel), for the texels the hemicube
-  // saw.
-  struct Source {
-    Vec3 x;
-    double w;    // share of its texel
-    size_t i;    // its texel, in sh.texels
-  };
-  std::vector<Source> sources;
+  // exactly instead, per source texel, by reciprocity: Lambert's factor to
+  // each source texel's polygons (exact) from points of the receiving texel
+  // (2 x 2 of a plain texel, 3 of each piece of another), for the texels
+  // the hemicube saw. Taken the other way round (from 2 x 2 points of each
+  // source texel to the receiving square; one point, the centroid, of a
+  // texel an outline cuts), the faces of a box that a lamp crosses got 5%
+  // too little of its light: their texels along the lamp receive from the
+  // lamp's texels cut by the box's outline, where F varies fastest.
+  const std::vector<SourcePolygon> polygons = source_polygons(sh);
   double reach = 0.0;
   for (size_t i = 0; i < nsrc; ++i) {
     const int t = sh.texels[i];
-    if (own.whole[t]) {
-      for (int q = 0; q < 4; ++q)
-        sources.push_back({own.centroid[t] + ((q % 2 ? 0.25 : -0.25) * own.texel_u) * own.u +
-                               ((q / 2 ? 0.25 : -0.25) * own.texel_v) * own.v,
-                           0.25, i});
-    } else {
-      sources.push_back({own.centroid[t], 1.0, i});
-    }
     reach = std::max(reach, glm::length(own.centroid[t] - sh.centre) + std::hypot(own.texel_u, own.texel_v));
   }
   reach *= kNearField;
@@ -1179,7 +1197,7 @@ Row PixmapSolver::Impl::compute_row(int s, Hemicube& cube, long long& spread_pix
     }
     if (narrow) {
       NarrowPart part;
-      receive_narrow(k, sh, reach, sky, add, part);
+      receive_narrow(k, sh, reach, sky, polygons, add, part);
       exact_put[k] = part.far_sum;
       behind[k] = part.behind;
       near_parts[k] = std::move(part.near);
@@ -1213,16 +1231,35 @@ Row PixmapSolver::Impl::compute_row(int s, Hemicube& cube, long long& spread_pix
     }
     std::sort(touched.begin(), touched.end());
     std::vector<double> per(nsrc);
+    std::vector<std::pair<Vec3, double>> points;
     for (int texel : touched) {
       const double f = acc[texel];
       if (near_texel.empty() || !near_texel[texel]) {
         if (f > 0.0) far_parts[k].push_back({static_cast<uint32_t>(pm.first + texel), static_cast<float>(f)});
         continue;
       }
-      const std::array<Vec3, 4> quad = texel_square(pm, texel);
       std::fill(per.begin(), per.end(), 0.0);
-      for (const Source& src : sources)
-        per[src.i] += src.w * point_polygon_form_factor(src.x, own.normal, quad.data(), 4, pm.normal);
+      points.clear();
+      // A plain square no line cuts is one fan of two triangles.
+      if (plain_square(pm, texel) && pieces_of(pm.first + texel).size() <= 2) {
+        const double a = 0.25 * pm.texel_u * pm.texel_v;
+        for (int q = 0; q < 4; ++q)
+          points.emplace_back(pm.centroid[texel] + ((q % 2 ? 0.25 : -0.25) * pm.texel_u) * pm.u +
+                                  ((q / 2 ? 0.25 : -0.25) * pm.texel_v) * pm.v,
+                              a);
+      } else {
+        for (const int d : pieces_of(pm.first + texel)) {
+          const std::array<Vec3, 3> p = piece_corners(d);
+          const double a = triangle_area(p[0], p[1], p[2]) / 3.0;
+          for (int m = 0; m < 3; ++m) points.emplace_back((4.0 * p[m] + p[(m + 1) % 3] + p[(m + 2) % 3]) / 6.0, a);
+        }
+      }
+      // F(q -> texel) = sum over the points of w F(x -> q's polygons) / A_q.
+      for (const SourcePolygon& poly : polygons) {
+        double f = 0.0;
+        for (const auto& [x, w] : points) f += w * point_polygon_form_factor(x, pm.normal, poly.v.data(), poly.count, own.normal);
+        per[poly.q] += f / own.area[sh.texels[poly.q]];
+      }
       near_hemicube[k] += f;
       near_parts[k].push_back(static_cast<uint32_t>(pm.first + texel));
       for (size_t q = 0; q < nsrc; ++q) {
@@ -1322,13 +1359,16 @@ void PixmapSolver::Impl::build_display() {
     }
   }
   display_first.push_back(display.triangles.size());
-  for (size_t k = 0; k < layout.pixmaps.size(); ++k)
-    for (size_t d = display_first[k]; d < display_first[k + 1]; ++d) {
-      const long long g = display_texel[d];
-      if (g >= 0 && !plain_square(layout.pixmaps[k], g - layout.pixmaps[k].first))
-        sliver_pieces.emplace_back(g, static_cast<int>(d));
-    }
-  std::sort(sliver_pieces.begin(), sliver_pieces.end());
+  pieces_begin.assign(static_cast<size_t>(layout.texels) + 1, 0);
+  for (const long long g : display_texel)
+    if (g >= 0) ++pieces_begin[static_cast<size_t>(g) + 1];
+  for (size_t g = 0; g + 1 < pieces_begin.size(); ++g) pieces_begin[g + 1] += pieces_begin[g];
+  pieces.resize(pieces_begin.back());
+  {
+    std::vector<uint32_t> at(pieces_begin.begin(), pieces_begin.end() - 1);
+    for (size_t d = 0; d < display_texel.size(); ++d)
+      if (display_texel[d] >= 0) pieces[at[static_cast<size_t>(display_texel[d])]++] = static_cast<int>(d);
+  }
   extent.resize(layout.pixmaps.size());
   for (size_t k = 0; k < layout.pixmaps.size(); ++k) {
     Extent& e = extent[k];
@@ -1382,7 +1422,25 @@ bool PixmapSolver::Impl::narrow_receiver(int k, const Shooter& sh, double pixel,
   return narrow_at(nearest);
 }
 
+std::vector<PixmapSolver::Impl::SourcePolygon> PixmapSolver::Impl::source_polygons(const Shooter& sh) const {
+  const Pixmap& own = layout.pixmaps[sh.pixmap];
+  std::vector<SourcePolygon> polygons;
+  for (size_t q = 0; q < sh.texels.size(); ++q) {
+    const int src = sh.texels[q];
+    if (plain_square(own, src)) {
+      polygons.push_back({q, texel_square(own, src), 4});
+      continue;
+    }
+    for (const int d : pieces_of(own.first + src)) {
+      const std::array<Vec3, 3> p = piece_corners(d);
+      polygons.push_back({q, {p[0], p[1], p[2], Vec3(0.0)}, 3});
+    }
+  }
+  return polygons;
+}
+
 void PixmapSolver::Impl::receive_narrow(int k, const Shooter& sh, double reach, bool sky,
+                                        const std::vector<SourcePolygon>& polygons,
                                         const std::function<void(int, double)>& add, NarrowPart& out) const {
   // Per lit display triangle (a piece of one texel). Its texel's centroid
   // beyond `reach`, as the hemicube would: Lambert's factor from the block's
@@ -1452,34 +1510,8 @@ void PixmapSolver::Impl::receive_narrow(int k, const Shooter& sh, double reach, 
     if (weight > 0.0) out.behind = weight_behind / weight;
     return;
   }
-  // The source texels' polygons: a plain texel's square, else the pieces it
-  // owns (a texel along an outline may own a sliver on its far side).
-  struct Polygon {
-    size_t q;  // its texel, in sh.texels
-    std::array<Vec3, 4> v;
-    size_t count;
-    Vec3 centroid() const {
-      Vec3 c(0.0);
-      for (size_t m = 0; m < count; ++m) c += v[m];
-      return c / static_cast<double>(count);
-    }
-  };
-  std::vector<Polygon> polygons;
-  for (size_t q = 0; q < nsrc; ++q) {
-    const int src = sh.texels[q];
-    if (plain_square(own, src)) {
-      polygons.push_back({q, texel_square(own, src), 4});
-      continue;
-    }
-    const long long g = own.first + src;
-    for (auto it = std::lower_bound(sliver_pieces.begin(), sliver_pieces.end(), std::make_pair(g, -1));
-         it != sliver_pieces.end() && it->first == g; ++it) {
-      const auto& t = display.triangles[static_cast<size_t>(it->second)];
-      polygons.push_back({q, {display.positions[t[0]], display.positions[t[1]], display.positions[t[2]], Vec3(0.0)}, 3});
-    }
-  }
   std::vector<Vec3> centres, from, to;
-  for (const Polygon& poly : polygons) centres.push_back(poly.centroid());
+  for (const SourcePolygon& poly : polygons) centres.push_back(poly.centroid());
   for (const Piece& piece : near_pieces) {
     from.insert(from.end(), polygons.size(), piece.centroid);
     to.insert(to.end(), centres.begin(), centres.end());
@@ -1494,7 +1526,7 @@ void PixmapSolver::Impl::receive_narrow(int k, const Shooter& sh, double reach, 
     double received = 0.0;  // F from the block (area-weighted over its texels)
     for (size_t m = 0; m < polygons.size(); ++m) {
       if (!seen[n * polygons.size() + m]) continue;
-      const Polygon& poly = polygons[m];
+      const SourcePolygon& poly = polygons[m];
       double f = 0.0;
       for (int a = 0; a < 3; ++a) {
         const Vec3 x = (4.0 * piece.v[a] + piece.v[(a + 1) % 3] + piece.v[(a + 2) % 3]) / 6.0;
