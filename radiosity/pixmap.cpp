@@ -127,6 +127,10 @@ struct UnionFind {
 
 St st_of(const Pixmap& pm, const Vec3& x) { return {pm.s_of(x), pm.t_of(x)}; }
 
+// Point a of the 3-point rule on triangle v (exact for quadratics): a
+// sixth of the way from corner a toward the midpoint of the other two.
+Vec3 rule_point(const std::array<Vec3, 3>& v, int a) { return (4.0 * v[a] + v[(a + 1) % 3] + v[(a + 2) % 3]) / 6.0; }
+
 // Whether segments pq and ab cross (touching counts).
 bool segments_cross(const St& p, const St& q, const St& a, const St& b) {
   auto side = [](const St& o, const St& u, const St& v) { return (u.s - o.s) * (v.t - o.t) - (u.t - o.t) * (v.s - o.s); };
@@ -313,11 +317,15 @@ PixmapLayout layout_of(const Scene& scene, const Mesh& coarse, const PixmapOptio
   // centroid alone, a one-sided table top 20 cm over a floor left the whole
   // floor out when it covered a coarse triangle's centroid).
   L.enclosed.assign(static_cast<size_t>(coarse.triangle_count()), 0);
-  if (vis) {
-    const ElementSet el = make_elements(scene, coarse);
-    for (int t = 0; t < coarse.triangle_count(); ++t)
-      L.enclosed[t] = inside_closed_object(scene, *vis, el.triangle[t], coarse.patch[t]) ? 1 : 0;
-  }
+  if (vis)
+    for (int t = 0; t < coarse.triangle_count(); ++t) {
+      const auto& c = coarse.triangles[static_cast<size_t>(t)];
+      L.enclosed[t] =
+          inside_closed_object(scene, *vis, {coarse.positions[c[0]], coarse.positions[c[1]], coarse.positions[c[2]]},
+                               coarse.patch[t])
+              ? 1
+              : 0;
+    }
   // Each pixmap's frame and grid.
   std::vector<std::vector<int>> triangles_of(L.pixmaps.size());
   // The contact lines inside each pixmap's patches (feature edges of the
@@ -1251,7 +1259,7 @@ Row PixmapSolver::Impl::compute_row(int s, Hemicube& cube, long long& spread_pix
         for (const int d : pieces_of(pm.first + texel)) {
           const std::array<Vec3, 3> p = piece_corners(d);
           const double a = triangle_area(p[0], p[1], p[2]) / 3.0;
-          for (int m = 0; m < 3; ++m) points.emplace_back((4.0 * p[m] + p[(m + 1) % 3] + p[(m + 2) % 3]) / 6.0, a);
+          for (int m = 0; m < 3; ++m) points.emplace_back(rule_point(p, m), a);
         }
       }
       // F(q -> texel) = sum over the points of w F(x -> q's polygons) / A_q.
@@ -1529,7 +1537,7 @@ void PixmapSolver::Impl::receive_narrow(int k, const Shooter& sh, double reach, 
       const SourcePolygon& poly = polygons[m];
       double f = 0.0;
       for (int a = 0; a < 3; ++a) {
-        const Vec3 x = (4.0 * piece.v[a] + piece.v[(a + 1) % 3] + piece.v[(a + 2) % 3]) / 6.0;
+        const Vec3 x = rule_point(piece.v, a);
         f += point_polygon_form_factor(x, pm.normal, poly.v.data(), poly.count, own.normal);
       }
       per[poly.q] += piece.area * f / (3.0 * own.area[sh.texels[poly.q]]);

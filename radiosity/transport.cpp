@@ -68,11 +68,11 @@ bool shut_in(const Scene& scene, const Visibility& vis, const Vec3& x, int patch
 
 }  // namespace
 
-bool inside_closed_object(const Scene& scene, const Visibility& vis, const Triangle& t, int patch) {
-  const Vec3 c = t.centroid();
+bool inside_closed_object(const Scene& scene, const Visibility& vis, const std::array<Vec3, 3>& v, int patch) {
+  const Vec3 c = (v[0] + v[1] + v[2]) / 3.0;
   if (!shut_in(scene, vis, c, patch)) return false;
-  for (const Vec3& v : t.v)
-    if (!shut_in(scene, vis, v + 0.05 * (c - v), patch)) return false;
+  for (const Vec3& corner : v)
+    if (!shut_in(scene, vis, corner + 0.05 * (c - corner), patch)) return false;
   return true;
 }
 
@@ -80,7 +80,7 @@ std::vector<char> emitting_inside_objects(const Scene& scene, const ElementSet& 
   std::vector<char> inside(el.size(), 0);
   for (size_t e = 0; e < el.size(); ++e)
     if (max3(el.emission[e]) > 0.0 && !el.zero_area[e])
-      inside[e] = inside_closed_object(scene, vis, el.triangle[e], el.patch[e]) ? 1 : 0;
+      inside[e] = inside_closed_object(scene, vis, el.triangle[e].v, el.patch[e]) ? 1 : 0;
   return inside;
 }
 

@@ -41,14 +41,14 @@ ElementSet make_elements(const Scene& scene, const Mesh& mesh);
 // frames (the pixmaps' grids).
 Vec3 tangent_of(const Vec3& n);
 
-// Whether triangle t of patch `patch` lies inside a closed object (the
+// Whether the triangle with corners v of patch `patch` lies inside a closed object (the
 // floor under a block): from its centroid and from a twentieth of the way
 // in from each corner, every one of 7 rays into its hemisphere (the normal
 // and six at 60 degrees from it) meets the back of a face first. A triangle
 // found shut at some of those points and open at others lies partly under
 // something open at its sides (a one-sided table top over a floor) and is
 // not inside.
-bool inside_closed_object(const Scene& scene, const Visibility& vis, const Triangle& t, int patch);
+bool inside_closed_object(const Scene& scene, const Visibility& vis, const std::array<Vec3, 3>& v, int patch);
 
 // Per element of `el`: 1 where it emits and lies inside a closed object.
 // Light emitted there goes into the object, and every method counts it as
