@@ -52,6 +52,81 @@ struct Counters {
   RayCount rays;
 };
 
+// Makes the matrix reciprocal without changing its row sums. Each row was
+// integrated at its own element's points, so a row sums to that element's
+// whole view of the scene (1 in a closed one, exactly where nothing
+// occludes: the point form factors cover each point's hemisphere once), but
+// A_i F_ij and A_j F_ji differ by the receiver quadrature's error, and then
+// the matrix creates or destroys light: the Cornell box's balance was off by
+// 1e-4 of the emitted power, a large receiver close to a small source
+// (a ceiling 5 cm over a box) by 4e-4. Each pair keeps the estimate made at
+// the smaller element's points (that error grows with the receiver's size
+// over the distance), both entries from it; then symmetric scales s (Sinkhorn
+// balancing of the symmetric A_i F_ij) bring every row back to its own sum t:
+// s_i sum_j F_ij s_j = t_i, F_ij <- s_i F_ij s_j. The result sends what it
+// receives and keeps every element's total view, so a closed scene's balance
+// closes to the solve's residual and the furnace stays exact.
+void make_reciprocal(const ElementSet& el, std::vector<double>& F) {
+  const long long n = static_cast<long long>(el.size());
+  const size_t un = static_cast<size_t>(n);
+  auto area = [&](long long i) { return el.triangle[static_cast<size_t>(i)].area; };
+  std::vector<double> target(un, 0.0);
+  tbb::parallel_for(tbb::blocked_range<long long>(0, n), [&](const tbb::blocked_range<long long>& r) {
+    for (long long i = r.begin(); i != r.end(); ++i) {
+      const double* fi = &F[static_cast<size_t>(i) * un];
+      double t = 0.0;
+      for (long long j = 0; j < n; ++j) t += fi[j];
+      target[static_cast<size_t>(i)] = t;
+    }
+  });
+  // Pair (i, j), i < j, is written by row i alone.
+  tbb::parallel_for(tbb::blocked_range<long long>(0, n), [&](const tbb::blocked_range<long long>& r) {
+    for (long long i = r.begin(); i != r.end(); ++i)
+      for (long long j = i + 1; j < n; ++j) {
+        double& fij = F[static_cast<size_t>(i) * un + static_cast<size_t>(j)];
+        double& fji = F[static_cast<size_t>(j) * un + static_cast<size_t>(i)];
+        if (fij == 0.0 && fji == 0.0) continue;
+        if (area(i) <= area(j))
+          fji = fij * area(i) / area(j);
+        else
+          fij = fji * area(j) / area(i);
+      }
+  });
+  // Over-relaxed in log s: 1.5 x the half step of the plain symmetric
+  // iteration takes the Cornell box's rows to within 1e-10 of their sums in
+  // 32 rounds instead of 51 (1.8 x: 80 rounds, oscillating).
+  // Rows need not all be reachable: where elements see only each other's
+  // sides (a bipartite exchange) the scales cannot give every row its sum, and
+  // the rounds stop at 40 with the entries still reciprocal, the rows within
+  // 2e-5 of their sums on the box on the floor.
+  constexpr double kOverRelaxation = 1.5;
+  std::vector<double> s(un, 1.0), next(un, 1.0);
+  for (int round = 0; round < 40; ++round) {
+    std::vector<double> misfit(un, 0.0);
+    tbb::parallel_for(tbb::blocked_range<long long>(0, n), [&](const tbb::blocked_range<long long>& r) {
+      for (long long i = r.begin(); i != r.end(); ++i) {
+        const size_t u = static_cast<size_t>(i);
+        const double* fi = &F[u * un];
+        double sum = 0.0;
+        for (size_t j = 0; j < un; ++j) sum += fi[j] * s[j];
+        next[u] = s[u];
+        if (sum > 0.0) {
+          next[u] = s[u] * std::pow(target[u] / (s[u] * sum), 0.5 * kOverRelaxation);
+          misfit[u] = std::abs(s[u] * sum - target[u]);
+        }
+      }
+    });
+    s.swap(next);
+    if (*std::max_element(misfit.begin(), misfit.end()) <= 1e-10) break;
+  }
+  tbb::parallel_for(tbb::blocked_range<long long>(0, n), [&](const tbb::blocked_range<long long>& r) {
+    for (long long i = r.begin(); i != r.end(); ++i) {
+      double* fi = &F[static_cast<size_t>(i) * un];
+      for (size_t j = 0; j < un; ++j) fi[j] *= s[static_cast<size_t>(i)] * s[j];
+    }
+  });
+}
+
 // The matrix, in the calling arena.
 std::vector<double> compute_matrix(const Scene& scene, const ElementSet& el, const SolveOptions& options,
                                    SolveStats& st, const ProgressFn& progress) {
@@ -125,13 +200,23 @@ std::vector<double> compute_matrix(const Scene& scene, const ElementSet& el, con
         },
         options.quadrature);
     c.receiver_points += static_cast<long long>(pts.x.size());
+    thread_local std::vector<const Triangle*> sources;
+    thread_local std::vector<long long> column;
+    thread_local std::vector<double> ff;
+    sources.clear();
+    column.clear();
     double* fi = &F[static_cast<size_t>(i * n)];
-    for (long long j = 0; j < n; ++j) {
-      if (fi[j] == 0.0) continue;
-      fi[j] *= form_factor(pts, el.triangle[static_cast<size_t>(j)]);
-      ++c.form_factors;
-    }
+    for (long long j = 0; j < n; ++j)
+      if (fi[j] != 0.0) {
+        sources.push_back(&el.triangle[static_cast<size_t>(j)]);
+        column.push_back(j);
+      }
+    ff.resize(sources.size());
+    form_factors(pts, sources.data(), sources.size(), ff.data());
+    for (size_t k = 0; k < column.size(); ++k) fi[column[k]] *= ff[k];
+    c.form_factors += static_cast<long long>(column.size());
   });
+  make_reciprocal(el, F);
   counters.combine_each([&](const Counters& c) {
     st.form_factors += c.form_factors;
     st.form_factors_skipped += 2 * c.zero_pairs;

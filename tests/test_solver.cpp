@@ -69,30 +69,39 @@ TEST(FormFactors, RowsOfAClosedSceneSumToOneAndReciprocityHolds) {
   MeshingOptions mo;
   mo.max_edge = 0.35;
   const Mesh mesh = mesh_scene(scene, mo);
-  // Each entry is a quadrature over its receiver; adjacent elements are the
-  // hardest. We claim, for any single pair, 6% at the solver's default level 1
-  // and 2% at level 2 (sums over whole patches are far better: the Howell
-  // C-14 test gets 1e-5 for two squares sharing an edge).
-  for (const auto& [level, claim] : {std::pair{1, 6e-2}, std::pair{2, 2e-2}}) {
+  const long long n = mesh.triangle_count();
+  auto matrix = [&](int level) {
     SolveOptions so;
     so.quadrature.max_level = level;
     SolveStats st;
-    const std::vector<double> F = form_factor_matrix(scene, mesh, so, st);
-    const long long n = mesh.triangle_count();
-    double worst_rec = 0.0;
+    return form_factor_matrix(scene, mesh, so, st);
+  };
+  // Each entry is a quadrature over the smaller element of its pair;
+  // adjacent elements are the hardest. Against level 4, we claim for any
+  // single pair 5% at the solver's default level 1 and 2% at level 2 (sums
+  // over whole patches are far better: the Howell C-14 test gets 1e-5 for
+  // two squares sharing an edge).
+  const std::vector<double> fine = matrix(4);
+  for (const auto& [level, claim] : {std::pair{1, 5e-2}, std::pair{2, 2e-2}}) {
+    const std::vector<double> F = matrix(level);
+    double worst = 0.0;
     for (long long i = 0; i < n; ++i) {
       double row = 0.0;
       for (long long j = 0; j < n; ++j) {
-        row += F[static_cast<size_t>(i * n + j)];
-        const double a = mesh.area(static_cast<int>(i)) * F[static_cast<size_t>(i * n + j)];
-        const double b = mesh.area(static_cast<int>(j)) * F[static_cast<size_t>(j * n + i)];
-        if (a > 0.0) worst_rec = std::max(worst_rec, std::abs(a - b) / std::max(a, b));
+        const size_t ij = static_cast<size_t>(i * n + j), ji = static_cast<size_t>(j * n + i);
+        row += F[ij];
+        if (fine[ij] > 0.0) worst = std::max(worst, std::abs(F[ij] / fine[ij] - 1.0));
+        // Reciprocity holds to rounding: both entries come from one estimate.
+        const double a = mesh.area(static_cast<int>(i)) * F[ij], b = mesh.area(static_cast<int>(j)) * F[ji];
+        EXPECT_NEAR(a, b, 1e-14 * std::max(a, b)) << "pair " << i << ", " << j << " level " << level;
       }
-      // Exact up to rounding: all sources of a row share the receiver's points.
-      EXPECT_NEAR(row, 1.0, 1e-12) << "row " << i << " level " << level;
+      // Each row keeps its own points' sum, 1 in a closed cube (the point
+      // form factors cover each point's hemisphere once), to the balancing's
+      // tolerance.
+      EXPECT_NEAR(row, 1.0, 1e-9) << "row " << i << " level " << level;
     }
-    EXPECT_LT(worst_rec, claim) << "level " << level;
-    std::printf("level %d: worst relative reciprocity error of a pair %.3g\n", level, worst_rec);
+    EXPECT_LT(worst, claim) << "level " << level;
+    std::printf("level %d: worst relative error of a pair against level 4 %.3g\n", level, worst);
   }
 }
 
@@ -120,6 +129,32 @@ TEST(EnergyBalance, CornellBoxEmittedEqualsAbsorbedPlusEscaped) {
     if (s.scene.patches[static_cast<size_t>(s.mesh.patch[static_cast<size_t>(t)])].name == "front_wall") {
       EXPECT_EQ(s.sol.element[static_cast<size_t>(t)], Rgb(0.0));
     }
+}
+
+TEST(EnergyBalance, ABoxCloseUnderTheCeilingNeitherMakesNorLosesLight) {
+  // A box's top 5 cm under the ceiling: the ceiling's elements are large
+  // next to the box's and close to them, where a form factor integrated at
+  // the ceiling element's points and one at the box element's points differ
+  // by up to 20%. A matrix taking each row from its own points sends out
+  // what it did not receive: here the balance was off by 1.1e-5 of the
+  // emitted power at a solve tolerance of 1e-10 (with a 1 m lamp over a
+  // 0.4 m box, by 4e-4; the Cornell box's by 1e-4). Reciprocal entries close
+  // it to the solve's tolerance, and the closed room's escaped power stays
+  // what its rows leave unseen.
+  const Scene scene = test::room_with(test::box_faces("box", 1, Vec3(0.6, 3.3, 0.6), Vec3(1.0, 3.95, 1.0)));
+  MeshingOptions mo;
+  mo.max_edge = scene.diagonal() / 16;
+  mo.discontinuity = DiscontinuityMode::contacts;
+  SolveOptions so;
+  so.tolerance = 1e-10;
+  const Solution sol = solve_matrix(scene, mesh_scene(scene, mo), so);
+  const SolveStats& st = sol.stats;
+  for (int c = 0; c < 3; ++c) {
+    const double e = st.power_emitted[c];
+    EXPECT_NEAR(e, 2.5, 1e-12);
+    EXPECT_LT(std::abs(e - st.power_absorbed[c] - st.power_escaped[c]) / e, 1e-7) << "channel " << c;
+    EXPECT_LT(std::abs(st.power_escaped[c]) / e, 1e-2) << "channel " << c;
+  }
 }
 
 TEST(Determinism, OneAndTwoThreadsGiveIdenticalResults) {
