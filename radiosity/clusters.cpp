@@ -197,6 +197,13 @@ int ClusterTree::lay_out(int t, const std::vector<std::vector<int>>& tree) {
   return c;
 }
 
+namespace {
+Vec3 direction_of(const ClusterTree::Group& g) {
+  const double l = glm::length(g.s);
+  return l > 0.0 ? g.s / l : Vec3(0.0);
+}
+}  // namespace
+
 void ClusterTree::finish(const std::vector<std::vector<int>>& tree, const std::vector<Triangle>& roots,
                          const std::vector<double>& weights) {
   clusters_.reserve(tree.size());
@@ -280,13 +287,20 @@ void ClusterTree::finish(const std::vector<std::vector<int>>& tree, const std::v
     for (const Item& it : items) {
       const int g = static_cast<int>(groups_.size());
       groups_.push_back({it.s, it.moment / it.area, it.area, -1});
+      const Vec3 axis = direction(it);
+      double cone = glm::length(axis) > 0.0 ? 0.0 : std::numbers::pi;
       for (const auto& [from, a] : it.from) {
         members_.push_back({from, a, g});
+        const Vec3 n = from >= 0 ? roots[static_cast<size_t>(from)].normal : direction_of(groups_[static_cast<size_t>(-2 - from)]);
+        const double own = from >= 0 ? 0.0 : groups_[static_cast<size_t>(-2 - from)].cone;
+        if (cone < std::numbers::pi)
+          cone = std::max(cone, std::acos(std::clamp(glm::dot(axis, n), -1.0, 1.0)) + own);
         if (from >= 0)
           root_group_[static_cast<size_t>(from)] = g;
         else
           groups_[static_cast<size_t>(-2 - from)].up = g;
       }
+      groups_[static_cast<size_t>(g)].cone = static_cast<float>(std::min(cone, std::numbers::pi));
       cl.area += it.area;
       moment += it.moment;
     }
@@ -364,6 +378,33 @@ void ClusterTree::form_factors(int c, const Vec3& x, const Vec3& n, double visib
     const double f = seen * out_cos * in_cos / (std::numbers::pi * d2 * d2);
     out.push_back({-2 - g, f});
   }
+}
+
+double ClusterTree::straddle(int c, const Vec3& x, double rx) const {
+  const Cluster& cl = cluster(c);
+  double wrong = 0.0;
+  for (int g = cl.group_begin; g < cl.group_end; ++g) {
+    const Group& gr = groups_[static_cast<size_t>(g)];
+    if (gr.cone == 0.0f) continue;  // flat: exact
+    const Vec3 r = x - gr.centroid;
+    const double d = glm::length(r);
+    if (!(d > rx)) {  // x's sphere holds the centroid: any direction
+      wrong += gr.area;
+      continue;
+    }
+    // Angles from the axis: the direction's, widened by the sphere's
+    // angular radius, plus the cone.
+    const double len = glm::length(gr.s);
+    const double cos_a = len > 0.0 ? glm::dot(gr.s, r) / (len * d) : 0.0;
+    const double a = std::acos(std::clamp(cos_a, -1.0, 1.0));
+    const double spread = static_cast<double>(gr.cone) + std::asin(std::min(1.0, rx / d));
+    const double near = a - spread, far = a + spread;  // the cone's nearest and furthest normals from w
+    if (near >= 0.5 * std::numbers::pi || far <= 0.5 * std::numbers::pi) continue;  // all away, or all facing
+    // Facing overall: the members turned away cost up to area x -cos(far);
+    // turned away overall: those facing w are lost, up to area x cos(near).
+    wrong += gr.area * (cos_a >= 0.0 ? -std::cos(std::min(far, std::numbers::pi)) : std::cos(std::max(near, 0.0)));
+  }
+  return wrong;
 }
 
 int ClusterTree::position_at_area(int c, double u) const {

@@ -41,6 +41,10 @@ public:
     Vec3 centroid{0.0};
     double area = 0.0;
     int up = -1;  // the group of the parent cluster it belongs to (-1 at the top)
+    // Half-angle of a cone about s holding every member's normal (pi when
+    // s is 0): 0 for a flat group, and the group's light is exact for every
+    // w further than it from the plane perpendicular to s.
+    float cone = 0.0f;
   };
 
   static constexpr int code(int c) { return -2 - c; }
@@ -110,6 +114,14 @@ public:
   // group of c] instead of `visible`.
   void form_factors(int c, const Vec3& x, const Vec3& n, double visible, std::vector<std::pair<int, double>>& out,
                     const float* per_group = nullptr) const;
+
+  // A bound on how far the groups of cluster c get their light towards a
+  // sphere about x of radius `rx` wrong, as projected area: where a group's
+  // normal cone straddles the direction's perpendicular plane, max(0, s . w)
+  // takes the members facing away off those facing w (or gives 0 for
+  // those facing w), at most area x the cosine of the cone's far edge. The
+  // sum over c's groups; 0 for groups that are flat or face w, or away, whole.
+  double straddle(int c, const Vec3& x, double rx) const;
 
   // The position (root_at(position)) of the root of cluster c holding
   // area fraction u in [0, 1) of it.
