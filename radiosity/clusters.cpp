@@ -198,9 +198,10 @@ int ClusterTree::lay_out(int t, const std::vector<std::vector<int>>& tree) {
 }
 
 namespace {
-Vec3 direction_of(const ClusterTree::Group& g) {
-  const double l = glm::length(g.s);
-  return l > 0.0 ? g.s / l : Vec3(0.0);
+// The unit vector along a group's s (sum of area x normal), or 0.
+Vec3 direction_of(const Vec3& s) {
+  const double l = glm::length(s);
+  return l > 0.0 ? s / l : Vec3(0.0);
 }
 }  // namespace
 
@@ -224,10 +225,7 @@ void ClusterTree::finish(const std::vector<std::vector<int>>& tree, const std::v
       from.insert(from.end(), o.from.begin(), o.from.end());
     }
   };
-  auto direction = [](const Item& it) {
-    const double l = glm::length(it.s);
-    return l > 0.0 ? it.s / l : Vec3(0.0);
-  };
+  auto direction = [](const Item& it) { return direction_of(it.s); };
   for (int c = static_cast<int>(clusters_.size()) - 1; c >= 0; --c) {
     Cluster& cl = clusters_[static_cast<size_t>(c)];
     std::vector<Item> items;
@@ -291,7 +289,7 @@ void ClusterTree::finish(const std::vector<std::vector<int>>& tree, const std::v
       double cone = glm::length(axis) > 0.0 ? 0.0 : std::numbers::pi;
       for (const auto& [from, a] : it.from) {
         members_.push_back({from, a, g});
-        const Vec3 n = from >= 0 ? roots[static_cast<size_t>(from)].normal : direction_of(groups_[static_cast<size_t>(-2 - from)]);
+        const Vec3 n = from >= 0 ? roots[static_cast<size_t>(from)].normal : direction_of(groups_[static_cast<size_t>(-2 - from)].s);
         const double own = from >= 0 ? 0.0 : groups_[static_cast<size_t>(-2 - from)].cone;
         if (cone < std::numbers::pi)
           cone = std::max(cone, std::acos(std::clamp(glm::dot(axis, n), -1.0, 1.0)) + own);
