@@ -103,17 +103,18 @@ Scene room(const std::string& name, const std::function<void(const AddFace&)>& c
   return build_scene(faces, {wall, grey, lamp}, name);
 }
 
-// The room with an icosphere of 20 x 4^level triangles floating inside.
-Scene sphere_room(int level) {
-  return room("sphere_room", [level](const AddFace& face) {
+// The room with an icosphere of 20 x 4^level triangles floating inside:
+// faces named `name` of `material` (1 grey, 2 lamp), about `centre`.
+Scene sphere_room(int level, const std::string& name = "sphere", int material = 1,
+                  const Vec3& centre = Vec3(2.0, 1.2, 2.0), double radius = 0.8) {
+  return room(name + "_room", [&](const AddFace& face) {
     const test::Icosphere sphere = test::icosphere(level);
     auto point = [&](int k) {
       const auto& p = sphere.positions[static_cast<size_t>(k)];
       return Vec3(p[0], p[1], p[2]);
     };
-    const Vec3 centre(2.0, 1.2, 2.0);
     for (const auto& [a, b, c] : sphere.triangles)
-      face("sphere", 1, {centre + 0.8 * point(a), centre + 0.8 * point(b), centre + 0.8 * point(c)});
+      face(name, material, {centre + radius * point(a), centre + radius * point(b), centre + radius * point(c)});
   });
 }
 
@@ -180,9 +181,8 @@ Mesh initial_mesh(const Scene& s) {
   return mesh_scene(s, o);
 }
 
-// The solver's volume cluster tree, rebuilt from the same roots (the volume
-// tree's shape depends on the roots alone).
-ClusterTree volume_tree(const Scene& s, const Mesh& m) {
+// The roots the solver builds its clusters over: the mesh's triangles.
+std::vector<Triangle> root_triangles(const Scene& s, const Mesh& m) {
   std::vector<Triangle> roots;
   for (int t = 0; t < m.triangle_count(); ++t) {
     const auto& tri = m.triangles[static_cast<size_t>(t)];
@@ -190,6 +190,13 @@ ClusterTree volume_tree(const Scene& s, const Mesh& m) {
                                   m.positions[static_cast<size_t>(tri[2])],
                                   s.patches[static_cast<size_t>(m.patch[static_cast<size_t>(t)])].normal));
   }
+  return roots;
+}
+
+// The solver's volume cluster tree, rebuilt from the same roots (the volume
+// tree's shape depends on the roots alone).
+ClusterTree volume_tree(const Scene& s, const Mesh& m) {
+  const std::vector<Triangle> roots = root_triangles(s, m);
   return ClusterTree::volume(roots, std::vector<double>(roots.size(), 1.0));
 }
 
@@ -335,13 +342,7 @@ TEST(Clusters, StraddleBoundsWhatAGroupsNetNormalGetsWrong) {
   const Scene s = sphere_room(2);
   const Mesh m = initial_mesh(s);
   const ClusterTree ct = volume_tree(s, m);
-  std::vector<Triangle> roots;
-  for (int t = 0; t < m.triangle_count(); ++t) {
-    const auto& tri = m.triangles[static_cast<size_t>(t)];
-    roots.push_back(make_triangle(m.positions[static_cast<size_t>(tri[0])], m.positions[static_cast<size_t>(tri[1])],
-                                  m.positions[static_cast<size_t>(tri[2])],
-                                  s.patches[static_cast<size_t>(m.patch[static_cast<size_t>(t)])].normal));
-  }
+  const std::vector<Triangle> roots = root_triangles(s, m);
   std::mt19937_64 rng(11);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   int straddling = 0, exact = 0;
@@ -383,16 +384,7 @@ TEST(Clusters, ABulbOfSmallTrianglesSendsTheRoomWhatItEmits) {
   // `--clusters off` (a room lit by such a bulb alone: 4.4% and 3%, the
   // ceiling above the bulb getting 37% of its light). Now a miss within
   // what the rays may be off by is the exact terms' to take.
-  const Scene s = room("bulb room", [](const AddFace& face) {
-    const test::Icosphere sphere = test::icosphere(2);
-    auto point = [&](int k) {
-      const auto& p = sphere.positions[static_cast<size_t>(k)];
-      return Vec3(p[0], p[1], p[2]);
-    };
-    const Vec3 centre(2.0, 2.2, 2.0);
-    for (const auto& [a, b, c] : sphere.triangles)
-      face("bulb", 2, {centre + 0.2 * point(a), centre + 0.2 * point(b), centre + 0.2 * point(c)});
-  });
+  const Scene s = sphere_room(2, "bulb", 2, Vec3(2.0, 2.2, 2.0), 0.2);
   const Mesh m = initial_mesh(s);
   HierarchicalOptions off;
   off.clusters = ClusterMode::off;
