@@ -734,10 +734,6 @@ private:
     }
     leaf_rays_.assign(n, RayCount{});
     in_blocks(todo, [&](size_t x) { gather_terms(x); });
-    for (const RayCount& c : leaf_rays_) {
-      out_.stats.rays_cast += c.cast;
-      out_.stats.rays_skipped += c.skipped;
-    }
     {
       // The element links leaving each node: (receiver, position in its
       // list), 8 bytes a link (with a pointer, 16: on the 64 x 64 box
@@ -758,6 +754,10 @@ private:
         }
       at = {};
       in_blocks(send_todo, [&](size_t y) { sender_terms(y, out_begin, out); });
+    }
+    for (const RayCount& c : leaf_rays_) {
+      out_.stats.rays_cast += c.cast;
+      out_.stats.rays_skipped += c.skipped;
     }
     std::fill(dirty_.begin(), dirty_.end(), 0);
     std::fill(sent_dirty_.begin(), sent_dirty_.end(), 0);
@@ -971,8 +971,31 @@ private:
     // that sends.
     if (node_open_[y] < 0.0f) node_open_[y] = static_cast<float>(openness_of(static_cast<int>(y)));
     for (size_t k = 0; k < path.size(); ++k) {
-      const float w = static_cast<float>(t.area * f[k] * path[k].second->visible) * node_open_[y];
-      if (w > 0.0f) sent.push_back({path[k].second->slot, w});
+      // Over a partly visible link, the piece's own visible fraction to the
+      // receiver where it could move what the link carries by more than
+      // kLeafRaysBound x the refinement threshold (rho_receiver F x the
+      // piece's radiosity's difference from its source node's), with a
+      // quarter of --rays, stratified, as a leaf casts on its ancestors'
+      // links: the link's fraction is a mean over the source, and where the
+      // bright part of the source is the hidden one (a wall lit by a lamp
+      // 10 cm in front of it, which the lamp's back hides from the room)
+      // weighing the pieces alike sent the room that bright part: every
+      // surface 18-23% too bright against a fine matrix solve, 3.7% of the
+      // emitted power made. The rays add 0.5% to the 8 x 8 box field's.
+      const Link& l = *path[k].second;
+      const int p = path[k].first;
+      const bool own_rays = l.visible < 1.0 &&
+                            max3(rho_[static_cast<size_t>(p)]) * l.f *
+                                    max3(glm::abs(B_[y] - B_[static_cast<size_t>(l.source)])) >
+                                kLeafRaysBound * hopt_.epsilon * scale_;
+      const double v = own_rays
+                           ? visibility_.visible_fraction(t, node_patch(static_cast<int>(y)), static_cast<uint64_t>(y),
+                                                          tri_[static_cast<size_t>(p)], node_patch(p),
+                                                          static_cast<uint64_t>(p), leaf_rays_[y],
+                                                          std::max(1, visibility_.side() / 2), false)
+                           : l.visible;
+      const float w = static_cast<float>(t.area * f[k] * v) * node_open_[y];
+      if (w > 0.0f) sent.push_back({l.slot, w});
     }
     sent.shrink_to_fit();
   }

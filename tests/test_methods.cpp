@@ -285,6 +285,41 @@ TEST_P(Conformance, ALampPartlyInsideABoxEmitsIntoItAndSaysSo) {
   EXPECT_TRUE(solve(GetParam(), beside, 0.0).warnings.empty());
 }
 
+TEST(Hierarchical, AWallLitFromTenCentimetresLightsTheRoomAsPixmapDoes) {
+  // A 1 x 1 lamp hangs 10 cm in front of a wall, facing it (a wall washer)
+  // in a closed room. The wall's bright patch behind the lamp is hidden
+  // from the rest of the room by the lamp's back, so a link from the room
+  // to the wall must not carry the wall's plain mean: weighing the wall's
+  // pieces alike by what they would send, the hierarchical method lit every
+  // surface 18-23% brighter than a fine matrix solve (0.15 m elements,
+  // within 2.6% of pixmap) and made 3.7% of the emitted power; here its
+  // element means were 47-75% over pixmap's. Each piece's own rays to the
+  // receiver now weigh it (within 4.1%). Pixmap (hemicubes from every
+  // shooter, nothing averaged over a source) is the reference here.
+  std::vector<RawFace> faces = test::box_faces("room", 0, Vec3(0, 0, 0), Vec3(4, 3, 4), false);
+  const char* names[] = {"back", "front", "washed", "right", "ceiling", "floor"};
+  for (size_t k = 0; k < faces.size(); ++k) faces[k].name = names[k];
+  RawFace lamp;
+  lamp.name = "lamp";
+  lamp.material = 1;
+  lamp.points = {{0.1, 1.0, 2.5}, {0.1, 2.0, 2.5}, {0.1, 2.0, 1.5}, {0.1, 1.0, 1.5}};  // facing -x, the wall
+  faces.push_back(lamp);
+  const Scene scene =
+      build_scene(faces, {test::material("white", Rgb(0.7)), test::material("lamp", Rgb(0.0), Rgb(10.0))}, "washer");
+  ASSERT_LT(scene.patches.back().normal.x, -0.99);
+  const MethodResult h = solve("hierarchical", scene, 0.0, {}, false);
+  const MethodResult p = solve("pixmap", scene, 0.0);
+  const auto mh = patch_mean_radiosity(scene, h.mesh, h.solution.element);
+  const auto mp = patch_mean_radiosity(scene, p.mesh, p.solution.element);
+  for (size_t k = 0; k < scene.patches.size(); ++k) {
+    std::printf("[washer] %-8s hierarchical %.5f pixmap %.5f (%+.2f%%)\n", scene.patches[k].name.c_str(), mh[k].x,
+                mp[k].x, 100.0 * (mh[k].x / mp[k].x - 1.0));
+    EXPECT_NEAR(mh[k].x / mp[k].x, 1.0, 0.05) << scene.patches[k].name;
+  }
+  const SolveStats& st = h.solution.stats;
+  EXPECT_GT(st.power_escaped.x, -0.005 * st.power_emitted.x);  // no light made
+}
+
 TEST_P(Conformance, ResultIsOnItsOwnMeshWithNamedCounters) {
   const Scene scene = read_obj_scene(kData + "/box_on_floor/box_on_floor.obj");
   const MethodResult r = solve(GetParam(), scene, 0.3);
