@@ -812,6 +812,19 @@ private:
   }
 
   static constexpr double kLeafRaysBound = 0.1;  // see the comment above leaf_terms
+  // Whether a node casts its own rays on a partly visible link it reads (a
+  // leaf on its ancestors' links, a sending piece on its source's): where
+  // the light the link's mean fraction may move there is over
+  // kLeafRaysBound x the refinement threshold.
+  bool own_rays_matter(double transport) const { return transport > kLeafRaysBound * hopt_.epsilon * scale_; }
+  // Those rays: a quarter of --rays (at least one), stratified on both
+  // ends, node a's own stream with b, without a shaft test.
+  int own_side() const { return std::max(1, visibility_.side() / 2); }
+  double own_visible_fraction(int a, int b, RayCount& count) const {
+    return visibility_.visible_fraction(tri_[static_cast<size_t>(a)], node_patch(a), static_cast<uint64_t>(a),
+                                        tri_[static_cast<size_t>(b)], node_patch(b), static_cast<uint64_t>(b), count,
+                                        own_side(), false);
+  }
   void gather_terms(size_t x) {
     const ElementTree& tree = out_.tree;
     terms_[x].clear();
@@ -863,21 +876,16 @@ private:
       const double f0 = unoccluded[next++];
       // An ancestor's partly visible link that may matter here: the leaf's
       // own visible fraction.
-      const bool own_rays = k >= own && l->visible < 1.0 &&
-                            rho * f0 * max3(B_[static_cast<size_t>(l->source)]) > kLeafRaysBound * hopt_.epsilon * scale_;
+      const bool own_rays =
+          k >= own && l->visible < 1.0 && own_rays_matter(rho * f0 * max3(B_[static_cast<size_t>(l->source)]));
       // No shaft test: the ancestor's shaft holds an occluder, and on the
       // Cornell box 97% of the leaves' shafts did too (573 k pairs, 15 k
       // cleared); the tests cost more than the rays they saved.
-      const double v = own_rays
-                           ? visibility_.visible_fraction(t, node_patch(static_cast<int>(x)), static_cast<uint64_t>(x),
-                                                          tri_[static_cast<size_t>(l->source)], node_patch(l->source),
-                                                          static_cast<uint64_t>(l->source), leaf_rays_[x],
-                                                          std::max(1, visibility_.side() / 2), false)
-                           : l->visible;
+      const double v = own_rays ? own_visible_fraction(static_cast<int>(x), l->source, leaf_rays_[x]) : l->visible;
       const double f = f0 * v;
       // The variance of the visible fraction the rays gave (binomial:
       // v (1 - v) over their number), as it enters the row.
-      const int rays = own_rays ? std::max(1, visibility_.side() / 2) * std::max(1, visibility_.side() / 2) : opt_.rays;
+      const int rays = own_rays ? own_side() * own_side() : opt_.rays;
       noise += f0 * f0 * v * (1.0 - v) / rays;
       if (f <= 0.0) continue;
       terms_[x].push_back({l->slot, static_cast<float>(f)});
@@ -984,16 +992,10 @@ private:
       // emitted power made. The rays add 0.5% to the 8 x 8 box field's.
       const Link& l = *path[k].second;
       const int p = path[k].first;
-      const bool own_rays = l.visible < 1.0 &&
-                            max3(rho_[static_cast<size_t>(p)]) * l.f *
-                                    max3(glm::abs(B_[y] - B_[static_cast<size_t>(l.source)])) >
-                                kLeafRaysBound * hopt_.epsilon * scale_;
-      const double v = own_rays
-                           ? visibility_.visible_fraction(t, node_patch(static_cast<int>(y)), static_cast<uint64_t>(y),
-                                                          tri_[static_cast<size_t>(p)], node_patch(p),
-                                                          static_cast<uint64_t>(p), leaf_rays_[y],
-                                                          std::max(1, visibility_.side() / 2), false)
-                           : l.visible;
+      const bool own_rays =
+          l.visible < 1.0 && own_rays_matter(max3(rho_[static_cast<size_t>(p)]) * l.f *
+                                             max3(glm::abs(B_[y] - B_[static_cast<size_t>(l.source)])));
+      const double v = own_rays ? own_visible_fraction(static_cast<int>(y), p, leaf_rays_[y]) : l.visible;
       const float w = static_cast<float>(t.area * f[k] * v) * node_open_[y];
       if (w > 0.0f) sent.push_back({l.slot, w});
     }

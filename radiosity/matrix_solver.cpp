@@ -100,9 +100,8 @@ void make_reciprocal(const ElementSet& el, std::vector<double>& F) {
   // the rounds stop at 40 with the entries still reciprocal, the rows within
   // 2e-5 of their sums on the box on the floor.
   constexpr double kOverRelaxation = 1.5;
-  std::vector<double> s(un, 1.0), next(un, 1.0);
+  std::vector<double> s(un, 1.0), next(un, 1.0), misfit(un, 0.0);
   for (int round = 0; round < 40; ++round) {
-    std::vector<double> misfit(un, 0.0);
     tbb::parallel_for(tbb::blocked_range<long long>(0, n), [&](const tbb::blocked_range<long long>& r) {
       for (long long i = r.begin(); i != r.end(); ++i) {
         const size_t u = static_cast<size_t>(i);
@@ -110,6 +109,7 @@ void make_reciprocal(const ElementSet& el, std::vector<double>& F) {
         double sum = 0.0;
         for (size_t j = 0; j < un; ++j) sum += fi[j] * s[j];
         next[u] = s[u];
+        misfit[u] = 0.0;
         if (sum > 0.0) {
           next[u] = s[u] * std::pow(target[u] / (s[u] * sum), 0.5 * kOverRelaxation);
           misfit[u] = std::abs(s[u] * sum - target[u]);
