@@ -194,6 +194,8 @@ nlohmann::json make_summary(const RunInfo& info, const Scene& scene, const Mesh&
                                 {"seconds", f.seconds_direct}};
       doc["field"]["gather"] = {{"sources", f.gather_sources},
                                 {"nodes", f.gather_nodes},
+                                {"clustered", f.clustered},
+                                {"clusters", f.gather_clusters},
                                 {"triangles", f.gather_triangles},
                                 {"rays_cast", f.rays_cast},
                                 {"opening", FieldEvaluator::kOpening},

@@ -3,6 +3,8 @@
 #include "radiosity/field.h"
 
 #include "meshing/errors.h"
+#include "meshing/box_tree.h"
+#include "radiosity/clusters.h"
 #include "radiosity/form_factor.h"
 #include "radiosity/gather_node.h"
 #include "radiosity/occlusion.h"
@@ -117,14 +119,30 @@ std::string to_string(FieldMode mode) {
 
 NodalMethod nodal_method(FieldMode mode) { return mode == FieldMode::mean ? NodalMethod::mean : NodalMethod::linear_fit; }
 
+namespace {
+
+int emitter_count(const Scene& scene) {
+  int e = 0;
+  for (const Patch& p : scene.patches) e += max3(scene.material_of(p).emission) > 0.0 ? 1 : 0;
+  return e;
+}
+
+}  // namespace
+
+bool gather_within_budget(const Scene& scene, double vertices) {
+  return gather_every_patch(vertices, static_cast<double>(scene.patches.size())) ||
+         vertices * (kClusterCut + emitter_count(scene)) <= kGatherBudget;
+}
+
 FieldMode resolve_field_mode(FieldMode requested, const Scene& scene, const Mesh& mesh, std::string* why) {
   if (requested != FieldMode::automatic) return requested;
-  const double pairs = static_cast<double>(mesh.positions.size()) * static_cast<double>(scene.patches.size());
-  if (pairs <= kGatherBudget) return FieldMode::gather;
+  const double vertices = static_cast<double>(mesh.positions.size());
+  if (gather_within_budget(scene, vertices)) return FieldMode::gather;
   if (why)
-    *why = "field: the fit, not the gather: " + format_number(static_cast<double>(mesh.positions.size())) +
-           " vertices x " + std::to_string(scene.patches.size()) + " patches = " + format_number(pairs) +
-           " (vertex, patch) pairs, over the automatic gather's budget of " + format_number(kGatherBudget) +
+    *why = "field: the fit, not the gather: " + format_number(vertices) + " vertices x (" +
+           format_number(kClusterCut) + " clusters or patches + " + std::to_string(emitter_count(scene)) +
+           " emitters) = " + format_number(vertices * (kClusterCut + emitter_count(scene))) +
+           " (vertex, source) pairs, over the automatic gather's budget of " + format_number(kGatherBudget) +
            " (--field gather forces it)";
   return FieldMode::fit;
 }
@@ -137,6 +155,13 @@ struct FieldEvaluator::Impl {
   Occlusion occlusion;
   std::unique_ptr<Visibility> visibility;
   std::vector<SourceTree> sources;  // per patch (empty tree: reflects nothing)
+  // The clustered gather (see FieldEvaluator): a cluster tree whose roots
+  // stand for the reflecting patches (empty: every patch is visited).
+  ClusterTree clusters;
+  std::vector<int> cluster_patch;       // per root: its patch
+  std::vector<double> cluster_reach;    // per cluster: a sphere about its centre holding its patches
+  std::vector<Box3> cluster_box;        // per cluster: the box of its patches
+  std::vector<Rgb> group_reflected;     // per group: the area mean of B - E
 
   Impl(const Scene& s, const SolveOptions& o)
       : scene(s), diagonal(s.diagonal()), rays_per_node(std::max(1, o.rays / 4)), direct(s), occlusion(s) {}
@@ -189,10 +214,14 @@ struct FieldEvaluator::Impl {
       if (!seen || seen[i]) sum += batch.w[i] * tree.reflected[static_cast<size_t>(batch.triangle[i])];
     return weight > 0.0 ? sum / weight : Rgb(0.0);
   }
+
+  Rgb gather_patch(size_t q, const Vec3& x, const Vec3& n, int patch, uint64_t id, FieldReport& report) const;
+  Rgb gather_clustered(const Vec3& x, const Vec3& n, int patch, uint64_t id, FieldReport& report) const;
+  void build_clusters();
 };
 
 FieldEvaluator::FieldEvaluator(const Scene& scene, const Mesh& mesh, const std::vector<Rgb>& element,
-                               const SolveOptions& options)
+                               const SolveOptions& options, GatherSources how)
     : impl_(std::make_unique<Impl>(scene, options)) {
   Impl& m = *impl_;
   if (!m.occlusion.convex_enclosure()) m.visibility = std::make_unique<Visibility>(scene);
@@ -238,9 +267,73 @@ FieldEvaluator::FieldEvaluator(const Scene& scene, const Mesh& mesh, const std::
     s.cumulative.assign(s.triangle.size() + 1, 0.0);
     for (size_t i = 0; i < s.triangle.size(); ++i) s.cumulative[i + 1] = s.cumulative[i] + s.triangle[i].area;
   }
+  if (how == GatherSources::clustered ||
+      (how == GatherSources::automatic && !gather_every_patch(static_cast<double>(mesh.positions.size()),
+                                                                  static_cast<double>(scene.patches.size()))))
+    m.build_clusters();
+}
+
+void FieldEvaluator::Impl::build_clusters() {
+  // One root per reflecting patch: a stand-in triangle in its plane with
+  // its area, normal and area centroid, its corners as far from that
+  // centroid as the patch's furthest vertex (the cluster tree takes that
+  // for the root's radius).
+  std::vector<Triangle> roots;
+  std::vector<Box3> root_box;
+  for (size_t p = 0; p < sources.size(); ++p) {
+    const SourceTree& s = sources[p];
+    if (s.nodes.empty()) continue;
+    const Vec3 c = s.nodes[0].centre;
+    double r = 0.0;
+    Box3 box;
+    for (const Triangle& t : s.triangle)
+      for (const Vec3& v : t.v) {
+        r = std::max(r, glm::length(v - c));
+        box.add(v);
+      }
+    root_box.push_back(box);
+    const Vec3 u = glm::normalize(glm::cross(s.normal, std::abs(s.normal.x) < 0.9 ? Vec3(1, 0, 0) : Vec3(0, 1, 0)));
+    const Vec3 w = glm::cross(s.normal, u);
+    const double h = 0.5 * std::sqrt(3.0);
+    Triangle t;
+    t.v = {c + r * u, c + r * (-0.5 * u + h * w), c + r * (-0.5 * u - h * w)};
+    t.normal = s.normal;
+    t.area = s.nodes[0].area;
+    t.radius = r;
+    roots.push_back(t);
+    cluster_patch.push_back(static_cast<int>(p));
+  }
+  if (roots.size() < 2) {
+    cluster_patch.clear();
+    return;
+  }
+  clusters = ClusterTree::volume(roots, std::vector<double>(roots.size(), 1.0));
+  cluster_reach.assign(clusters.size(), 0.0);
+  cluster_box.assign(clusters.size(), Box3{});
+  for (int c = static_cast<int>(clusters.size()) - 1; c >= 0; --c) {
+    const Vec3& centre = clusters.cluster(c).centre;
+    double& reach = cluster_reach[static_cast<size_t>(c)];
+    Box3& box = cluster_box[static_cast<size_t>(c)];
+    for (const int child : clusters.children(c)) {
+      if (child >= 0) {
+        const Triangle& t = roots[static_cast<size_t>(child)];
+        reach = std::max(reach, glm::length(t.centroid() - centre) + t.radius);
+        box.add(root_box[static_cast<size_t>(child)]);
+      } else {
+        const int k = ClusterTree::index(child);
+        reach = std::max(reach, glm::length(clusters.cluster(k).centre - centre) + cluster_reach[static_cast<size_t>(k)]);
+        box.add(cluster_box[static_cast<size_t>(k)]);
+      }
+    }
+  }
+  std::vector<Rgb> root_reflected;
+  for (const int p : cluster_patch) root_reflected.push_back(sources[static_cast<size_t>(p)].nodes[0].reflected);
+  clusters.radiosity(root_reflected, group_reflected);
 }
 
 FieldEvaluator::~FieldEvaluator() = default;
+
+bool FieldEvaluator::clustered() const { return !impl_->clusters.empty(); }
 
 Vec3 FieldEvaluator::evaluation_point(const Vec3& x, int patch, const Vec3& inward, FieldReport& report) const {
   const Impl& m = *impl_;
@@ -263,7 +356,11 @@ Vec3 FieldEvaluator::evaluation_point(const Vec3& x, int patch, const Vec3& inwa
   const double small = 0.1 * length;
   double step = 0.0;
   bool flat = false;  // touching a patch that lies in the plane (a lamp set in a ceiling)
-  for (int q = 0; q < static_cast<int>(m.scene.patches.size()); ++q) {
+  // Only the patches near x (a box tree query: this runs once per vertex),
+  // in the order of their numbers, as a pass over all of them would go.
+  thread_local std::vector<int> near;
+  m.occlusion.patches_near(x, std::max(small, 1e-9 * diagonal), near);
+  for (const int q : near) {
     if (q == patch) continue;
     const double distance = m.occlusion.distance(q, x);
     const bool touching = distance <= 1e-9 * diagonal;
@@ -370,13 +467,11 @@ NodeTerm node_term(const GatherNode& node, const Vec3& x, const Vec3& n, const V
 
 }  // namespace detail
 
-Rgb FieldEvaluator::indirect(const Vec3& x, int patch, uint64_t id, FieldReport& report) const {
-  const Impl& m = *impl_;
-  const Patch& receiver = m.scene.patches[static_cast<size_t>(patch)];
-  const Rgb rho = m.scene.material_of(receiver).reflectance;
-  if (max3(rho) <= 0.0) return Rgb(0.0);
-  const Vec3& n = receiver.normal;
-  Rgb h(0.0);
+// What x (normal n, on `patch`) gathers from source patch q, before its
+// reflectance: Lambert's form factor to q x the mean over q's tree cut.
+Rgb FieldEvaluator::Impl::gather_patch(size_t q, const Vec3& x, const Vec3& n, int patch, uint64_t id,
+                                       FieldReport& report) const {
+  const Impl& m = *this;
   // What one entry of a source's tree cut adds: f x its radiosity (send),
   // or f x the mean over its samples [begin .. end) once their rays are cast.
   struct CutTerm {
@@ -386,123 +481,245 @@ Rgb FieldEvaluator::indirect(const Vec3& x, int patch, uint64_t id, FieldReport&
     size_t begin = 0, end = 0;
     double weight = 0.0;  // of the samples, those with a zero kernel included
   };
-  // Kept per thread: this runs once per vertex.
+  // Kept per thread: this runs once per (vertex, source).
   thread_local std::vector<int> stack, cut;
   thread_local std::vector<const Triangle*> triangles;
   thread_local std::vector<double> tri_f;
   thread_local std::vector<CutTerm> terms;
-  thread_local Impl::Samples samples, unshaded;
+  thread_local Samples samples, unshaded;
   thread_local std::vector<Vec3> from;
   thread_local std::vector<unsigned char> seen;
   thread_local ReceiverPoints at_x;  // x alone, for form_factors
   at_x.normal = n;
   at_x.x.assign(1, x);
   at_x.w.assign(1, 1.0);
-  for (size_t q = 0; q < m.sources.size(); ++q) {
-    const SourceTree& s = m.sources[q];
-    if (s.nodes.empty() || static_cast<int>(q) == patch || !m.occlusion.facing(patch, static_cast<int>(q))) continue;
-    const double fq = patch_form_factor(x, n, s.loops, s.normal);
-    if (fq <= 0.0) continue;
-    ++report.gather_sources;
-    const bool occludable = m.visibility && m.occlusion.may_occlude(patch, static_cast<int>(q));
-    // What may lie between x and the parts of q, found once (when a part
-    // first needs a shaft test) where the cut has enough parts to pay for
-    // it (it costs a few parts' tests); else every part is tested alone
-    // (`all`). On a field of 8 x 8 boxes, whose faces are cut into few
-    // parts, listing for every source doubled the gather's time.
-    Occlusion::Candidates candidates;
-    candidates.all = true;
-    bool listed = false;
-    // One random stream per (point, source node or triangle).
-    const uint64_t stream = pair_seed(id, q);
-    // The tree cut: nodes far enough to take whole (>= 0) and the
-    // triangles of the leaves opened (-1 - triangle), in the
-    // order of the walk; then the triangles' form factors in one pass.
-    cut.clear();
-    stack.assign(1, 0);
-    while (!stack.empty()) {
-      const int k = stack.back();
-      stack.pop_back();
-      const SourceTree::Node& node = s.nodes[static_cast<size_t>(k)];
-      if (node.left < 0) {
-        for (int i = node.begin; i < node.end; ++i) cut.push_back(-1 - i);
-      } else if (node.radius <= kOpening * glm::length(node.centre - x)) {
-        cut.push_back(k);
-      } else {
-        stack.push_back(node.left);
-        stack.push_back(node.right);
-      }
+  const SourceTree& s = m.sources[q];
+  if (s.nodes.empty() || static_cast<int>(q) == patch || !m.occlusion.facing(patch, static_cast<int>(q))) return Rgb(0.0);
+  const double fq = patch_form_factor(x, n, s.loops, s.normal);
+  if (fq <= 0.0) return Rgb(0.0);
+  ++report.gather_sources;
+  const bool occludable = m.visibility && m.occlusion.may_occlude(patch, static_cast<int>(q));
+  // What may lie between x and the parts of q, found once (when a part
+  // first needs a shaft test) where the cut has enough parts to pay for
+  // it (it costs a few parts' tests); else every part is tested alone
+  // (`all`). On a field of 8 x 8 boxes, whose faces are cut into few
+  // parts, listing for every source doubled the gather's time.
+  Occlusion::Candidates candidates;
+  candidates.all = true;
+  bool listed = false;
+  // One random stream per (point, source node or triangle).
+  const uint64_t stream = pair_seed(id, q);
+  // The tree cut: nodes far enough to take whole (>= 0) and the
+  // triangles of the leaves opened (-1 - triangle), in the
+  // order of the walk; then the triangles' form factors in one pass.
+  cut.clear();
+  stack.assign(1, 0);
+  while (!stack.empty()) {
+    const int k = stack.back();
+    stack.pop_back();
+    const SourceTree::Node& node = s.nodes[static_cast<size_t>(k)];
+    if (node.left < 0) {
+      for (int i = node.begin; i < node.end; ++i) cut.push_back(-1 - i);
+    } else if (node.radius <= kOpening * glm::length(node.centre - x)) {
+      cut.push_back(k);
+    } else {
+      stack.push_back(node.left);
+      stack.push_back(node.right);
     }
-    triangles.clear();
-    for (const int e : cut)
-      if (e < 0) triangles.push_back(&s.triangle[static_cast<size_t>(-1 - e)]);
-    tri_f.resize(triangles.size());
-    form_factors(at_x, triangles.data(), triangles.size(), tri_f.data());
-    // Per entry of the cut, its weight and what it sends: at once where its
-    // shaft is clear, else from samples whose shadow rays are cast
-    // together, one Embree call for the whole source.
-    terms.clear();
-    samples.clear();
-    size_t next = 0;
-    for (const int e : cut) {
-      CutTerm term;
-      const int i = -1 - e;
-      const bool is_triangle = e < 0;
-      const SourceTree::Node* node = is_triangle ? nullptr : &s.nodes[static_cast<size_t>(e)];
-      detail::NodeTerm nt;
-      if (is_triangle) {
-        nt.f = tri_f[next++];
-        ++report.gather_triangles;
-      } else {
-        nt = detail::node_term(*node, x, n, s.normal);
-        ++report.gather_nodes;
-      }
-      if (!(nt.f > 0.0)) continue;
-      term.f = nt.f;
-      if (occludable && !listed && cut.size() >= kListedParts) {
-        candidates = m.occlusion.candidates(patch, x, n, static_cast<int>(q));
-        listed = true;
-      }
-      const bool shaded =
-          occludable && (is_triangle ? m.occlusion.may_occlude(candidates, patch, x, n, static_cast<int>(q),
-                                                               s.triangle[static_cast<size_t>(i)])
-                                     : m.occlusion.may_occlude(candidates, patch, x, n, static_cast<int>(q), node->rect,
-                                                               s.normal));
-      const int begin = is_triangle ? i : node->begin, end = is_triangle ? i + 1 : node->end;
-      const uint64_t seed =
-          pair_seed(stream, is_triangle ? (uint64_t{1} << 32) + static_cast<uint64_t>(i) : static_cast<uint64_t>(e));
-      if (shaded) {
-        term.begin = samples.to.size();
-        term.weight = m.draw(x, n, s, begin, end, seed, samples);
-        term.end = samples.to.size();
-        term.sampled = true;
-        report.rays_cast += m.rays_per_node;
-      } else if (is_triangle) {
-        term.send = term.f * s.reflected[static_cast<size_t>(i)];
-      } else if (nt.smooth) {
-        term.send = term.f * node->reflected + nt.first;
-      } else {
-        // The node straddles x's tangent plane (the expansion fails): the
-        // same points, without rays (the shaft is clear).
-        unshaded.clear();
-        const double w = m.draw(x, n, s, begin, end, seed, unshaded);
-        term.send = term.f * Impl::sampled_mean(s, unshaded, 0, unshaded.to.size(), nullptr, w);
-      }
-      terms.push_back(term);
-    }
-    seen.assign(samples.to.size(), 1);
-    if (!samples.to.empty()) {
-      from.assign(samples.to.size(), x);
-      m.visibility->visible(from.data(), samples.to.data(), samples.to.size(), patch, static_cast<int>(q), seen.data());
-    }
-    double weight = 0.0;
-    Rgb sum(0.0);
-    for (const CutTerm& t : terms) {
-      weight += t.f;
-      sum += t.sampled ? t.f * Impl::sampled_mean(s, samples, t.begin, t.end, seen.data(), t.weight) : t.send;
-    }
-    if (weight > 0.0) h += (fq / weight) * sum;
   }
+  triangles.clear();
+  for (const int e : cut)
+    if (e < 0) triangles.push_back(&s.triangle[static_cast<size_t>(-1 - e)]);
+  tri_f.resize(triangles.size());
+  form_factors(at_x, triangles.data(), triangles.size(), tri_f.data());
+  // Per entry of the cut, its weight and what it sends: at once where its
+  // shaft is clear, else from samples whose shadow rays are cast
+  // together, one Embree call for the whole source.
+  terms.clear();
+  samples.clear();
+  size_t next = 0;
+  for (const int e : cut) {
+    CutTerm term;
+    const int i = -1 - e;
+    const bool is_triangle = e < 0;
+    const SourceTree::Node* node = is_triangle ? nullptr : &s.nodes[static_cast<size_t>(e)];
+    detail::NodeTerm nt;
+    if (is_triangle) {
+      nt.f = tri_f[next++];
+      ++report.gather_triangles;
+    } else {
+      nt = detail::node_term(*node, x, n, s.normal);
+      ++report.gather_nodes;
+    }
+    if (!(nt.f > 0.0)) continue;
+    term.f = nt.f;
+    if (occludable && !listed && cut.size() >= kListedParts) {
+      candidates = m.occlusion.candidates(patch, x, n, static_cast<int>(q));
+      listed = true;
+    }
+    const bool shaded =
+        occludable && (is_triangle ? m.occlusion.may_occlude(candidates, patch, x, n, static_cast<int>(q),
+                                                             s.triangle[static_cast<size_t>(i)])
+                                   : m.occlusion.may_occlude(candidates, patch, x, n, static_cast<int>(q), node->rect,
+                                                             s.normal));
+    const int begin = is_triangle ? i : node->begin, end = is_triangle ? i + 1 : node->end;
+    const uint64_t seed =
+        pair_seed(stream, is_triangle ? (uint64_t{1} << 32) + static_cast<uint64_t>(i) : static_cast<uint64_t>(e));
+    if (shaded) {
+      term.begin = samples.to.size();
+      term.weight = m.draw(x, n, s, begin, end, seed, samples);
+      term.end = samples.to.size();
+      term.sampled = true;
+      report.rays_cast += m.rays_per_node;
+    } else if (is_triangle) {
+      term.send = term.f * s.reflected[static_cast<size_t>(i)];
+    } else if (nt.smooth) {
+      term.send = term.f * node->reflected + nt.first;
+    } else {
+      // The node straddles x's tangent plane (the expansion fails): the
+      // same points, without rays (the shaft is clear).
+      unshaded.clear();
+      const double w = m.draw(x, n, s, begin, end, seed, unshaded);
+      term.send = term.f * sampled_mean(s, unshaded, 0, unshaded.to.size(), nullptr, w);
+    }
+    terms.push_back(term);
+  }
+  seen.assign(samples.to.size(), 1);
+  if (!samples.to.empty()) {
+    from.assign(samples.to.size(), x);
+    m.visibility->visible(from.data(), samples.to.data(), samples.to.size(), patch, static_cast<int>(q), seen.data());
+  }
+  double weight = 0.0;
+  Rgb sum(0.0);
+  for (const CutTerm& t : terms) {
+    weight += t.f;
+    sum += t.sampled ? t.f * sampled_mean(s, samples, t.begin, t.end, seen.data(), t.weight) : t.send;
+  }
+  return weight > 0.0 ? (fq / weight) * sum : Rgb(0.0);
+}
+
+// What x gathers from every source patch by the cluster tree over them: a
+// cluster far enough (its patches within a sphere of radius at most
+// kClusterOpening x its distance), wholly in front of x's tangent plane and
+// with groups whose normals do not straddle the direction to x by more than
+// kClusterStraddle of its area, is taken whole: its groups' form factors
+// (ClusterTree::form_factors) times the kernel-weighted mean of V R over
+// rays_per_node area-stratified points of its patches, one random stream
+// per (point, cluster). A cluster wholly behind the plane gives nothing;
+// any other is opened, down to the patches, which gather_patch takes.
+Rgb FieldEvaluator::Impl::gather_clustered(const Vec3& x, const Vec3& n, int patch, uint64_t id,
+                                           FieldReport& report) const {
+  struct Far {
+    double f = 0.0;   // the cluster's form factor
+    Rgb send{0.0};    // f x its groups' radiosity, where no rays are cast
+    size_t begin = 0, end = 0;  // its samples
+    double weight = 0.0;        // of the samples, those with a zero kernel included
+  };
+  thread_local std::vector<int> stack;
+  thread_local std::vector<Far> far;
+  thread_local std::vector<std::pair<int, double>> found;
+  thread_local Samples samples;
+  thread_local std::vector<int> sample_patch;
+  thread_local std::vector<Vec3> from;
+  thread_local std::vector<unsigned char> seen;
+  far.clear();
+  samples.clear();
+  sample_patch.clear();
+  Rgb h(0.0);
+  stack.assign(1, 0);
+  while (!stack.empty()) {
+    const int c = stack.back();
+    stack.pop_back();
+    const ClusterTree::Cluster& cl = clusters.cluster(c);
+    const double reach = cluster_reach[static_cast<size_t>(c)];
+    const double d = glm::length(cl.centre - x);
+    // The heights of its box's corners over x's tangent plane (points on
+    // the plane send x nothing: a box standing on the floor under x is
+    // wholly in front of it).
+    const Box3& box = cluster_box[static_cast<size_t>(c)];
+    double low = INFINITY, high = -INFINITY;
+    for (int k = 0; k < 8; ++k) {
+      const Vec3 corner((k & 1) ? box.hi.x : box.lo.x, (k & 2) ? box.hi.y : box.lo.y, (k & 4) ? box.hi.z : box.lo.z);
+      const double hk = glm::dot(corner - x, n);
+      low = std::min(low, hk);
+      high = std::max(high, hk);
+    }
+    const double flat = 1e-9 * diagonal;
+    if (high <= flat) continue;  // wholly behind x's tangent plane, or in it
+    if (low >= -flat && reach <= kClusterOpening * d && clusters.straddle(c, x, 0.0) <= kClusterStraddle * cl.area) {
+      ++report.gather_clusters;
+      found.clear();
+      clusters.form_factors(c, x, n, 1.0, found);
+      Far t;
+      for (const auto& [g, f] : found) {
+        t.f += f;
+        t.send += f * group_reflected[static_cast<size_t>(-2 - g)];
+      }
+      if (!(t.f > 0.0)) continue;
+      if (visibility) {
+        // Area-stratified points of the cluster's patches, each weighed by
+        // the point form factor's kernel there, their rays cast below.
+        SplitMix rng(pair_seed(pair_seed(id, uint64_t{1} << 40), static_cast<uint64_t>(c)));
+        const int k = rays_per_node;
+        t.begin = samples.to.size();
+        for (int j = 0; j < k; ++j) {
+          const int root = clusters.root_at(clusters.position_at_area(c, (j + rng.uniform()) / k));
+          const size_t q = static_cast<size_t>(cluster_patch[static_cast<size_t>(root)]);
+          const SourceTree& s = sources[q];
+          const double u = rng.uniform(), a = rng.uniform(), b = rng.uniform();
+          int tri = -1;
+          const Vec3 y = s.sample(0, static_cast<int>(s.triangle.size()), u, a, b, tri);
+          const Vec3 r = y - x;
+          const double w =
+              std::max(0.0, glm::dot(n, r)) * std::max(0.0, -glm::dot(s.normal, r)) / std::pow(glm::dot(r, r), 2);
+          t.weight += w;
+          if (!(w > 0.0)) continue;
+          samples.to.push_back(y);
+          samples.w.push_back(w);
+          samples.triangle.push_back(tri);
+          sample_patch.push_back(static_cast<int>(q));
+        }
+        t.end = samples.to.size();
+        report.rays_cast += k;
+      }
+      far.push_back(t);
+      continue;
+    }
+    for (const int child : clusters.children(c)) {
+      if (child <= -2)
+        stack.push_back(ClusterTree::index(child));
+      else
+        h += gather_patch(static_cast<size_t>(cluster_patch[static_cast<size_t>(child)]), x, n, patch, id, report);
+    }
+  }
+  if (!visibility) {
+    for (const Far& t : far) h += t.send;
+    return h;
+  }
+  seen.assign(samples.to.size(), 1);
+  if (!samples.to.empty()) {
+    from.assign(samples.to.size(), x);
+    visibility->visible_each(from.data(), samples.to.data(), samples.to.size(), patch, sample_patch.data(), seen.data());
+  }
+  for (const Far& t : far) {
+    if (!(t.weight > 0.0)) continue;
+    Rgb sum(0.0);
+    for (size_t i = t.begin; i < t.end; ++i)
+      if (seen[i]) sum += samples.w[i] * sources[static_cast<size_t>(sample_patch[i])].reflected[static_cast<size_t>(samples.triangle[i])];
+    h += t.f * sum / t.weight;
+  }
+  return h;
+}
+
+Rgb FieldEvaluator::indirect(const Vec3& x, int patch, uint64_t id, FieldReport& report) const {
+  const Impl& m = *impl_;
+  const Patch& receiver = m.scene.patches[static_cast<size_t>(patch)];
+  const Rgb rho = m.scene.material_of(receiver).reflectance;
+  if (max3(rho) <= 0.0) return Rgb(0.0);
+  const Vec3& n = receiver.normal;
+  if (!m.clusters.empty()) return rho * m.gather_clustered(x, n, patch, id, report);
+  Rgb h(0.0);
+  for (size_t q = 0; q < m.sources.size(); ++q) h += m.gather_patch(q, x, n, patch, id, report);
   return rho * h;
 }
 
@@ -554,6 +771,7 @@ NodalField compute_field(const Scene& scene, const Mesh& mesh, const std::vector
   }
 
   const FieldEvaluator evaluator(scene, mesh, element, options);
+  rep.clustered = evaluator.clustered();
   std::vector<FieldReport> per(nd);
   std::vector<Rgb> direct(nd), indirect(nd);
   // In blocks, so that progress is reported from one thread.
@@ -582,6 +800,7 @@ NodalField compute_field(const Scene& scene, const Mesh& mesh, const std::vector
     rep.on_other_surface += per[d].on_other_surface;
     rep.gather_sources += per[d].gather_sources;
     rep.gather_nodes += per[d].gather_nodes;
+    rep.gather_clusters += per[d].gather_clusters;
     rep.gather_triangles += per[d].gather_triangles;
     rep.rays_cast += per[d].rays_cast;
   }

@@ -27,6 +27,8 @@ struct FieldReport {
   long long on_other_surface = 0;  // vertices on another patch (a contact), taken a hair to their own side
   long long gather_sources = 0;    // (vertex, source patch) pairs gathered
   long long gather_nodes = 0;      // source nodes taken whole (their angular size within the bound)
+  long long gather_clusters = 0;   // clusters of patches taken whole (the clustered gather)
+  bool clustered = false;          // the gather went by clusters of patches
   long long gather_triangles = 0;  // source triangles taken one by one (Lambert's exact formula)
   long long rays_cast = 0;
   double seconds_direct = 0.0;
@@ -61,9 +63,30 @@ struct FieldReport {
 // factor's kernel there (visibility and radiosity are correlated: the part
 // of a source hidden from x is often its dark part). One random stream per
 // (point, node), so results do not depend on the thread count.
+//
+// Past the budget below (scenes of many patches), the gather does not visit
+// every patch: a cluster tree over the patches (ClusterTree::volume, one
+// root per reflecting patch) is walked from its top, and a cluster is taken
+// whole where its patches lie within a sphere of radius at most
+// kClusterOpening x its distance from x, wholly in front of x's tangent
+// plane, and its normal groups straddle the direction to x by at most
+// kClusterStraddle of its area (ClusterTree::straddle): its groups' form
+// factors (each a point form factor at the group's centroid) times the
+// kernel-weighted mean of the visible reflected radiosity over
+// options.rays / 4 area-stratified points of its patches, their rays cast
+// together. Other clusters are opened; the patches reached are gathered as
+// above. The clusters' form factors are not scaled to an exact sum, so a
+// point's row is exact only to the far clusters' error, about
+// (kClusterOpening)^2 of what they send.
+enum class GatherSources {
+  automatic,    // every patch within kGatherBudget, clusters past it
+  every_patch,  // every patch
+  clustered,    // the cluster tree (with fewer than two reflecting patches: every patch)
+};
 class FieldEvaluator {
 public:
-  FieldEvaluator(const Scene& scene, const Mesh& mesh, const std::vector<Rgb>& element, const SolveOptions& options);
+  FieldEvaluator(const Scene& scene, const Mesh& mesh, const std::vector<Rgb>& element, const SolveOptions& options,
+                 GatherSources how = GatherSources::automatic);
   ~FieldEvaluator();
   FieldEvaluator(const FieldEvaluator&) = delete;
   FieldEvaluator& operator=(const FieldEvaluator&) = delete;
@@ -83,7 +106,12 @@ public:
   Rgb direct(const Vec3& x, int patch, FieldReport& report) const;
   Rgb indirect(const Vec3& x, int patch, uint64_t id, FieldReport& report) const;
 
+  // Whether the gather goes by the cluster tree over the patches.
+  bool clustered() const;
+
   static constexpr double kOpening = 0.25;
+  static constexpr double kClusterOpening = 0.2;
+  static constexpr double kClusterStraddle = 0.05;
 
 private:
   struct Impl;
@@ -96,6 +124,16 @@ private:
 // box has 3e5 pairs, a 1,280-triangle sphere in a room 2e7 (33 s of field
 // for 10 s of solve on this machine).
 inline constexpr double kGatherBudget = 2e7;
+// Past that budget the gather goes by clusters of patches (FieldEvaluator),
+// a vertex visiting about kClusterCut clusters and patches, and the direct
+// pass still every emitter: the automatic field also gathers while
+// (display vertices) x (kClusterCut + emitters) is within the budget.
+inline constexpr double kClusterCut = 400;
+// Whether the gather visits every patch for each of `vertices` vertices
+// (else it goes by clusters).
+inline bool gather_every_patch(double vertices, double patches) { return vertices * patches <= kGatherBudget; }
+// Whether the automatic field gathers over `vertices` vertices.
+bool gather_within_budget(const Scene& scene, double vertices);
 
 // `requested`, or for FieldMode::automatic gather or fit by the budget
 // (with the reason in *why when it is fit).

@@ -267,7 +267,7 @@ private:
   bool gathered_field() const {
     if (opt_.field != FieldMode::automatic) return opt_.field == FieldMode::gather;
     const double vertices = (1.0 + 2.0 * kBaumShare) * static_cast<double>(out_.mesh.positions.size());
-    return vertices * static_cast<double>(scene_.patches.size()) <= kGatherBudget;
+    return gather_within_budget(scene_, vertices);
   }
 
   int node_patch(int n) const { return out_.tree.node(n).patch; }

@@ -96,8 +96,8 @@ Occlusion::Occlusion(const Scene& scene) {
         break;
       }
   }
+  tree_ = BoxTree(boxes);  // also for patches_near
   if (convex_) return;
-  tree_ = BoxTree(boxes);
   if (np <= kCachedPatches) {
     pair_ = std::make_unique<std::atomic<unsigned char>[]>(np * np);
     for (size_t i = 0; i < np * np; ++i) pair_[i].store(0, std::memory_order_relaxed);
@@ -150,6 +150,15 @@ bool Occlusion::facing(int p, int q) const {
   const Poly& a = polys_[static_cast<size_t>(p)];
   const Poly& b = polys_[static_cast<size_t>(q)];
   return in_front(a, b) && in_front(b, a);
+}
+
+void Occlusion::patches_near(const Vec3& x, double r, std::vector<int>& out) const {
+  out.clear();
+  tree_.overlapping(Box3{x, x}, r, [&](int k) {
+    out.push_back(k);
+    return true;
+  });
+  std::sort(out.begin(), out.end());
 }
 
 double Occlusion::distance(int p, const Vec3& x) const {

@@ -39,6 +39,9 @@ public:
 
   // Lower bound of the distance from x to patch p (its outline; holes ignored).
   double distance(int p, const Vec3& x) const;
+  // Into `out`, in increasing order: every patch whose bounding box lies
+  // within r of x on each axis (among them every patch within distance r).
+  void patches_near(const Vec3& x, double r, std::vector<int>& out) const;
 
   // Whether some patch may lie between elements a (of patch pa) and b (of pb).
   bool may_occlude(int pa, int pb, const Triangle& a, const Triangle& b) const;

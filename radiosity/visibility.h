@@ -25,6 +25,10 @@ public:
   // and last 1e-6 of it left out: one call to Embree, which traces nearby
   // rays together. Thread-safe.
   void visible(const Vec3* from, const Vec3* to, size_t n, int ignore_a, int ignore_b, unsigned char* seen) const;
+  // The same with a patch of its own ignored per segment: ignore_each[i]
+  // for segment i (its far end's patch), besides ignore_a for all.
+  void visible_each(const Vec3* from, const Vec3* to, size_t n, int ignore_a, const int* ignore_each,
+                    unsigned char* seen) const;
 
   // Segments between points on two surfaces: from[i] on one facing
   // from_normal, to[i] on one facing to_normal (unit normals). Each end is

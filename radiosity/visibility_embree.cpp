@@ -21,6 +21,7 @@ struct QueryContext {
   RTCIntersectContext base;  // must come first: Embree passes &base back to us
   const int* prim_patch;
   int ignore_a, ignore_b;
+  const int* ignore_each;  // per ray (by its id), or null
 };
 
 void ignore_filter(const RTCFilterFunctionNArguments* args) {
@@ -29,7 +30,9 @@ void ignore_filter(const RTCFilterFunctionNArguments* args) {
     if (args->valid[i] != -1) continue;
     const unsigned prim = RTCHitN_primID(args->hit, args->N, i);
     const int patch = ctx->prim_patch[prim];
-    if (patch == ctx->ignore_a || patch == ctx->ignore_b) args->valid[i] = 0;
+    if (patch == ctx->ignore_a || patch == ctx->ignore_b ||
+        (ctx->ignore_each && patch == ctx->ignore_each[RTCRayN_id(args->ray, args->N, i)]))
+      args->valid[i] = 0;
   }
 }
 
@@ -136,6 +139,7 @@ QueryContext make_context(const std::vector<int>& prim_patch, int ignore_a, int 
   ctx.prim_patch = prim_patch.data();
   ctx.ignore_a = ignore_a;
   ctx.ignore_b = ignore_b;
+  ctx.ignore_each = nullptr;
   return ctx;
 }
 
@@ -149,19 +153,33 @@ void trace_coherent(const RTCScene scene, QueryContext& ctx, size_t n, MakeRay&&
   ctx.base.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
   thread_local std::vector<RTCRay> rays;
   rays.resize(n);
-  for (size_t i = 0; i < n; ++i) rays[i] = ray(i);
+  for (size_t i = 0; i < n; ++i) {
+    rays[i] = ray(i);
+    rays[i].id = static_cast<unsigned>(i);  // for a per-ray ignored patch
+  }
   rtcOccluded1M(scene, &ctx.base, rays.data(), static_cast<unsigned>(n), sizeof(RTCRay));
   for (size_t i = 0; i < n; ++i) seen[i] = rays[i].tfar >= 0.0f ? 1 : 0;
+}
+
+// Open segments (from[i], to[i]), the first and last 1e-6 of each left out.
+void trace_segments(const RTCScene scene, const Vec3& origin, QueryContext& ctx, const Vec3* from, const Vec3* to,
+                    size_t n, unsigned char* seen) {
+  trace_coherent(
+      scene, ctx, n, [&](size_t i) { return make_ray(from[i], origin, to[i] - from[i], 1e-6f, 1.0f - 1e-6f); }, seen);
 }
 
 }  // namespace
 
 void Visibility::visible(const Vec3* from, const Vec3* to, size_t n, int ignore_a, int ignore_b, unsigned char* seen) const {
-  const Impl& m = *impl_;
-  QueryContext ctx = make_context(m.prim_patch, ignore_a, ignore_b);
-  trace_coherent(
-      m.scene, ctx, n, [&](size_t i) { return make_ray(from[i], m.origin, to[i] - from[i], 1e-6f, 1.0f - 1e-6f); },
-      seen);
+  QueryContext ctx = make_context(impl_->prim_patch, ignore_a, ignore_b);
+  trace_segments(impl_->scene, impl_->origin, ctx, from, to, n, seen);
+}
+
+void Visibility::visible_each(const Vec3* from, const Vec3* to, size_t n, int ignore_a, const int* ignore_each,
+                              unsigned char* seen) const {
+  QueryContext ctx = make_context(impl_->prim_patch, ignore_a, -1);
+  ctx.ignore_each = ignore_each;
+  trace_segments(impl_->scene, impl_->origin, ctx, from, to, n, seen);
 }
 
 bool Visibility::visible_off_surfaces(const Vec3& from, const Vec3& from_normal, const Vec3& to, const Vec3& to_normal,
