@@ -5,6 +5,7 @@
 
 #include "radiosity/direct.h"
 
+#include "meshing/box_tree.h"
 #include "meshing/errors.h"
 #include "radiosity/form_factor.h"
 
@@ -16,6 +17,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <numbers>
 
@@ -43,6 +45,7 @@ struct Emitter {
   std::vector<Vec3> base;               // the pyramid's base: the outline if convex, else `corners`
   Vec3 base_centre{0.0};
   std::vector<int> front;               // occluders with a corner strictly in front of the plane
+  BoxTree front_boxes;                   // their boxes (item k: front[k])
   std::vector<std::vector<Vec3>> loops;  // outline, then holes (scene coordinates)
   Vec3 origin{0.0};                      // a point of the plane (double): n . y = n . origin
   int iu = 1, iv = 2;                    // the scene axes of the 2-D map's u and v
@@ -369,11 +372,50 @@ struct DirectIllumination::Impl {
           if (apart(t, glm::cross(he, edge))) return true;
       return false;
     };
-    const Vec3 lo = glm::min(x, e.lo) - Vec3(margin), hi = glm::max(x, e.hi) + Vec3(margin);
-    for (const int index : e.front) {
+    // The occluders whose boxes meet the pyramid's box, by the box tree
+    // (not a pass over all of them: this runs per vertex and emitter), in
+    // the order of their numbers. A subtree whose box lies beyond one of
+    // the pyramid's side planes or the emitter's plane (its corners'
+    // projections on the face's normal all at or past the pyramid's) is
+    // skipped: every occluder in it would be separated on that axis.
+    Box3 query;
+    query.add(glm::min(x, e.lo) - Vec3(margin));
+    query.add(glm::max(x, e.hi) + Vec3(margin));
+    thread_local std::vector<std::array<double, 5>> faces;  // axis, and the pyramid's projections on it
+    faces.clear();
+    auto face = [&](const Vec3& axis) {
+      double plo = INFINITY, phi = -INFINITY;
+      for (const Vec3& p : hull) {
+        const double d = glm::dot(p, axis);
+        plo = std::min(plo, d);
+        phi = std::max(phi, d);
+      }
+      faces.push_back({axis.x, axis.y, axis.z, plo, phi});
+    };
+    for (size_t i = 0; i < nb; ++i) face(glm::cross(hull_edges[2 * i], hull_edges[2 * ((i + 1) % nb)]));
+    face(e.normal);
+    auto beyond = [&](const Box3& b) {
+      for (const auto& f : faces) {
+        // The box's extent on the axis: its centre's projection +- the
+        // half-extents' projection on |axis|.
+        const Vec3 axis(f[0], f[1], f[2]);
+        const double c = glm::dot(b.centre(), axis), r = glm::dot(0.5 * (b.hi - b.lo), glm::abs(axis));
+        if (c - r >= f[4] || c + r <= f[3]) return true;
+      }
+      return false;
+    };
+    thread_local std::vector<int> met;
+    met.clear();
+    e.front_boxes.where([&](const Box3& b) { return b.overlaps(query, 0.0) && !beyond(b); },
+                        [&](int k) {
+                          met.push_back(k);
+                          return true;
+                        });
+    std::sort(met.begin(), met.end());
+    for (const int k : met) {
+      const int index = e.front[static_cast<size_t>(k)];
       const OccluderPolygon& t = occluders[static_cast<size_t>(index)];
       if (t.patch == receiver || t.patch == e.patch) continue;
-      if (glm::any(glm::lessThan(hi, t.lo)) || glm::any(glm::lessThan(t.hi, lo))) continue;
       if (!separated(t.d)) out.push_back(index);
     }
   }
@@ -584,6 +626,14 @@ DirectIllumination::DirectIllumination(const Scene& scene) : impl_(std::make_uni
                       [&](const Point3& p) { return e.plane.oriented_side(p) == CGAL::ON_POSITIVE_SIDE; }))
         e.front.push_back(static_cast<int>(t));
     }
+    std::vector<Box3> boxes;
+    for (const int t : e.front) {
+      Box3 b;
+      b.add(impl_->occluders[static_cast<size_t>(t)].lo);
+      b.add(impl_->occluders[static_cast<size_t>(t)].hi);
+      boxes.push_back(b);
+    }
+    e.front_boxes = BoxTree(boxes);
     impl_->emitters.push_back(std::move(e));
   }
 }
