@@ -586,3 +586,60 @@ TEST(Field, EachSegmentIgnoresItsOwnPatch) {
   rays.visible_each(from.data(), to.data(), from.size(), receiver, ignore.data(), seen.data());
   for (size_t i = 0; i < seen.size(); ++i) EXPECT_EQ(seen[i], i % 2 ? 1 : 0) << i;
 }
+
+TEST(Field, TheClusteredGatherOfAConvexRoomOfTilesIsUniformWithoutRays) {
+  // A closed cube room whose walls are 10 x 10 tiles each (600 patches):
+  // a convex enclosure, so no shadow rays at all, and the far clusters'
+  // groups send their area-mean radiosity. Everything emits 1 with
+  // reflectance 0.8 and element radiosity 5: the field is 5 wherever the
+  // gathered form factors sum to 1. Deterministic, so a tighter bound than
+  // with rays: every point within 0.3% (measured 0.02-0.09% high).
+  std::vector<RawFace> faces;
+  const int k = 10;
+  for (int f = 0; f < 6; ++f)
+    for (int i = 0; i < k; ++i)
+      for (int j = 0; j < k; ++j) {
+        const double a0 = static_cast<double>(i) / k, a1 = static_cast<double>(i + 1) / k;
+        const double b0 = static_cast<double>(j) / k, b1 = static_cast<double>(j + 1) / k;
+        // Face f: axis f / 2 at 0 or 1, the tile's corners counter-clockwise
+        // seen from inside.
+        const int axis = f / 2;
+        const double at = f % 2;
+        auto point = [&](double a, double b) {
+          Vec3 p(0.0);
+          p[axis] = at;
+          p[(axis + 1) % 3] = a;
+          p[(axis + 2) % 3] = b;
+          return p;
+        };
+        RawFace t;
+        t.name = "tile";
+        t.material = 0;
+        t.points = {point(a0, b0), point(a1, b0), point(a1, b1), point(a0, b1)};
+        if (f % 2) std::reverse(t.points.begin(), t.points.end());
+        faces.push_back(t);
+      }
+  const Scene scene = build_scene(faces, {test::material("f", Rgb(0.8), Rgb(1.0))}, "tiled cube");
+  ASSERT_EQ(scene.patches.size(), 600u);
+  MeshingOptions mo = find_method("matrix").meshing(scene);
+  mo.max_edge = 0.1;
+  mo.discontinuity = DiscontinuityMode::off;
+  const Mesh mesh = mesh_scene(scene, mo);
+  const std::vector<Rgb> element(mesh.triangles.size(), Rgb(5.0));
+  const FieldEvaluator clustered(scene, mesh, element, SolveOptions{}, GatherSources::clustered);
+  ASSERT_TRUE(clustered.clustered());
+  const auto all = triangle_centroids(mesh);
+  double lo = 1e300, hi = 0.0;
+  FieldReport report;
+  for (size_t i = 0; i < all.size(); i += 5) {
+    const double b = clustered.radiosity(all[i].first, all[i].second, i, report).x;
+    lo = std::min(lo, b);
+    hi = std::max(hi, b);
+  }
+  std::printf("[field] clustered convex room of 600 tiles: points in [%.5f, %.5f] (exact 5), %lld clusters taken, %lld rays\n",
+              lo, hi, report.gather_clusters, report.rays_cast);
+  EXPECT_EQ(report.rays_cast, 0);
+  EXPECT_GT(report.gather_clusters, 0);
+  EXPECT_GT(lo, 0.997 * 5.0);
+  EXPECT_LT(hi, 1.003 * 5.0);
+}
