@@ -178,6 +178,12 @@ struct FieldEvaluator::Impl {
       triangle.clear();
     }
   };
+  // The point form factor's kernel between x (normal n) and y (normal m),
+  // without its 1 / pi: a sample's weight.
+  static double kernel(const Vec3& x, const Vec3& n, const Vec3& y, const Vec3& m) {
+    const Vec3 r = y - x;
+    return std::max(0.0, glm::dot(n, r)) * std::max(0.0, -glm::dot(m, r)) / std::pow(glm::dot(r, r), 2);
+  }
   // Area-uniform stratified points y of triangles [begin .. end) of a
   // source, for the mean of V(x, y) R(y) seen from x (normal n): appended
   // to `batch` (those where the kernel is positive); returns the sum of
@@ -195,8 +201,7 @@ struct FieldEvaluator::Impl {
       const double a = rng.uniform(), b = rng.uniform();
       int t = -1;
       const Vec3 y = tree.sample(begin, end, u, a, b, t);
-      const Vec3 r = y - x;
-      const double ws = std::max(0.0, glm::dot(n, r)) * std::max(0.0, -glm::dot(tree.normal, r)) / std::pow(glm::dot(r, r), 2);
+      const double ws = kernel(x, n, y, tree.normal);
       weight += ws;
       if (!(ws > 0.0)) continue;
       batch.to.push_back(y);
@@ -669,9 +674,7 @@ Rgb FieldEvaluator::Impl::gather_clustered(const Vec3& x, const Vec3& n, int pat
           const double u = rng.uniform(), a = rng.uniform(), b = rng.uniform();
           int tri = -1;
           const Vec3 y = s.sample(0, static_cast<int>(s.triangle.size()), u, a, b, tri);
-          const Vec3 r = y - x;
-          const double w =
-              std::max(0.0, glm::dot(n, r)) * std::max(0.0, -glm::dot(s.normal, r)) / std::pow(glm::dot(r, r), 2);
+          const double w = kernel(x, n, y, s.normal);
           t.weight += w;
           if (!(w > 0.0)) continue;
           samples.to.push_back(y);
