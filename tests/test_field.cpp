@@ -10,11 +10,13 @@
 #include "radiosity/gather_node.h"
 #include "radiosity/method.h"
 #include "radiosity/occlusion.h"
+#include "radiosity/transport.h"
 #include "radiosity/visibility.h"
 
 #include "tests/test_util.h"
 
 #include <gtest/gtest.h>
+#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <array>
@@ -642,4 +644,31 @@ TEST(Field, TheClusteredGatherOfAConvexRoomOfTilesIsUniformWithoutRays) {
   EXPECT_GT(report.gather_clusters, 0);
   EXPECT_GT(lo, 0.997 * 5.0);
   EXPECT_LT(hi, 1.003 * 5.0);
+}
+
+TEST(Field, TheClusteredGatherOfAPointDoesNotDependOnThePointsBeforeIt) {
+  // Per-thread scratch must not carry anything from one point to the next:
+  // the same points in the opposite order, and with two threads, give the
+  // same values to the bit (each point's rays come from its own streams).
+  const Scene scene = test::room_with(box_grid(4));
+  const MethodResult r = solve(scene, "matrix", 0.5, DiscontinuityMode::contacts);
+  const FieldEvaluator clustered(scene, r.mesh, r.solution.element, SolveOptions{}, GatherSources::clustered);
+  ASSERT_TRUE(clustered.clustered());
+  const auto points = triangle_centroids(r.mesh);
+  const size_t n = points.size();
+  std::vector<Rgb> forward(n), backward(n), parallel(n);
+  FieldReport report;
+  for (size_t i = 0; i < n; ++i) forward[i] = clustered.indirect(points[i].first, points[i].second, i, report);
+  for (size_t k = n; k-- > 0;) backward[k] = clustered.indirect(points[k].first, points[k].second, k, report);
+  run_in_arena(2, [&] {
+    tbb::parallel_for(size_t{0}, n, [&](size_t i) {
+      FieldReport own;
+      parallel[i] = clustered.indirect(points[i].first, points[i].second, i, own);
+    });
+  });
+  EXPECT_GT(report.gather_clusters, 0);
+  for (size_t i = 0; i < n; ++i) {
+    ASSERT_EQ(forward[i], backward[i]) << i;
+    ASSERT_EQ(forward[i], parallel[i]) << i;
+  }
 }
