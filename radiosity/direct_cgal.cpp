@@ -20,6 +20,7 @@
 #include <array>
 #include <cmath>
 #include <numbers>
+#include <unordered_map>
 
 namespace radmesh {
 
@@ -158,7 +159,64 @@ struct DirectIllumination::Impl {
   std::vector<Emitter> emitters;
   std::vector<OccluderPolygon> occluders;  // in patch order
   std::vector<ConvexOccluder> convex;       // per patch
+  // Per patch: where it is a face of a closed surface facing out (see
+  // find_solids), the box of that surface; else empty.
+  std::vector<Box3> solid_box;
   explicit Impl(const Scene& s) : scene(s) {}
+
+  // The closed surfaces facing out among the patches: a set of patches
+  // joined by shared edges in which every edge is shared by exactly two of
+  // them, once in each direction (a closed, consistently oriented surface),
+  // enclosing a positive volume (its normals point out). A segment from a
+  // point outside such a surface's box into the solid enters it through a
+  // face turned towards the point, so from there the faces turned away hide
+  // nothing more (a sphere's far side, a box's back faces), and the exact
+  // clip need not union their shadows.
+  void find_solids() {
+    const size_t np = scene.patches.size();
+    solid_box.assign(np, Box3{});
+    auto key = [](int a, int b) { return (static_cast<uint64_t>(static_cast<uint32_t>(a)) << 32) | static_cast<uint32_t>(b); };
+    std::unordered_map<uint64_t, int> directed;  // edge a -> b: how many patches have it
+    std::unordered_map<uint64_t, int> owner;     // edge {a, b}: the first patch having it
+    std::vector<int> parent(np);
+    for (size_t p = 0; p < np; ++p) parent[p] = static_cast<int>(p);
+    auto find = [&](int p) {
+      while (parent[static_cast<size_t>(p)] != p) p = parent[static_cast<size_t>(p)] = parent[static_cast<size_t>(parent[static_cast<size_t>(p)])];
+      return p;
+    };
+    auto edges = [&](size_t p, auto&& visit) {
+      const Patch& patch = scene.patches[p];
+      auto loop = [&](const std::vector<int>& l) {
+        for (size_t i = 0; i < l.size(); ++i) visit(l[i], l[(i + 1) % l.size()]);
+      };
+      loop(patch.outer);
+      for (const auto& h : patch.holes) loop(h);
+    };
+    for (size_t p = 0; p < np; ++p)
+      edges(p, [&](int a, int b) {
+        ++directed[key(a, b)];
+        const auto [it, fresh] = owner.try_emplace(key(std::min(a, b), std::max(a, b)), static_cast<int>(p));
+        if (!fresh) parent[static_cast<size_t>(find(static_cast<int>(p)))] = find(it->second);
+      });
+    std::vector<char> closed(np, 1);
+    std::vector<double> volume(np, 0.0);
+    std::vector<Box3> box(np);
+    for (size_t p = 0; p < np; ++p) {
+      const size_t r = static_cast<size_t>(find(static_cast<int>(p)));
+      edges(p, [&](int a, int b) {
+        const auto back = directed.find(key(b, a));
+        if (directed[key(a, b)] != 1 || back == directed.end() || back->second != 1) closed[r] = 0;
+        box[r].add(scene.vertices[static_cast<size_t>(a)]);
+      });
+      const Patch& patch = scene.patches[p];
+      volume[r] += scene.patch_area(static_cast<int>(p)) *
+                   glm::dot(patch.normal, scene.vertices[static_cast<size_t>(patch.outer[0])]) / 3.0;
+    }
+    for (size_t p = 0; p < np; ++p) {
+      const size_t r = static_cast<size_t>(find(static_cast<int>(p)));
+      if (closed[r] && volume[r] > 0.0) solid_box[p] = box[r];
+    }
+  }
 
   // The part of occluder t that lies in the pyramid from x over the
   // emitter's padded box and in the slab between the emitter's plane and
@@ -378,6 +436,8 @@ struct DirectIllumination::Impl {
     // the pyramid's side planes or the emitter's plane (its corners'
     // projections on the face's normal all at or past the pyramid's) is
     // skipped: every occluder in it would be separated on that axis.
+    Box3 point_box;
+    point_box.add(x);
     Box3 query;
     query.add(glm::min(x, e.lo) - Vec3(margin));
     query.add(glm::max(x, e.hi) + Vec3(margin));
@@ -416,6 +476,12 @@ struct DirectIllumination::Impl {
       const int index = e.front[static_cast<size_t>(k)];
       const OccluderPolygon& t = occluders[static_cast<size_t>(index)];
       if (t.patch == receiver || t.patch == e.patch) continue;
+      // A face of a closed solid turned away from x, x outside the
+      // solid's box: its shadow lies in those of the faces turned to x.
+      const Box3& solid = solid_box[static_cast<size_t>(t.patch)];
+      if (!solid.empty() && !solid.overlaps(point_box, margin) &&
+          glm::dot(x - t.d[0], scene.patches[static_cast<size_t>(t.patch)].normal) < -margin)
+        continue;
       if (!separated(t.d)) out.push_back(index);
     }
   }
@@ -535,6 +601,7 @@ DirectIllumination::DirectIllumination(const Scene& scene) : impl_(std::make_uni
       if (!CGAL::coplanar(q[0], q[1], q[2], q[i])) return false;
     return true;
   };
+  impl_->find_solids();
   std::vector<char> one(scene.patches.size(), 0), added(scene.patches.size(), 0);
   for (size_t p = 0; p < scene.patches.size(); ++p) one[p] = whole(impl_->convex[p].outline);
   const Mesh coarse = triangulate_patches(scene);

@@ -151,3 +151,77 @@ TEST_F(BoxOnFloor, AQuadOccluderCastsTheShadowOfItsTwoTriangles) {
   EXPECT_GT(penumbra, 20);  // the grid crosses the penumbrae
   fs::remove_all(dir);
 }
+
+namespace {
+// An octahedron-like closed solid: a cube's six faces split into triangles,
+// about `centre` with half-size h, facing out (or in).
+void closed_cube(std::vector<RawFace>& faces, const std::string& name, const Vec3& centre, double h, bool outward) {
+  for (RawFace f : test::box_faces(name, 1, centre - Vec3(h), centre + Vec3(h), outward)) {
+    // Two triangles per face, sharing the face's diagonal (every edge of
+    // the surface then joins exactly two faces, once each way).
+    RawFace a = f, b = f;
+    a.points = {f.points[0], f.points[1], f.points[2]};
+    b.points = {f.points[0], f.points[2], f.points[3]};
+    faces.push_back(a);
+    faces.push_back(b);
+  }
+}
+}  // namespace
+
+TEST(Direct, FacesOfAClosedSolidTurnedAwayAreLeftOutOfTheClipAndTheLightIsTheSame) {
+  // A floor lit by a 1 x 1 lamp 3 m up, with three closed surfaces between:
+  // a cube floating (closed, facing out: its faces turned away from a floor
+  // point are left out of the clip), a cube standing on the floor (closed,
+  // its bottom on the floor: floor points under and beside it lie in its
+  // box, where nothing is left out), and a cube whose faces face in (closed
+  // but enclosing a negative volume: nothing left out). At points in light,
+  // penumbra and umbra of all three, the fast path (reflected) must equal
+  // the visible form factor over every occluder to 1e-12.
+  std::vector<RawFace> faces;
+  RawFace floor;
+  floor.name = "floor";
+  floor.material = 0;
+  floor.points = {{-3, 0, -3}, {-3, 0, 3}, {3, 0, 3}, {3, 0, -3}};
+  faces.push_back(floor);
+  RawFace lamp;
+  lamp.name = "lamp";
+  lamp.material = 2;
+  lamp.points = {{-0.5, 3, -0.5}, {0.5, 3, -0.5}, {0.5, 3, 0.5}, {-0.5, 3, 0.5}};
+  faces.push_back(lamp);
+  closed_cube(faces, "floating", Vec3(-1.0, 1.2, 0.0), 0.3, true);
+  closed_cube(faces, "standing", Vec3(1.0, 0.25, 0.0), 0.25, true);
+  closed_cube(faces, "inside_out", Vec3(0.0, 1.5, 1.0), 0.3, false);
+  // A second lamp shut inside the inside-out cube: none of its light may
+  // reach the floor (a face turned away from a floor point is what hides it
+  // there: the cube's faces face in).
+  RawFace shut;
+  shut.name = "shut_lamp";
+  shut.material = 2;
+  shut.points = {{-0.1, 1.5, 0.9}, {0.1, 1.5, 0.9}, {0.1, 1.5, 1.1}, {-0.1, 1.5, 1.1}};
+  faces.push_back(shut);
+  const Scene scene = build_scene(
+      faces, {test::material("white", Rgb(0.5)), test::material("grey", Rgb(0.5)), test::material("lamp", Rgb(0.0), Rgb(1.0))},
+      "closed solids");
+  const DirectIllumination direct(scene);
+  const int floor_patch = patch_named(scene, "floor"), light = patch_named(scene, "lamp"),
+            shut_light = patch_named(scene, "shut_lamp");
+  ASSERT_GE(floor_patch, 0);
+  ASSERT_GE(light, 0);
+  ASSERT_GE(shut_light, 0);
+  const Vec3 up(0.0, 1.0, 0.0);
+  int shaded = 0, dark = 0;
+  for (int i = 0; i <= 60; ++i)
+    for (int k = 0; k <= 20; ++k) {
+      const Vec3 x(-2.9 + 5.8 * i / 60.0, 0.0, -2.0 + 4.0 * k / 20.0);
+      const double brute = direct.visible_form_factor(x, up, floor_patch, light);
+      ASSERT_EQ(direct.visible_form_factor(x, up, floor_patch, shut_light), 0.0);
+      const double fast = direct.reflected(x, floor_patch).x / 0.5;
+      ASSERT_NEAR(fast, brute, 1e-12 * std::max(brute, 1e-3)) << x.x << " " << x.z;
+      const double open = direct.unoccluded_form_factor(x, up, light);
+      shaded += brute < open - 1e-9 ? 1 : 0;
+      dark += brute == 0.0 ? 1 : 0;
+    }
+  std::printf("[direct] closed solids: %d of 1281 floor points shaded, %d dark\n", shaded, dark);
+  EXPECT_GT(shaded, 100);
+  EXPECT_GT(dark, 5);
+}
