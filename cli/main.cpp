@@ -505,8 +505,9 @@ int main(int argc, char** argv) {
   run_cmd->add_option("--field", run_p.field,
                       "vertex values: gather (exact direct light and a final gather of the solved radiosity "
                       "at every vertex), fit (least-squares plane through the element values "
-                      "around the vertex), mean (their area-weighted mean) or auto (gather unless that would "
-                      "pass (vertex, patch) pairs over a budget, then fit; the default)")
+                      "around the vertex), mean (their area-weighted mean) or auto (gather, by clusters of "
+                      "patches on large scenes, unless that would pass a budget of (vertex, source) pairs, "
+                      "then fit; the default)")
       ->check(CLI::IsMember({"auto", "gather", "fit", "mean"}));
   run_cmd->add_option("--nodal", run_p.nodal, "the older name of --field fit|mean")
       ->check(CLI::IsMember({"fit", "mean"}));
