@@ -45,8 +45,7 @@ struct Emitter {
   Rgb emission{0.0};
   std::vector<Vec3> base;               // the pyramid's base: the outline if convex, else `corners`
   Vec3 base_centre{0.0};
-  std::vector<int> front;               // occluders with a corner strictly in front of the plane
-  BoxTree front_boxes;                   // their boxes (item k: front[k])
+  std::vector<bool> in_front;            // per occluder: a corner strictly in front of the plane
   std::vector<std::vector<Vec3>> loops;  // outline, then holes (scene coordinates)
   Vec3 origin{0.0};                      // a point of the plane (double): n . y = n . origin
   int iu = 1, iv = 2;                    // the scene axes of the 2-D map's u and v
@@ -158,6 +157,7 @@ struct DirectIllumination::Impl {
   const Scene& scene;
   std::vector<Emitter> emitters;
   std::vector<OccluderPolygon> occluders;  // in patch order
+  BoxTree occluder_boxes;                  // their boxes (item t: occluders[t])
   std::vector<ConvexOccluder> convex;       // per patch
   // Per patch: where it is a face of a closed surface facing out (see
   // find_solids), the box of that surface; else empty.
@@ -373,7 +373,7 @@ struct DirectIllumination::Impl {
     return std::abs(sum) / (2.0 * std::numbers::pi);
   }
 
-  // The cheap test: which triangles of `e.front` may meet the pyramid from x
+  // The cheap test: which occluders in front of the emitter may meet the pyramid from x
   // over the emitter's (padded) box, within the slab between the emitter and
   // x. A triangle is cleared when all its corners lie outside one of the
   // pyramid's planes by a margin (1e-9 of the pyramid's size) far above the
@@ -466,14 +466,13 @@ struct DirectIllumination::Impl {
     };
     thread_local std::vector<int> met;
     met.clear();
-    e.front_boxes.where([&](const Box3& b) { return b.overlaps(query, 0.0) && !beyond(b); },
-                        [&](int k) {
-                          met.push_back(k);
-                          return true;
-                        });
+    occluder_boxes.where([&](const Box3& b) { return b.overlaps(query, 0.0) && !beyond(b); },
+                         [&](int t) {
+                           if (e.in_front[static_cast<size_t>(t)]) met.push_back(t);
+                           return true;
+                         });
     std::sort(met.begin(), met.end());
-    for (const int k : met) {
-      const int index = e.front[static_cast<size_t>(k)];
+    for (const int index : met) {
       const OccluderPolygon& t = occluders[static_cast<size_t>(index)];
       if (t.patch == receiver || t.patch == e.patch) continue;
       // A face of a closed solid turned away from x, x outside the
@@ -616,6 +615,14 @@ DirectIllumination::DirectIllumination(const Scene& scene) : impl_(std::make_uni
     add(static_cast<int>(p), {coarse.positions[static_cast<size_t>(tri[0])], coarse.positions[static_cast<size_t>(tri[1])],
             coarse.positions[static_cast<size_t>(tri[2])]});
   }
+  {
+    std::vector<Box3> boxes(impl_->occluders.size());
+    for (size_t t = 0; t < boxes.size(); ++t) {
+      boxes[t].add(impl_->occluders[t].lo);
+      boxes[t].add(impl_->occluders[t].hi);
+    }
+    impl_->occluder_boxes = BoxTree(boxes);
+  }
   for (size_t p = 0; p < scene.patches.size(); ++p) {
     const Patch& patch = scene.patches[p];
     const Material& m = scene.material_of(patch);
@@ -687,20 +694,12 @@ DirectIllumination::DirectIllumination(const Scene& scene) : impl_(std::make_uni
     for (auto h = e.shape.holes_begin(); h != e.shape.holes_end(); ++h) e.loops.push_back(e.lifted(*h));
     if (patch.holes.empty() && e.shape.outer_boundary().is_convex()) e.base = e.loops[0];
     for (const Vec3& b : e.base) e.base_centre += b / static_cast<double>(e.base.size());
+    e.in_front.resize(impl_->occluders.size());
     for (size_t t = 0; t < impl_->occluders.size(); ++t) {
       const OccluderPolygon& o = impl_->occluders[t];
-      if (std::any_of(o.v.begin(), o.v.end(),
-                      [&](const Point3& p) { return e.plane.oriented_side(p) == CGAL::ON_POSITIVE_SIDE; }))
-        e.front.push_back(static_cast<int>(t));
+      e.in_front[t] = std::any_of(o.v.begin(), o.v.end(),
+                                  [&](const Point3& p) { return e.plane.oriented_side(p) == CGAL::ON_POSITIVE_SIDE; });
     }
-    std::vector<Box3> boxes;
-    for (const int t : e.front) {
-      Box3 b;
-      b.add(impl_->occluders[static_cast<size_t>(t)].lo);
-      b.add(impl_->occluders[static_cast<size_t>(t)].hi);
-      boxes.push_back(b);
-    }
-    e.front_boxes = BoxTree(boxes);
     impl_->emitters.push_back(std::move(e));
   }
 }
