@@ -167,15 +167,21 @@ struct FieldEvaluator::Impl {
       : scene(s), diagonal(s.diagonal()), rays_per_node(std::max(1, o.rays / 4)), direct(s), occlusion(s) {}
 
   // Sample points of a source seen from one point: where each lies, its
-  // weight (the point form factor's kernel there) and its triangle.
+  // weight (the point form factor's kernel there) and the reflected
+  // radiosity of its triangle.
   struct Samples {
     std::vector<Vec3> to;
     std::vector<double> w;
-    std::vector<int> triangle;
+    std::vector<Rgb> reflected;
     void clear() {
       to.clear();
       w.clear();
-      triangle.clear();
+      reflected.clear();
+    }
+    void add(const Vec3& y, double weight, const Rgb& r) {
+      to.push_back(y);
+      w.push_back(weight);
+      reflected.push_back(r);
     }
   };
   // The point form factor's kernel between x (normal n) and y (normal m),
@@ -203,20 +209,16 @@ struct FieldEvaluator::Impl {
       const Vec3 y = tree.sample(begin, end, u, a, b, t);
       const double ws = kernel(x, n, y, tree.normal);
       weight += ws;
-      if (!(ws > 0.0)) continue;
-      batch.to.push_back(y);
-      batch.w.push_back(ws);
-      batch.triangle.push_back(t);
+      if (ws > 0.0) batch.add(y, ws, tree.reflected[static_cast<size_t>(t)]);
     }
     return weight;
   }
   // The weighted mean of R over samples [begin .. end) of `batch` whose
   // segment from x got through (seen; null: all of them).
-  static Rgb sampled_mean(const SourceTree& tree, const Samples& batch, size_t begin, size_t end,
-                          const unsigned char* seen, double weight) {
+  static Rgb sampled_mean(const Samples& batch, size_t begin, size_t end, const unsigned char* seen, double weight) {
     Rgb sum(0.0);
     for (size_t i = begin; i < end; ++i)
-      if (!seen || seen[i]) sum += batch.w[i] * tree.reflected[static_cast<size_t>(batch.triangle[i])];
+      if (!seen || seen[i]) sum += batch.w[i] * batch.reflected[i];
     return weight > 0.0 ? sum / weight : Rgb(0.0);
   }
 
@@ -585,7 +587,7 @@ Rgb FieldEvaluator::Impl::gather_patch(size_t q, const Vec3& x, const Vec3& n, i
       // same points, without rays (the shaft is clear).
       unshaded.clear();
       const double w = m.draw(x, n, s, begin, end, seed, unshaded);
-      term.send = term.f * sampled_mean(s, unshaded, 0, unshaded.to.size(), nullptr, w);
+      term.send = term.f * sampled_mean(unshaded, 0, unshaded.to.size(), nullptr, w);
     }
     terms.push_back(term);
   }
@@ -598,7 +600,7 @@ Rgb FieldEvaluator::Impl::gather_patch(size_t q, const Vec3& x, const Vec3& n, i
   Rgb sum(0.0);
   for (const CutTerm& t : terms) {
     weight += t.f;
-    sum += t.sampled ? t.f * sampled_mean(s, samples, t.begin, t.end, seen.data(), t.weight) : t.send;
+    sum += t.sampled ? t.f * sampled_mean(samples, t.begin, t.end, seen.data(), t.weight) : t.send;
   }
   return weight > 0.0 ? (fq / weight) * sum : Rgb(0.0);
 }
@@ -677,9 +679,7 @@ Rgb FieldEvaluator::Impl::gather_clustered(const Vec3& x, const Vec3& n, int pat
           const double w = kernel(x, n, y, s.normal);
           t.weight += w;
           if (!(w > 0.0)) continue;
-          samples.to.push_back(y);
-          samples.w.push_back(w);
-          samples.triangle.push_back(tri);
+          samples.add(y, w, s.reflected[static_cast<size_t>(tri)]);
           sample_patch.push_back(static_cast<int>(q));
         }
         t.end = samples.to.size();
@@ -704,13 +704,7 @@ Rgb FieldEvaluator::Impl::gather_clustered(const Vec3& x, const Vec3& n, int pat
     from.assign(samples.to.size(), x);
     visibility->visible_each(from.data(), samples.to.data(), samples.to.size(), patch, sample_patch.data(), seen.data());
   }
-  for (const Far& t : far) {
-    if (!(t.weight > 0.0)) continue;
-    Rgb sum(0.0);
-    for (size_t i = t.begin; i < t.end; ++i)
-      if (seen[i]) sum += samples.w[i] * sources[static_cast<size_t>(sample_patch[i])].reflected[static_cast<size_t>(samples.triangle[i])];
-    h += t.f * sum / t.weight;
-  }
+  for (const Far& t : far) h += t.f * sampled_mean(samples, t.begin, t.end, seen.data(), t.weight);
   return h;
 }
 
