@@ -401,66 +401,72 @@ struct DirectIllumination::Impl {
     // margin (a triangle that only touches the pyramid, as a wall meeting
     // the emitter's edge does, hides nothing). Axes: the pyramid's faces,
     // the triangle's plane, and the cross products of their edges.
-    auto apart = [&](const std::vector<Vec3>& t, const Vec3& axis) {
-      const double len = glm::length(axis);
-      if (!(len > 1e-300)) return false;
-      double hlo = INFINITY, hhi = -INFINITY, tlo = INFINITY, thi = -INFINITY;
+    // The pyramid's extent along an axis, and that axis's length.
+    struct Extent {
+      Vec3 axis{0.0};
+      double lo = INFINITY, hi = -INFINITY, len = 0.0;
+    };
+    auto extent = [&](const Vec3& axis) {
+      Extent h;
+      h.axis = axis;
+      h.len = glm::length(axis);
       for (const Vec3& p : hull) {
         const double d = glm::dot(p, axis);
-        hlo = std::min(hlo, d);
-        hhi = std::max(hhi, d);
+        h.lo = std::min(h.lo, d);
+        h.hi = std::max(h.hi, d);
       }
+      return h;
+    };
+    // The pyramid's faces (its sides, then the emitter's plane): the axes
+    // every occluder is tested on first, and what the box tree prunes by.
+    thread_local std::vector<Extent> faces;
+    faces.clear();
+    for (size_t i = 0; i < nb; ++i) faces.push_back(extent(glm::cross(hull_edges[2 * i], hull_edges[2 * ((i + 1) % nb)])));
+    faces.push_back(extent(e.normal));
+    // Separating-axis test of a triangle and the pyramid, both convex:
+    // clear when their projections on some axis overlap by no more than the
+    // margin (a triangle that only touches the pyramid, as a wall meeting
+    // the emitter's edge does, hides nothing). Axes: the pyramid's faces,
+    // the triangle's plane, and the cross products of their edges.
+    auto apart = [&](const std::vector<Vec3>& t, const Extent& h) {
+      if (!(h.len > 1e-300)) return false;
+      double tlo = INFINITY, thi = -INFINITY;
       for (const Vec3& p : t) {
-        const double d = glm::dot(p, axis);
+        const double d = glm::dot(p, h.axis);
         tlo = std::min(tlo, d);
         thi = std::max(thi, d);
       }
-      return hhi <= tlo + margin * len || thi <= hlo + margin * len;
+      return h.hi <= tlo + margin * h.len || thi <= h.lo + margin * h.len;
     };
     std::vector<Vec3> te;
     auto separated = [&](const std::vector<Vec3>& t) {
-      for (size_t i = 0; i < nb; ++i)
-        if (apart(t, glm::cross(hull_edges[2 * i], hull_edges[2 * ((i + 1) % nb)]))) return true;
-      if (apart(t, e.normal)) return true;
+      for (const Extent& f : faces)
+        if (apart(t, f)) return true;
       te.clear();
       for (size_t i = 0; i < t.size(); ++i) te.push_back(t[(i + 1) % t.size()] - t[i]);
-      if (apart(t, glm::cross(te[0], te[1]))) return true;
+      if (apart(t, extent(glm::cross(te[0], te[1])))) return true;
       for (const Vec3& he : hull_edges)
         for (const Vec3& edge : te)
-          if (apart(t, glm::cross(he, edge))) return true;
+          if (apart(t, extent(glm::cross(he, edge)))) return true;
       return false;
     };
     // The occluders whose boxes meet the pyramid's box, by the box tree
     // (not a pass over all of them: this runs per vertex and emitter), in
     // the order of their numbers. A subtree whose box lies beyond one of
-    // the pyramid's side planes or the emitter's plane (its corners'
-    // projections on the face's normal all at or past the pyramid's) is
-    // skipped: every occluder in it would be separated on that axis.
+    // the pyramid's faces (its corners' projections on the face's normal
+    // all at or past the pyramid's) is skipped: every occluder in it would
+    // be separated on that axis.
     Box3 point_box;
     point_box.add(x);
     Box3 query;
     query.add(glm::min(x, e.lo) - Vec3(margin));
     query.add(glm::max(x, e.hi) + Vec3(margin));
-    thread_local std::vector<std::array<double, 5>> faces;  // axis, and the pyramid's projections on it
-    faces.clear();
-    auto face = [&](const Vec3& axis) {
-      double plo = INFINITY, phi = -INFINITY;
-      for (const Vec3& p : hull) {
-        const double d = glm::dot(p, axis);
-        plo = std::min(plo, d);
-        phi = std::max(phi, d);
-      }
-      faces.push_back({axis.x, axis.y, axis.z, plo, phi});
-    };
-    for (size_t i = 0; i < nb; ++i) face(glm::cross(hull_edges[2 * i], hull_edges[2 * ((i + 1) % nb)]));
-    face(e.normal);
     auto beyond = [&](const Box3& b) {
-      for (const auto& f : faces) {
+      for (const Extent& f : faces) {
         // The box's extent on the axis: its centre's projection +- the
         // half-extents' projection on |axis|.
-        const Vec3 axis(f[0], f[1], f[2]);
-        const double c = glm::dot(b.centre(), axis), r = glm::dot(0.5 * (b.hi - b.lo), glm::abs(axis));
-        if (c - r >= f[4] || c + r <= f[3]) return true;
+        const double c = glm::dot(b.centre(), f.axis), r = glm::dot(0.5 * (b.hi - b.lo), glm::abs(f.axis));
+        if (c - r >= f.hi || c + r <= f.lo) return true;
       }
       return false;
     };
