@@ -7,6 +7,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <random>
 #include <set>
 
@@ -405,6 +406,53 @@ TEST(Clusters, ABulbOfSmallTrianglesSendsTheRoomWhatItEmits) {
                 100.0 * (mb.at(name) / mean - 1.0));
     EXPECT_NEAR(mb.at(name) / mean, 1.0, 0.01) << name;
   }
+}
+
+TEST(Clusters, ATubeUnderTheCeilingLightsAClosedRoomWithACabinetAndLosesNoPower) {
+  // A closed 4 x 3 x 4 room (rho 0.7) lit only by a fluorescent tube, an
+  // emitting box 1.2 m x 4 cm x 4 cm hanging 5 cm under the ceiling, with a
+  // cabinet (rho 0.5) standing 10 cm from two walls. The ceiling right
+  // above the tube is 70 times as bright as the rest of the room, so a
+  // bound on the light a link may carry, taken against the brightest
+  // reflected radiosity, left the leaves in the gaps behind the cabinet on
+  // their ancestors' visible fractions: their exact rows came out up to 8%
+  // over or under 1, and the row scale took the miss out of their
+  // approximate parts. 1.08% of the emitted power escaped the closed room,
+  // every wall 0.5-1.3% dark against the matrix method on 0.15 m elements.
+  std::vector<RawFace> faces;
+  auto box = [&](const Vec3& lo, const Vec3& hi, const std::string& name, int material, bool bottom, bool inward) {
+    const double x0 = lo.x, y0 = lo.y, z0 = lo.z, x1 = hi.x, y1 = hi.y, z1 = hi.z;
+    std::vector<std::vector<Vec3>> quads = {
+        {{x0, y0, z0}, {x0, y1, z0}, {x1, y1, z0}, {x1, y0, z0}}, {{x0, y0, z1}, {x1, y0, z1}, {x1, y1, z1}, {x0, y1, z1}},
+        {{x0, y0, z0}, {x0, y0, z1}, {x0, y1, z1}, {x0, y1, z0}}, {{x1, y0, z0}, {x1, y1, z0}, {x1, y1, z1}, {x1, y0, z1}},
+        {{x0, y1, z0}, {x0, y1, z1}, {x1, y1, z1}, {x1, y1, z0}}};  // outward: -z, +z, -x, +x, +y
+    if (bottom) quads.push_back({{x0, y0, z0}, {x1, y0, z0}, {x1, y0, z1}, {x0, y0, z1}});
+    for (auto& q : quads) {
+      if (inward) std::reverse(q.begin(), q.end());
+      RawFace f;
+      f.name = name;
+      f.material = material;
+      f.points = q;
+      faces.push_back(std::move(f));
+    }
+  };
+  box({-2, 0, -2}, {2, 3, 2}, "room", 0, true, true);
+  box({-0.6, 2.91, -0.02}, {0.6, 2.95, 0.02}, "tube", 2, true, false);
+  box({-1.9, 0, 1.4}, {-0.9, 2.0, 1.9}, "cabinet", 1, false, false);
+  Material wall, grey, lamp;
+  wall.name = "wall";
+  wall.reflectance = Rgb(0.7);
+  grey.name = "grey";
+  grey.reflectance = Rgb(0.5);
+  lamp.name = "lamp";
+  lamp.emission = Rgb(10.0);
+  const Scene s = build_scene(faces, {wall, grey, lamp}, "tube_room");
+  const HierarchicalSolution h = solve_hierarchical(s, initial_mesh(s), {}, {});
+  ASSERT_GT(h.stats.cluster_links, 0);
+  const SolveStats& st = h.solution.stats;
+  std::printf("[clusters] tube room: escaped %.3f%% of the emitted power\n",
+              100.0 * st.power_escaped.x / st.power_emitted.x);
+  EXPECT_LT(std::abs(st.power_escaped.x) / st.power_emitted.x, 0.004);
 }
 
 TEST(Clusters, BoxesOnTheFloorAreNotLitAsTheFloor) {
