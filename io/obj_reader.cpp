@@ -61,16 +61,51 @@ bool parse_int(const std::string& s, long* v) {
   return end == s.c_str() + s.size();
 }
 
-std::vector<std::string> read_lines(const std::string& path) {
+// A statement of an OBJ or MTL file: its text and the line it starts on.
+// A line ending in a backslash goes on in the next one (the formats'
+// continuation; tinyobjloader knows none and read such a face as an
+// error); the backslash becomes a space.
+struct Line {
+  std::string text;
+  int number = 0;
+};
+struct Lines {
+  std::vector<Line> lines;
+  bool continued = false;  // some statement spans several lines
+  // The statements joined, one a line, for tinyobjloader (which knows no
+  // continuation).
+  std::string joined() const {
+    std::string out;
+    for (const Line& l : lines) (out += l.text) += '\n';
+    return out;
+  }
+};
+
+Lines read_lines(const std::string& path) {
   std::ifstream in(path);
   if (!in) throw IoError(path + ": cannot open for reading");
-  std::vector<std::string> lines;
+  Lines out;
+  bool open = false;  // the last statement ended in a backslash
+  int number = 0;
   for (std::string l; std::getline(in, l);) {
+    ++number;
     if (!l.empty() && l.back() == '\r') l.pop_back();
-    lines.push_back(l);
+    // A comment does not go on: "# made in C:\models\" would swallow the
+    // statement after it.
+    const size_t first = l.find_first_not_of(" \t");
+    const bool comment = !open && first != std::string::npos && l[first] == '#';
+    const bool goes_on = !comment && !l.empty() && l.back() == '\\';
+    if (goes_on) l.back() = ' ';
+    if (open) {
+      out.lines.back().text += l;
+      out.continued = true;
+    } else {
+      out.lines.push_back({std::move(l), number});
+    }
+    open = goes_on;
   }
   if (in.bad()) throw IoError(path + ": read error");
-  return lines;
+  return out;
 }
 
 // Per material: where it and its Kd/Ke are in the MTL file, and their
@@ -83,11 +118,11 @@ struct MtlInfo {
 };
 
 void scan_mtl(const std::string& path, std::map<std::string, MtlInfo>* info) {
-  const auto lines = read_lines(path);
+  const std::vector<Line> lines = read_lines(path).lines;
   std::string current;
   for (size_t i = 0; i < lines.size(); ++i) {
-    const int ln = static_cast<int>(i) + 1;
-    const auto tok = split_ws(lines[i], path, ln);
+    const int ln = lines[i].number;
+    const auto tok = split_ws(lines[i].text, path, ln);
     if (tok.empty() || tok[0][0] == '#') continue;
     if (tok[0] == "newmtl") {
       if (tok.size() < 2) throw InputError(where(path, ln) + "newmtl without a name");
@@ -100,7 +135,7 @@ void scan_mtl(const std::string& path, std::map<std::string, MtlInfo>* info) {
     } else if (tok[0] == "Kd" || tok[0] == "Ke") {
       if (current.empty()) throw InputError(where(path, ln) + tok[0] + " before any newmtl");
       if (tok.size() != 4 && tok.size() != 2)
-        throw InputError(where(path, ln) + tok[0] + " needs 3 numbers (or 1), got '" + lines[i] + "'");
+        throw InputError(where(path, ln) + tok[0] + " needs 3 numbers (or 1), got '" + lines[i].text + "'");
       Rgb value(0.0);
       for (size_t k = 1; k < tok.size(); ++k) {
         double v;
@@ -125,23 +160,26 @@ void scan_mtl(const std::string& path, std::map<std::string, MtlInfo>* info) {
 struct ObjScan {
   std::vector<int> face_lines;  // line of each f, in file order
   std::map<std::string, MtlInfo> materials;
+  std::string joined;  // the statements, where some span several lines; else empty
 };
 
 ObjScan scan_obj(const std::string& path) {
   ObjScan scan;
-  const auto lines = read_lines(path);
+  const Lines read = read_lines(path);
+  if (read.continued) scan.joined = read.joined();
+  const std::vector<Line>& lines = read.lines;
   const fs::path dir = fs::path(path).parent_path();
   long vertices = 0;
   std::set<std::string> used;
   std::map<std::string, int> used_line;
   for (size_t i = 0; i < lines.size(); ++i) {
-    const int ln = static_cast<int>(i) + 1;
-    const auto tok = split_ws(lines[i], path, ln);
+    const int ln = lines[i].number;
+    const auto tok = split_ws(lines[i].text, path, ln);
     if (tok.empty() || tok[0][0] == '#') continue;
     const std::string& key = tok[0];
     if (key == "v") {
       if (tok.size() < 4 || tok.size() > 5)
-        throw InputError(where(path, ln) + "vertex needs 3 coordinates, got '" + lines[i] + "'");
+        throw InputError(where(path, ln) + "vertex needs 3 coordinates, got '" + lines[i].text + "'");
       for (size_t k = 1; k < 4; ++k) {
         double v;
         if (!parse_double(tok[k], &v))
@@ -152,7 +190,7 @@ ObjScan scan_obj(const std::string& path) {
       ++vertices;
     } else if (key == "f") {
       if (tok.size() < 4)
-        throw InputError(where(path, ln) + "face needs at least 3 vertices, got '" + lines[i] + "'");
+        throw InputError(where(path, ln) + "face needs at least 3 vertices, got '" + lines[i].text + "'");
       for (size_t k = 1; k < tok.size(); ++k) {
         const std::string idx = tok[k].substr(0, tok[k].find('/'));
         long v;
@@ -212,11 +250,12 @@ SceneSource read_obj_source(const std::string& path) {
     fs::path dir;
     bool operator()(const std::string& name, std::vector<tinyobj::material_t>* materials,
                     std::map<std::string, int>* names, std::string* warn, std::string* err) override {
-      std::ifstream in(dir / name);
-      if (!in) {
-        if (err) *err += "cannot open material library " + (dir / name).string() + "\n";
+      const fs::path file = dir / name;
+      if (!std::ifstream(file)) {
+        if (err) *err += "cannot open material library " + file.string() + "\n";
         return false;
       }
+      std::istringstream in(read_lines(file.string()).joined());
       tinyobj::LoadMtl(names, materials, &in, warn, err);
       return true;
     }
@@ -226,7 +265,9 @@ SceneSource read_obj_source(const std::string& path) {
   std::vector<tinyobj::shape_t> shapes;
   std::vector<tinyobj::material_t> tiny_materials;
   std::string warn, err;
-  std::ifstream obj(path);
+  std::ifstream file(path);
+  std::istringstream joined(scan.joined);
+  std::istream& obj = scan.joined.empty() ? static_cast<std::istream&>(file) : joined;
   if (!tinyobj::LoadObj(&attrib, &shapes, &tiny_materials, &warn, &err, &obj, &library, false, false))
     throw InputError(path + ": " + (err.empty() ? "cannot parse" : err));
 

@@ -721,6 +721,37 @@ TEST(Readers, ObjStaysAsItWasAndMissingFilesAreIoErrors) {
   }
 }
 
+TEST(Readers, ObjAndMtlStatementsGoOnPastABackslashAtTheLineEnd) {
+  // The OBJ and MTL formats continue a statement ending in a backslash on
+  // the next line; a comment ending in one does not swallow what follows.
+  // tinyobjloader knows no continuation, and the face below used to be an
+  // error ("face vertex index '\' is not a valid index").
+  const fs::path dir = fresh_dir("continued");
+  const std::string mtl_plain = "newmtl white\nKd 0.7 0.6 0.5\nnewmtl lamp\nKe 10 10 10\n";
+  const std::string obj_plain =
+      "mtllib m.mtl\nusemtl white\nv 0 0 0\nv 1 0 0\nv 1 0 1\nv 0 0 1\nf 1 4 3 2\n"
+      "usemtl lamp\nv 0.25 1 0.25\nv 0.75 1 0.25\nv 0.75 1 0.75\nv 0.25 1 0.75\nf 5 6 7 8\n";
+  write_text(dir / "plain" / "m.mtl", mtl_plain);
+  write_text(dir / "plain" / "s.obj", obj_plain);
+  write_text(dir / "cont" / "m.mtl", "newmtl white\nKd 0.7 \\\n 0.6 0.5\nnewmtl lamp\nKe 10 10 10\n");
+  write_text(dir / "cont" / "s.obj",
+             "# made in C:\\models\\\nmtllib m.mtl\nusemtl white\nv 0 0 0\nv 1 \\\n0 0\nv 1 0 1\nv 0 0 1\n"
+             "f 1 4 \\\n 3 \\\n 2\nusemtl lamp\nv 0.25 1 0.25\nv 0.75 1 0.25\nv 0.75 1 0.75\nv 0.25 1 0.75\n"
+             "f 5 6 7 8\n");
+  const Scene plain = read_scene((dir / "plain" / "s.obj").string());
+  const Scene cont = read_scene((dir / "cont" / "s.obj").string());
+  ASSERT_EQ(cont.patches.size(), 2u);
+  expect_same_scene(plain, cont, 0.0, "continued");
+  EXPECT_EQ(cont.materials[0].reflectance, Rgb(0.7, 0.6, 0.5));
+  // The lamp's face starts on line 17 of the continued file: messages name
+  // the line a statement starts on.
+  EXPECT_EQ(cont.patches[1].line, 17);
+  write_text(dir / "bad" / "m.mtl", mtl_plain);
+  write_text(dir / "bad" / "s.obj", "mtllib m.mtl\nusemtl white\nv 0 0 0\nv 1 0 \\\n0\nv 1 0 1\nf 1 2 \\\n9\n");
+  const std::string msg = message_of<InputError>([&] { read_scene((dir / "bad" / "s.obj").string()); });
+  EXPECT_TRUE(contains(msg, "s.obj:7: face vertex index 9 is out of range")) << msg;
+}
+
 TEST(Readers, ExtensionIsCaseInsensitive) {
   const fs::path dir = fresh_dir("case");
   test::write_ply(dir / "octa.PLY", octahedron(), true);
