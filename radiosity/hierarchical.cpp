@@ -681,8 +681,8 @@ private:
   // source radiosity. In a closed room lit by a tube 5 cm under the ceiling
   // (the ceiling above it 70 times as bright as the rest, so that the bound
   // let every dim link through on its ancestor's fraction), the leaves in
-  // the 10 cm gaps behind a cabinet had exact rows 5-8% over or under 1,
-  // and 1.08% of the emitted power escaped the closed room; with 0.01,
+  // the 10 cm gaps behind a cabinet had exact rows several percent over or
+  // under 1, and 1.08% of the emitted power escaped the closed room; with 0.01,
   // -0.03% (test ATubeUnderTheCeilingLightsAClosedRoomWithACabinetAndLosesNoPower),
   // the 16 x 16 box field's 0.13% -> 0.04%, for 1-8% more run time. One
   // fraction for a whole ancestor is the mean over the ancestor, and the
