@@ -66,6 +66,7 @@ public:
     out_.stats.min_area = min_area_;
     for (const Material& m : scene.materials) max_emission_ = std::max(max_emission_, max3(m.emission));
     scale_ = max_emission_;
+    rays_reference_ = scale_;
     quadrature_ = opt.quadrature;
     quadrature_.max_level = std::max(quadrature_.max_level, 3);  // links of near elements: one link, many points
     grow();
@@ -207,6 +208,14 @@ private:
     double reflected = 0.0;
     for (size_t n = 0; n < B_.size(); ++n) reflected = std::max(reflected, max3(B_[n] - emit_[n]));
     if (reflected > 0.0) scale_ = reflected;
+    rays_reference_ = scale_;
+    double sum = 0.0, area = 0.0;  // over the leaves that reflect
+    for (size_t n = 0; n < B_.size(); ++n)
+      if (out_.tree.is_leaf(static_cast<int>(n)) && max3(rho_[n]) > 0.0) {
+        sum += tri_[n].area * max3(B_[n] - emit_[n]);
+        area += tri_[n].area;
+      }
+    if (sum > 0.0) rays_reference_ = std::min(scale_, sum / area);
     ++st.rounds;
     publish();
     check_memory();
@@ -668,23 +677,14 @@ private:
   //
   // Visibility: a link's own visible fraction, except where a leaf gathers
   // over an ancestor's partly visible link that could move it by more than
-  // kLeafRaysBound x the refinement threshold (rho_leaf F B_source, the
-  // most the link's fraction can be off by, against epsilon x the largest
-  // reflected radiosity): then the leaf casts its own rays to the source (a
+  // kLeafRaysBound x epsilon x the scene's mean reflected radiosity
+  // (rho_leaf F B_source, the most the link's fraction can be off by; see
+  // rays_reference_): then the leaf casts its own rays to the source (a
   // quarter of --rays, at least one, stratified; its own random stream:
   // unbiased for the leaf, and its many links average the noise; 16 rays
   // gave the same Cornell errors, and on the 8 x 8 box field 1.6x the run;
   // without the bound, the same errors and 1.2x the run on a sphere room of
-  // 5,127 faces; a bound of 1 lost the fix). The bound is 0.01, not 0.1 as
-  // it was: a link's fraction also moves the leaf's row, and the row scale
-  // takes a row's miss out of the approximate part, whatever the link's
-  // source radiosity. In a closed room lit by a tube 5 cm under the ceiling
-  // (the ceiling above it 70 times as bright as the rest, so that the bound
-  // let every dim link through on its ancestor's fraction), the leaves in
-  // the 10 cm gaps behind a cabinet had exact rows several percent over or
-  // under 1, and 1.08% of the emitted power escaped the closed room; with 0.01,
-  // -0.03% (test ATubeUnderTheCeilingLightsAClosedRoomWithACabinetAndLosesNoPower),
-  // the 16 x 16 box field's 0.13% -> 0.04%, for 1-8% more run time. One
+  // 5,127 faces; a bound of 1 lost the fix). One
   // fraction for a whole ancestor is the mean over the ancestor, and the
   // leaves next to an occluder see less than the mean: on the Cornell box
   // the floor within 15 mm of a block came out 6% brighter than the field
@@ -820,12 +820,12 @@ private:
     }
   }
 
-  static constexpr double kLeafRaysBound = 0.01;  // see the comment above leaf_terms
+  static constexpr double kLeafRaysBound = 0.1;  // see the comment above leaf_terms
   // Whether a node casts its own rays on a partly visible link it reads (a
   // leaf on its ancestors' links, a sending piece on its source's): where
   // the light the link's mean fraction may move there is over
-  // kLeafRaysBound x the refinement threshold.
-  bool own_rays_matter(double transport) const { return transport > kLeafRaysBound * hopt_.epsilon * scale_; }
+  // kLeafRaysBound x epsilon x rays_reference_.
+  bool own_rays_matter(double transport) const { return transport > kLeafRaysBound * hopt_.epsilon * rays_reference_; }
   // Those rays: a quarter of --rays (at least one), stratified on both
   // ends, node a's own stream with b, without a shaft test.
   int own_side() const { return std::max(1, visibility_.side() / 2); }
@@ -2054,6 +2054,21 @@ private:
   // for the first linking, then the largest reflected radiosity (B - E) of
   // the last solve, so that a small bright lamp does not set the scale.
   double scale_ = 0.0;
+  // The radiosity the leaves' own rays are bounded against (own_rays_matter):
+  // the area mean of the reflected radiosity over the leaves that reflect,
+  // once solved (scale_ before). It was scale_, the largest: in a closed
+  // room lit by a tube 5 cm under the ceiling, the ceiling above the tube is
+  // about 70 times as bright as the rest, so every dim link passed the bound
+  // on its ancestor's visible fraction. A link's fraction moves the leaf's
+  // row as well as its light, and the row scale takes a row's miss out of
+  // the approximate part whatever the link's source radiosity: the leaves
+  // in the 10 cm gaps behind a cabinet had exact rows several percent over
+  // or under 1, the row scale cut or stretched their approximate parts, and
+  // 1.08% of the emitted power escaped the closed room; now -0.11% (test
+  // ATubeUnderTheCeilingLightsAClosedRoomWithACabinetAndLosesNoPower), the
+  // 16 x 16 box field's 0.13% -> 0.08% in the same time. A bound of 0.01 x
+  // the largest instead: -0.03% and 0.04%, but 1.13x the box field's time.
+  double rays_reference_ = 0.0;
   QuadratureOptions quadrature_;
   ElementSet el_;  // per tree node
   std::vector<std::string> enclosed_warnings_;  // emitting roots inside closed objects (SolveStats::warnings)
