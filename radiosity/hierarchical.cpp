@@ -990,7 +990,7 @@ private:
     for (size_t k = 0; k < path.size(); ++k) {
       // Over a partly visible link, the piece's own visible fraction to the
       // receiver where it could move what the link carries by more than
-      // kLeafRaysBound x the refinement threshold (rho_receiver F x the
+      // kLeafRaysBound x epsilon x rays_reference_ (rho_receiver F x the
       // piece's radiosity's difference from its source node's), with a
       // quarter of --rays, stratified, as a leaf casts on its ancestors'
       // links: the link's fraction is a mean over the source, and where the
