@@ -2066,7 +2066,7 @@ private:
   // or under 1, the row scale cut or stretched their approximate parts, and
   // 1.08% of the emitted power escaped the closed room; now -0.11% (test
   // ATubeUnderTheCeilingLightsAClosedRoomWithACabinetAndLosesNoPower), the
-  // 16 x 16 box field's 0.13% -> 0.08% in the same time. A bound of 0.01 x
+  // 16 x 16 box field's 0.13% -> 0.08% for 1.04x its time. A bound of 0.01 x
   // the largest instead: -0.03% and 0.04%, but 1.13x the box field's time.
   double rays_reference_ = 0.0;
   QuadratureOptions quadrature_;
