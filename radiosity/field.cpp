@@ -127,21 +127,26 @@ int emitter_count(const Scene& scene) {
   return e;
 }
 
+// The (vertex, source) pairs a clustered gather over `vertices` vertices is
+// taken for.
+double clustered_pairs(double vertices, int emitters) { return vertices * (kClusterCut + emitters); }
+
 }  // namespace
 
 bool gather_within_budget(const Scene& scene, double vertices) {
   return gather_every_patch(vertices, static_cast<double>(scene.patches.size())) ||
-         vertices * (kClusterCut + emitter_count(scene)) <= kGatherBudget;
+         clustered_pairs(vertices, emitter_count(scene)) <= kGatherBudget;
 }
 
 FieldMode resolve_field_mode(FieldMode requested, const Scene& scene, const Mesh& mesh, std::string* why) {
   if (requested != FieldMode::automatic) return requested;
   const double vertices = static_cast<double>(mesh.positions.size());
   if (gather_within_budget(scene, vertices)) return FieldMode::gather;
+  const int emitters = emitter_count(scene);
   if (why)
     *why = "field: the fit, not the gather: " + format_number(vertices) + " vertices x (" +
-           format_number(kClusterCut) + " clusters or patches + " + std::to_string(emitter_count(scene)) +
-           " emitters) = " + format_number(vertices * (kClusterCut + emitter_count(scene))) +
+           format_number(kClusterCut) + " clusters or patches + " + std::to_string(emitters) +
+           " emitters) = " + format_number(clustered_pairs(vertices, emitters)) +
            " (vertex, source) pairs, over the automatic gather's budget of " + format_number(kGatherBudget) +
            " (--field gather forces it)";
   return FieldMode::fit;
@@ -633,6 +638,7 @@ Rgb FieldEvaluator::Impl::gather_clustered(const Vec3& x, const Vec3& n, int pat
   samples.clear();
   sample_patch.clear();
   Rgb h(0.0);
+  const double flat = 1e-9 * diagonal;  // heights within this of x's plane count as on it
   stack.assign(1, 0);
   while (!stack.empty()) {
     const int c = stack.back();
@@ -651,7 +657,6 @@ Rgb FieldEvaluator::Impl::gather_clustered(const Vec3& x, const Vec3& n, int pat
       low = std::min(low, hk);
       high = std::max(high, hk);
     }
-    const double flat = 1e-9 * diagonal;
     if (high <= flat) continue;  // wholly behind x's tangent plane, or in it
     if (low >= -flat && reach <= kClusterOpening * d && clusters.straddle(c, x, 0.0) <= kClusterStraddle * cl.area) {
       ++report.gather_clusters;
