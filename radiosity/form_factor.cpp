@@ -142,34 +142,46 @@ namespace {
 
 // Calls visit(j, q, F(x_q -> *sources[j])) for every pair whose point lies
 // in front of the source (the others are 0), in source order, then point
-// order. The pairs go through the vectorized kernel as struct of arrays; a
-// pair whose triangle crosses the point's tangent plane takes the clipping
-// formula instead.
+// order. The pairs go through the vectorized kernel as struct of arrays. A
+// triangle crossing the point's tangent plane is clipped to it first: the
+// part in front is a triangle or a quad, the quad two triangles (a fan
+// from its first corner) whose sums are added, since the contour sum of a
+// polygon is the sum of its fan's (their shared edge cancels).
 template <class Visit>
 void point_source_pairs(const ReceiverPoints& r, const Triangle* const* sources, size_t count, Visit&& visit) {
-  // The (point, source) pairs with the point in front of the source, as
-  // struct of arrays for the vectorized kernel; a pair whose triangle
-  // crosses the point's tangent plane takes the clipping formula instead.
   struct Scratch {
     std::array<std::vector<double>, 9> d;
     std::vector<double> sum;
     std::vector<int> source, point;
-    std::vector<char> clipped;
   };
   // Sized once for every pair and filled by index (no push_back per
-  // coordinate: that bookkeeping took longer than the kernel itself).
+  // coordinate: that bookkeeping took longer than the kernel itself); a
+  // clipped quad's second item needs room beyond the pairs.
   thread_local Scratch m;
   const size_t points = r.x.size();
   const size_t most = count * points;
   if (m.source.size() < most) {
-    for (auto& v : m.d) v.resize(most);
-    m.sum.resize(most);
+    for (auto& v : m.d) v.resize(2 * most);
+    m.sum.resize(2 * most);
     m.source.resize(most);
     m.point.resize(most);
-    m.clipped.resize(most);
   }
   std::array<double*, 9> d;
   for (size_t k = 0; k < 9; ++k) d[k] = m.d[k].data();
+  auto put = [&](size_t i, const Vec3& a, const Vec3& b, const Vec3& c) {
+    const Vec3* corner[3] = {&a, &b, &c};
+    for (size_t k = 0; k < 3; ++k) {
+      d[3 * k][i] = corner[k]->x;
+      d[3 * k + 1][i] = corner[k]->y;
+      d[3 * k + 2][i] = corner[k]->z;
+    }
+  };
+  // The quads' second items go after every pair's first: their loops
+  // and pairs are kept until the pairs are counted.
+  thread_local std::vector<std::array<Vec3, 4>> quad_loops;
+  thread_local std::vector<int> quad_pairs;
+  quad_loops.clear();
+  quad_pairs.clear();
   size_t n = 0;
   for (size_t j = 0; j < count; ++j) {
     const Triangle& t = *sources[j];
@@ -184,21 +196,38 @@ void point_source_pairs(const ReceiverPoints& r, const Triangle* const* sources,
         d[3 * k + 2][n] = e.z;
         in_front = in_front && glm::dot(r.normal, e) >= 0.0;
       }
+      if (!in_front) {
+        // Sutherland-Hodgman against the tangent plane (h >= 0 kept).
+        const Vec3 e[3] = {t.v[0] - x, t.v[1] - x, t.v[2] - x};
+        const double h[3] = {glm::dot(r.normal, e[0]), glm::dot(r.normal, e[1]), glm::dot(r.normal, e[2])};
+        std::array<Vec3, 4> loop;
+        int corners = 0;
+        for (size_t k = 0; k < 3; ++k) {
+          const size_t k1 = k == 2 ? 0 : k + 1;
+          if (h[k] >= 0.0) loop[static_cast<size_t>(corners++)] = e[k];
+          if ((h[k] >= 0.0) != (h[k1] >= 0.0))
+            loop[static_cast<size_t>(corners++)] = e[k] + (e[k1] - e[k]) * (h[k] / (h[k] - h[k1]));
+        }
+        if (corners < 3) continue;  // nothing in front: F = 0
+        put(n, loop[0], loop[1], loop[2]);
+        if (corners == 4) {
+          quad_loops.push_back(loop);
+          quad_pairs.push_back(static_cast<int>(n));
+        }
+      }
       m.source[n] = static_cast<int>(j);
       m.point[n] = static_cast<int>(q);
-      m.clipped[n] = in_front ? 0 : 1;
       ++n;
     }
   }
-  detail::lambert_triangle_sums(n, {d[0], d[1], d[2], d[3], d[4], d[5], d[6], d[7], d[8]}, r.normal.x, r.normal.y,
-                                r.normal.z, m.sum.data());
-  for (size_t i = 0; i < n; ++i) {
-    const Triangle& t = *sources[static_cast<size_t>(m.source[i])];
-    const size_t q = static_cast<size_t>(m.point[i]);
-    const double f = m.clipped[i] ? point_polygon_form_factor(r.x[q], r.normal, t.v.data(), 3, t.normal)
-                                  : std::abs(m.sum[i]) / (2.0 * std::numbers::pi);
-    visit(static_cast<size_t>(m.source[i]), q, f);
-  }
+  const size_t quads = quad_pairs.size();
+  for (size_t k = 0; k < quads; ++k) put(n + k, quad_loops[k][0], quad_loops[k][2], quad_loops[k][3]);
+  detail::lambert_triangle_sums(n + quads, {d[0], d[1], d[2], d[3], d[4], d[5], d[6], d[7], d[8]}, r.normal.x,
+                                r.normal.y, r.normal.z, m.sum.data());
+  for (size_t k = 0; k < quads; ++k) m.sum[static_cast<size_t>(quad_pairs[k])] += m.sum[n + k];
+  for (size_t i = 0; i < n; ++i)
+    visit(static_cast<size_t>(m.source[i]), static_cast<size_t>(m.point[i]),
+          std::abs(m.sum[i]) / (2.0 * std::numbers::pi));
 }
 
 }  // namespace

@@ -219,7 +219,9 @@ TEST(ElementFormFactor, ManySourcesAtOnceEqualOneByOne) {
       clipped += straddles;
     }
     zero += expected == 0.0;
-    EXPECT_NEAR(batch[j], expected, 1e-14 * expected) << j;
+    // A clipped quad goes through the kernel as two triangles, whose shared
+    // edge's terms cancel to rounding (1.5e-13 of F here, 1e-14 unclipped).
+    EXPECT_NEAR(batch[j], expected, 1e-12 * expected) << j;
     EXPECT_EQ(batch[j], form_factor(pts, sources[j])) << j;
   }
   EXPECT_GT(clipped, 100);  // the set covers the clipped path ...
