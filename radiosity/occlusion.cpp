@@ -7,8 +7,9 @@ namespace radmesh {
 
 namespace {
 
-// True when every point of `k` lies on or outside some supporting plane of
-// the convex hull of a and b: then k meets no segment from a to b but
+// Whether a polygon k lies outside the convex hull of the polygons a and b
+// (normals na, nb): true when every point of k lies on or outside some
+// supporting plane of that hull. Then k meets no segment from a to b but
 // those on the hull's boundary, which join points on the edges of a and b
 // (no area of either: they carry no light). Planes tried: the two
 // polygons' own planes and the planes through an edge of one polygon and a
@@ -17,51 +18,104 @@ namespace {
 // face standing on the edge of one polygon) is thus clear; when it was
 // not, its shadow rays were cast, and the few that grazed it in single
 // precision made a pair near the room's corners look partly hidden.
-template <class A, class B, class C>
-bool separated(const A& a, const B& b, const C& k, const Vec3& na, const Vec3& nb, double eps) {
-  auto behind_all = [&](const Vec3& origin, const Vec3& n) {
-    for (const Vec3& p : k)
-      if (glm::dot(p - origin, n) > eps) return false;
-    return true;
-  };
-  if (behind_all(a[0], na) || behind_all(b[0], nb)) return true;
-  auto try_planes = [&](const auto& e, const auto& o) {
-    const size_t ne = std::size(e);
-    for (size_t i = 0; i < ne; ++i) {
-      const Vec3& p0 = e[i];
-      const Vec3& p1 = e[(i + 1) % ne];
-      for (const Vec3& c : o) {
-        Vec3 m = glm::cross(p1 - p0, c - p0);
-        const double len = glm::length(m);
-        if (len <= 0.0) continue;
-        m /= len;
-        // Orientation such that both polygons are on the non-positive side.
-        int pos = 0, neg = 0;
-        for (const Vec3& q : e) {
-          const double d = glm::dot(q - p0, m);
-          pos += d > eps;
-          neg += d < -eps;
-        }
-        for (const Vec3& q : o) {
-          const double d = glm::dot(q - p0, m);
-          pos += d > eps;
-          neg += d < -eps;
-        }
-        if (pos > 0 && neg > 0) continue;  // not a supporting plane
-        if (pos > 0) m = -m;
-        bool out = true;
-        for (const Vec3& q : k)
-          if (glm::dot(q - p0, m) < -eps) {
-            out = false;
-            break;
-          }
-        if (out) return true;
-      }
+// The planes depend on a and b alone: they are made as the first polygon
+// tested needs them, in a fixed order, and kept for the next ones (a shaft
+// has several candidates, and each made every plane anew).
+template <class A, class B>
+class ShaftPlanes {
+public:
+  ShaftPlanes(const A& a, const B& b, const Vec3& na, const Vec3& nb, double eps)
+      : a_(a), b_(b), na_(na), nb_(nb), eps_(eps), planes_(scratch()) {
+    planes_.clear();
+  }
+  template <class C>
+  bool separates(const C& k) {
+    if (behind_all(k, a_[0], na_) || behind_all(k, b_[0], nb_)) return true;
+    for (const Plane& p : planes_)
+      if (outside(k, p)) return true;
+    Plane p;
+    while (next(p)) {
+      planes_.push_back(p);
+      if (outside(k, p)) return true;
     }
     return false;
+  }
+
+private:
+  struct Plane {
+    Vec3 origin, normal;
   };
-  return try_planes(a, b) || try_planes(b, a);
-}
+  static std::vector<Plane>& scratch() {
+    thread_local std::vector<Plane> planes;
+    return planes;
+  }
+  template <class C>
+  bool behind_all(const C& k, const Vec3& origin, const Vec3& n) const {
+    for (const Vec3& p : k)
+      if (glm::dot(p - origin, n) > eps_) return false;
+    return true;
+  }
+  template <class C>
+  bool outside(const C& k, const Plane& p) const {
+    for (const Vec3& q : k)
+      if (glm::dot(q - p.origin, p.normal) < -eps_) return false;
+    return true;
+  }
+  // The next supporting plane through an edge of one polygon (a's edges
+  // with b's vertices, then b's with a's) and a vertex of the other,
+  // oriented with both polygons on its non-positive side; false when none
+  // is left.
+  bool next(Plane& out) {
+    const size_t na = std::size(a_), nb = std::size(b_);
+    while (side_ < 2) {
+      const bool from_a = side_ == 0;
+      const size_t ne = from_a ? na : nb, no = from_a ? nb : na;
+      if (edge_ == ne) {
+        ++side_;
+        edge_ = corner_ = 0;
+        continue;
+      }
+      const size_t i = edge_, c = corner_;
+      if (++corner_ == no) {
+        corner_ = 0;
+        ++edge_;
+      }
+      if (from_a ? plane(a_, b_, i, c, out) : plane(b_, a_, i, c, out)) return true;
+    }
+    return false;
+  }
+  template <class E, class O>
+  bool plane(const E& e, const O& o, size_t i, size_t c, Plane& out) const {
+    const size_t ne = std::size(e);
+    const Vec3& p0 = e[i];
+    const Vec3& p1 = e[(i + 1) % ne];
+    Vec3 m = glm::cross(p1 - p0, o[c] - p0);
+    const double len = glm::length(m);
+    if (len <= 0.0) return false;
+    m /= len;
+    int pos = 0, neg = 0;
+    for (const Vec3& q : e) {
+      const double d = glm::dot(q - p0, m);
+      pos += d > eps_;
+      neg += d < -eps_;
+    }
+    for (const Vec3& q : o) {
+      const double d = glm::dot(q - p0, m);
+      pos += d > eps_;
+      neg += d < -eps_;
+    }
+    if (pos > 0 && neg > 0) return false;  // not a supporting plane
+    out = {p0, pos > 0 ? -m : m};
+    return true;
+  }
+
+  const A& a_;
+  const B& b_;
+  Vec3 na_, nb_;
+  double eps_;
+  std::vector<Plane>& planes_;
+  size_t side_ = 0, edge_ = 0, corner_ = 0;
+};
 
 }  // namespace
 
@@ -121,8 +175,10 @@ bool Occlusion::shaft_blocked(int pa, int pb, const A& a, const B& b, const Vec3
     return true;
   });
   if (!few) return true;
+  if (count == 0) return false;
+  ShaftPlanes<A, B> planes(a, b, na, nb, eps_);
   for (int i = 0; i < count; ++i)
-    if (!separated(a, b, polys_[static_cast<size_t>(candidates[static_cast<size_t>(i)])].v, na, nb, eps_)) return true;
+    if (!planes.separates(polys_[static_cast<size_t>(candidates[static_cast<size_t>(i)])].v)) return true;
   return false;
 }
 
@@ -198,10 +254,11 @@ Occlusion::Candidates Occlusion::candidates(int px, const Vec3& x, const Vec3& n
   // At most 4 x kMaxTests patches tested, so that a point's cost per source
   // stays bounded where the whole source's shaft meets many boxes.
   int tested = 0;
+  ShaftPlanes<std::array<Vec3, 1>, std::vector<Vec3>> planes(a, b.v, nx, b.normal, eps_);
   c.all = !tree_.overlapping(shaft, eps_, [&](int k) {
     if (k == px || k == pb) return true;
     if (++tested > 4 * kMaxTests) return false;
-    if (separated(a, b.v, polys_[static_cast<size_t>(k)].v, nx, b.normal, eps_)) return true;
+    if (planes.separates(polys_[static_cast<size_t>(k)].v)) return true;
     if (c.count == kMaxTests) return false;
     c.k[static_cast<size_t>(c.count++)] = k;
     return true;
@@ -218,9 +275,10 @@ bool Occlusion::candidate_shaft(const Candidates& c, int px, const Vec3& x, cons
   shaft.add(x);
   for (const Vec3& v : b) shaft.add(v);
   const std::array<Vec3, 1> a{x};
+  ShaftPlanes<std::array<Vec3, 1>, B> planes(a, b, nx, nb, eps_);
   for (int i = 0; i < c.count; ++i) {
     const Poly& k = polys_[static_cast<size_t>(c.k[static_cast<size_t>(i)])];
-    if (k.box.overlaps(shaft, eps_) && !separated(a, b, k.v, nx, nb, eps_)) return true;
+    if (k.box.overlaps(shaft, eps_) && !planes.separates(k.v)) return true;
   }
   return false;
 }
