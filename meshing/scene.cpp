@@ -43,13 +43,6 @@ void Scene::bounds(Vec3& lo, Vec3& hi) const {
   }
 }
 
-double Scene::diagonal() const {
-  if (vertices.empty()) return 0.0;
-  Vec3 lo, hi;
-  bounds(lo, hi);
-  return glm::length(hi - lo);
-}
-
 bool Scene::has_emitter() const {
   for (const Patch& p : patches) {
     const Rgb& e = materials[static_cast<size_t>(p.material)].emission;

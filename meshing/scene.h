@@ -66,7 +66,11 @@ struct Scene {
   const Material& material_of(const Patch& patch) const;
   double patch_area(int p) const;          // outer area minus holes
   void bounds(Vec3& lo, Vec3& hi) const;   // bounding box of all vertices
-  double diagonal() const;                 // bounding-box diagonal length
+  // The scene's size: the diameter of the smallest sphere holding every
+  // vertex. A box-shaped room's diagonal, and, unlike the bounding box's
+  // diagonal, the same for the scene rotated (the defaults that scale
+  // with the scene, such as mesh sizes, come from it).
+  double diagonal() const;
   bool has_emitter() const;
 };
 

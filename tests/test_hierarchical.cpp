@@ -423,8 +423,11 @@ TEST(Hierarchical, BaumCriterionSplitsWhereVertexValuesDiffer) {
       continue;  // nothing split, or the budget spent
     ++within_budget;
     // Otherwise, when it stops, every leaf that may still be split is within
-    // the tolerance (the criterion is checked on the values of the last solve).
+    // the tolerance (the criterion is checked on the values of the last
+    // solve), but for those a round would split that add under 1% of the
+    // leaves: such a round is not made (kBaumRound).
     const double min_area = baum.stats.min_area;
+    int over = 0;
     double top = 0.0;  // the largest reflected radiosity
     for (size_t n = 0; n < baum.node_radiosity.size(); ++n) {
       const Patch& patch = s.patches[static_cast<size_t>(baum.tree.node(static_cast<int>(n)).patch)];
@@ -438,8 +441,9 @@ TEST(Hierarchical, BaumCriterionSplitsWhereVertexValuesDiffer) {
         lo = std::min(lo, baum.solution.nodal.radiosity[static_cast<size_t>(c)].x);
         hi = std::max(hi, baum.solution.nodal.radiosity[static_cast<size_t>(c)].x);
       }
-      EXPECT_LE(hi - lo, rel * top * (1.0 + 1e-9)) << "leaf " << n;
+      over += hi - lo > rel * top * (1.0 + 1e-9);
     }
+    EXPECT_LT(3 * over, 0.01 * baum.stats.leaves) << rel << ": " << over << " leaves over the tolerance";
   }
   EXPECT_GT(within_budget, 0);
 }
