@@ -79,6 +79,7 @@ struct Lines {
     for (const Line& l : lines) (out += l.text) += '\n';
     return out;
   }
+  bool rewritten = false;  // some statement was changed for tinyobjloader (ObjScan::long_faces)
 };
 
 Lines read_lines(const std::string& path) {
@@ -157,17 +158,26 @@ void scan_mtl(const std::string& path, std::map<std::string, MtlInfo>* info) {
   }
 }
 
+// tinyobjloader counts a face's vertices in an unsigned char: a face of 300
+// vertices came out with 44 (300 - 256), the rest of it dropped without a
+// word (a round lamp of 300 vertices lost 98% of its area). Such a face is
+// given to it as its first three vertices, which keeps its place, object
+// and material, and its vertices are taken from the scan.
+constexpr size_t kTinyobjMostVertices = 255;
+
 struct ObjScan {
   std::vector<int> face_lines;  // line of each f, in file order
+  // Faces of more than kTinyobjMostVertices vertices: face number -> its
+  // vertices (0-based indices into the v statements).
+  std::map<size_t, std::vector<long>> long_faces;
   std::map<std::string, MtlInfo> materials;
-  std::string joined;  // the statements, where some span several lines; else empty
+  std::string joined;  // the statements, where some span several lines or were rewritten; else empty
 };
 
 ObjScan scan_obj(const std::string& path) {
   ObjScan scan;
-  const Lines read = read_lines(path);
-  if (read.continued) scan.joined = read.joined();
-  const std::vector<Line>& lines = read.lines;
+  Lines read = read_lines(path);
+  std::vector<Line>& lines = read.lines;
   const fs::path dir = fs::path(path).parent_path();
   long vertices = 0;
   std::set<std::string> used;
@@ -178,19 +188,23 @@ ObjScan scan_obj(const std::string& path) {
     if (tok.empty() || tok[0][0] == '#') continue;
     const std::string& key = tok[0];
     if (key == "v") {
-      if (tok.size() < 4 || tok.size() > 5)
-        throw InputError(where(path, ln) + "vertex needs 3 coordinates, got '" + lines[i].text + "'");
-      for (size_t k = 1; k < 4; ++k) {
+      // x y z, x y z w, or x y z r g b (a colour per vertex, as MeshLab
+      // writes: read, not used).
+      if (tok.size() < 4 || tok.size() == 6 || tok.size() > 7)
+        throw InputError(where(path, ln) + "vertex needs 3 coordinates (then a weight, or 3 colour values), got '" +
+                         lines[i].text + "'");
+      for (size_t k = 1; k < tok.size(); ++k) {
         double v;
-        if (!parse_double(tok[k], &v))
-          throw InputError(where(path, ln) + "coordinate '" + tok[k] + "' is not a number");
-        if (!std::isfinite(v))
-          throw InputError(where(path, ln) + "coordinate '" + tok[k] + "' is not finite");
+        const std::string what = k <= 3 ? "coordinate '" : "vertex value '";
+        if (!parse_double(tok[k], &v)) throw InputError(where(path, ln) + what + tok[k] + "' is not a number");
+        if (!std::isfinite(v)) throw InputError(where(path, ln) + what + tok[k] + "' is not finite");
       }
       ++vertices;
     } else if (key == "f") {
       if (tok.size() < 4)
         throw InputError(where(path, ln) + "face needs at least 3 vertices, got '" + lines[i].text + "'");
+      const bool long_face = tok.size() - 1 > kTinyobjMostVertices;
+      std::vector<long> indices;
       for (size_t k = 1; k < tok.size(); ++k) {
         const std::string idx = tok[k].substr(0, tok[k].find('/'));
         long v;
@@ -200,6 +214,12 @@ ObjScan scan_obj(const std::string& path) {
         if (abs < 1 || abs > vertices)
           throw InputError(where(path, ln) + "face vertex index " + idx + " is out of range (" +
                            std::to_string(vertices) + " vertices defined so far)");
+        if (long_face) indices.push_back(abs - 1);
+      }
+      if (long_face) {
+        scan.long_faces[scan.face_lines.size()] = std::move(indices);
+        lines[i].text = "f " + tok[1] + " " + tok[2] + " " + tok[3];
+        read.rewritten = true;
       }
       scan.face_lines.push_back(ln);
     } else if (key == "mtllib") {
@@ -231,6 +251,7 @@ ObjScan scan_obj(const std::string& path) {
     if (!scan.materials.count(name))
       throw InputError(where(path, used_line[name]) + "material '" + name +
                        "' is not defined in any mtllib file");
+  if (read.continued || read.rewritten) scan.joined = read.joined();
   return scan;
 }
 
@@ -304,13 +325,15 @@ SceneSource read_obj_source(const std::string& path) {
       face.material = shape.mesh.material_ids[f];
       face.file = path;
       face.line = face_no < scan.face_lines.size() ? scan.face_lines[face_no] : 0;
+      auto add_point = [&](size_t vi) {
+        face.points.emplace_back(attrib.vertices[3 * vi], attrib.vertices[3 * vi + 1], attrib.vertices[3 * vi + 2]);
+      };
       const size_t nv = shape.mesh.num_face_vertices[f];
-      for (size_t k = 0; k < nv; ++k) {
-        const int vi = shape.mesh.indices[offset + k].vertex_index;
-        face.points.emplace_back(attrib.vertices[3 * static_cast<size_t>(vi)],
-                                 attrib.vertices[3 * static_cast<size_t>(vi) + 1],
-                                 attrib.vertices[3 * static_cast<size_t>(vi) + 2]);
-      }
+      const auto long_face = scan.long_faces.find(face_no);
+      if (long_face != scan.long_faces.end())
+        for (const long vi : long_face->second) add_point(static_cast<size_t>(vi));
+      else
+        for (size_t k = 0; k < nv; ++k) add_point(static_cast<size_t>(shape.mesh.indices[offset + k].vertex_index));
       offset += nv;
       if (face.material < 0 && source.missing_material.empty())
         source.missing_material =

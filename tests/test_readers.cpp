@@ -17,6 +17,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <numbers>
 #include <sstream>
 #include <string>
 #include <unistd.h>
@@ -750,6 +751,45 @@ TEST(Readers, ObjAndMtlStatementsGoOnPastABackslashAtTheLineEnd) {
   write_text(dir / "bad" / "s.obj", "mtllib m.mtl\nusemtl white\nv 0 0 0\nv 1 0 \\\n0\nv 1 0 1\nf 1 2 \\\n9\n");
   const std::string msg = message_of<InputError>([&] { read_scene((dir / "bad" / "s.obj").string()); });
   EXPECT_TRUE(contains(msg, "s.obj:7: face vertex index 9 is out of range")) << msg;
+}
+
+TEST(Readers, AnObjFaceOfMoreThan255VerticesKeepsThemAllAndTheFacesAfterIt) {
+  // tinyobjloader counts a face's vertices in an unsigned char: a round
+  // lamp of 300 vertices came out with 44 of them (1.9% of its area, no
+  // word said), and the faces after it could be shifted. The lamp here is
+  // written with negative indices and v//vn pairs, its vertices with a
+  // colour each (x y z r g b, as MeshLab writes them), and a triangle of
+  // another object and material follows it.
+  const fs::path dir = fresh_dir("long_face");
+  write_text(dir / "m.mtl", "newmtl white\nKd 0.7 0.7 0.7\nnewmtl lamp\nKe 10 10 10\nnewmtl grey\nKd 0.5 0.5 0.5\n");
+  const int n = 300;
+  const double r = 0.3;
+  std::ostringstream obj;
+  obj << "mtllib m.mtl\nvn 0 -1 0\no floor\nusemtl white\nv -2 0 -2\nv 2 0 -2\nv 2 0 2\nv -2 0 2\nf 1 4 3 2\n";
+  obj << "o lamp\nusemtl lamp\n";
+  obj.precision(17);
+  for (int k = 0; k < n; ++k) {
+    const double a = 2.0 * std::numbers::pi * k / n;
+    obj << "v " << r * std::cos(a) << " 2.9 " << r * std::sin(a) << " 1 0.5 0.25\n";
+  }
+  obj << "f";
+  for (int k = 0; k < n; ++k) obj << " " << k - n << "//1";
+  obj << "\no shelf\nusemtl grey\nv 0 1 0\nv 1 1 0\nv 0 1 1\nf -3 -1 -2\n";
+  write_text(dir / "s.obj", obj.str());
+  const Scene s = read_scene((dir / "s.obj").string());
+  ASSERT_EQ(s.patches.size(), 3u);
+  const Patch& lamp = s.patches[1];
+  EXPECT_EQ(lamp.name, "lamp");
+  EXPECT_EQ(s.material_of(lamp).name, "lamp");
+  ASSERT_EQ(lamp.outer.size(), static_cast<size_t>(n));
+  const double area = 0.5 * n * r * r * std::sin(2.0 * std::numbers::pi / n);
+  EXPECT_NEAR(s.patch_area(1), area, 1e-12 * area);
+  EXPECT_NEAR(glm::length(s.vertices[static_cast<size_t>(lamp.outer[0])] - Vec3(r, 2.9, 0.0)), 0.0, 1e-12);
+  const Patch& shelf = s.patches[2];
+  EXPECT_EQ(shelf.name, "shelf");
+  EXPECT_EQ(s.material_of(shelf).name, "grey");
+  EXPECT_NEAR(s.patch_area(2), 0.5, 1e-12);
+  EXPECT_EQ(shelf.line, 318);  // 9 lines, then the lamp's 2 + 300 + 1, then 2 + 3 before it
 }
 
 TEST(Readers, ExtensionIsCaseInsensitive) {
