@@ -647,6 +647,12 @@ INSTANTIATE_TEST_SUITE_P(
                       ": Validation failed: aiMesh::mFaces[0]::mIndices[2] is out of range"},
         FileErrorCase{"off_index", "mesh.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 9\n",
                       ": OFF: Vertex index is out of range"},
+        // assimp said "Faces with zero indices aren't allowed" of a face of 10.
+        FileErrorCase{"off_face_of_ten_vertices", "mesh.off",
+                      "OFF\n10 1 0\n0 0 0\n1 0 0\n2 0 0\n3 0 1\n3 0 2\n2 0 3\n1 0 3\n0 0 3\n-1 0 2\n-1 0 1\n"
+                      "10 0 1 2 3 4 5 6 7 8 9\n",
+                      ": OFF: a face has no vertex or more than 9, which assimp's OFF reader refuses (write the mesh "
+                      "as OBJ or PLY: they take faces of any size)"},
         FileErrorCase{"ply_parse", "mesh.ply", PLY_HEAD(3, 1) "0 0 0\nx 0 0\n0 1 0\n3 0 1 2\n",
                       ": Cannot parse string \"x 0 0"},
         // Headers assimp would loop on without end (found by fuzz_assimp_reader), or
