@@ -163,6 +163,9 @@ struct DirectIllumination::Impl {
   // find_solids), the box of that surface; else empty.
   std::vector<Box3> solid_box;
   explicit Impl(const Scene& s) : scene(s) {}
+  // Bounds on the shaft test's cost per vertex (see shaft and the emitters' base).
+  static constexpr size_t kMostBaseCorners = 16;
+  static constexpr double kMostAxisWork = 131072.0;  // a triangle in a 16-sided pyramid: 3 x 32 x 20 = 1,920
 
   // The closed surfaces facing out among the patches: a set of patches
   // joined by shared edges in which every edge is shared by exactly two of
@@ -445,6 +448,14 @@ struct DirectIllumination::Impl {
       te.clear();
       for (size_t i = 0; i < t.size(); ++i) te.push_back(t[(i + 1) % t.size()] - t[i]);
       if (apart(t, extent(glm::cross(te[0], te[1])))) return true;
+      // The edge pairs' axes cost (pyramid edges) x (occluder edges) x
+      // (their points): past kMostAxisWork (an occluder of 256 corners in a
+      // wide pyramid: 67 M steps a vertex) the occluder goes to the exact
+      // clip, which finds what it hides (or nothing) all the same.
+      if (static_cast<double>(hull_edges.size()) * static_cast<double>(te.size()) *
+              static_cast<double>(hull.size() + t.size()) >
+          kMostAxisWork)
+        return false;
       for (const Vec3& he : hull_edges)
         for (const Vec3& edge : te)
           if (apart(t, extent(glm::cross(he, edge)))) return true;
@@ -698,7 +709,12 @@ DirectIllumination::DirectIllumination(const Scene& scene) : impl_(std::make_uni
     }
     e.loops.push_back(e.lifted(e.shape.outer_boundary()));
     for (auto h = e.shape.holes_begin(); h != e.shape.holes_end(); ++h) e.loops.push_back(e.lifted(*h));
-    if (patch.holes.empty() && e.shape.outer_boundary().is_convex()) e.base = e.loops[0];
+    // The pyramid's base: a convex emitter's own outline, unless it has many
+    // corners (a round lamp of 256): every vertex's shaft test costs a pass
+    // over the base's corners per corner, and the box's pyramid only clears
+    // a little less.
+    if (patch.holes.empty() && e.loops[0].size() <= Impl::kMostBaseCorners && e.shape.outer_boundary().is_convex())
+      e.base = e.loops[0];
     for (const Vec3& b : e.base) e.base_centre += b / static_cast<double>(e.base.size());
     e.in_front.resize(impl_->occluders.size());
     for (size_t t = 0; t < impl_->occluders.size(); ++t) {
