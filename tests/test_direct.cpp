@@ -166,6 +166,18 @@ void closed_cube(std::vector<RawFace>& faces, const std::string& name, const Vec
     faces.push_back(b);
   }
 }
+// A 6 x 6 floor "floor" (material 0, white 0.5) under `faces` (material 1
+// is grey 0.5, material 2 a lamp emitting 1).
+Scene on_a_floor(std::vector<RawFace> faces, const std::string& name) {
+  RawFace floor;
+  floor.name = "floor";
+  floor.material = 0;
+  floor.points = {{-3, 0, -3}, {-3, 0, 3}, {3, 0, 3}, {3, 0, -3}};
+  faces.insert(faces.begin(), floor);
+  return build_scene(
+      faces, {test::material("white", Rgb(0.5)), test::material("grey", Rgb(0.5)), test::material("lamp", Rgb(0.0), Rgb(1.0))},
+      name);
+}
 }  // namespace
 
 TEST(Direct, FacesOfAClosedSolidTurnedAwayAreLeftOutOfTheClipAndTheLightIsTheSame) {
@@ -178,11 +190,6 @@ TEST(Direct, FacesOfAClosedSolidTurnedAwayAreLeftOutOfTheClipAndTheLightIsTheSam
   // penumbra and umbra of all three, the fast path (reflected) must equal
   // the visible form factor over every occluder to 1e-12.
   std::vector<RawFace> faces;
-  RawFace floor;
-  floor.name = "floor";
-  floor.material = 0;
-  floor.points = {{-3, 0, -3}, {-3, 0, 3}, {3, 0, 3}, {3, 0, -3}};
-  faces.push_back(floor);
   RawFace lamp;
   lamp.name = "lamp";
   lamp.material = 2;
@@ -199,9 +206,7 @@ TEST(Direct, FacesOfAClosedSolidTurnedAwayAreLeftOutOfTheClipAndTheLightIsTheSam
   shut.material = 2;
   shut.points = {{-0.1, 1.5, 0.9}, {0.1, 1.5, 0.9}, {0.1, 1.5, 1.1}, {-0.1, 1.5, 1.1}};
   faces.push_back(shut);
-  const Scene scene = build_scene(
-      faces, {test::material("white", Rgb(0.5)), test::material("grey", Rgb(0.5)), test::material("lamp", Rgb(0.0), Rgb(1.0))},
-      "closed solids");
+  const Scene scene = on_a_floor(faces, "closed solids");
   const DirectIllumination direct(scene);
   const int floor_patch = patch_named(scene, "floor"), light = patch_named(scene, "lamp"),
             shut_light = patch_named(scene, "shut_lamp");
@@ -246,17 +251,8 @@ TEST(Direct, ARoundLampOverARoundTableIsLitExactlyByTheCheapPath) {
     }
     return f;
   };
-  std::vector<RawFace> faces;
-  RawFace floor;
-  floor.name = "floor";
-  floor.material = 0;
-  floor.points = {{-3, 0, -3}, {-3, 0, 3}, {3, 0, 3}, {3, 0, -3}};
-  faces.push_back(floor);
-  faces.push_back(disc("lamp", 2, 48, 0.3, 2.9, false));
-  faces.push_back(disc("table", 1, 200, 0.8, 0.75, true));
-  const Scene scene = build_scene(
-      faces, {test::material("white", Rgb(0.5)), test::material("grey", Rgb(0.5)), test::material("lamp", Rgb(0.0), Rgb(1.0))},
-      "round table");
+  const Scene scene =
+      on_a_floor({disc("lamp", 2, 48, 0.3, 2.9, false), disc("table", 1, 200, 0.8, 0.75, true)}, "round table");
   const DirectIllumination direct(scene);
   const int floor_patch = patch_named(scene, "floor"), table = patch_named(scene, "table"),
             light = patch_named(scene, "lamp");
