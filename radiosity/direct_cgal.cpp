@@ -43,7 +43,7 @@ struct Emitter {
   std::array<Point3, 4> corners;  // the 2-D bounding box lifted back to the plane
   Vec3 lo{0.0}, hi{0.0};
   Rgb emission{0.0};
-  std::vector<Vec3> base;               // the pyramid's base: the outline if convex, else `corners`
+  std::vector<Vec3> base;               // the pyramid's base: the outline if convex (at most 16 corners), else `corners`
   Vec3 base_centre{0.0};
   std::vector<bool> in_front;            // per occluder: a corner strictly in front of the plane
   std::vector<std::vector<Vec3>> loops;  // outline, then holes (scene coordinates)
@@ -504,8 +504,9 @@ struct DirectIllumination::Impl {
 
   // True when one convex occluder patch among the candidates' patches hides
   // the whole emitter from x: the segment from x to every corner of the
-  // emitter's outline crosses the occluder's plane inside its outline (by
-  // the margin). Then it hides the outline's convex hull, and so the emitter.
+  // emitter's outline (or of its base) crosses the occluder's plane inside
+  // its outline (by the margin). Then it hides their convex hull, and so the
+  // emitter.
   bool hidden_by_one(const Vec3& x, const Emitter& e, const std::vector<int>& candidates) const {
     const double margin = 1e-9 * (glm::length(x - e.base_centre) + glm::length(e.hi - e.lo));
     int last = -1;
@@ -517,7 +518,11 @@ struct DirectIllumination::Impl {
       if (c.outline.empty()) continue;
       const double sx = glm::dot(x - c.outline[0], c.normal);
       bool all = true;
-      for (const Vec3& v : e.loops[0]) {
+      // The emitter's corners, or past kMostBaseCorners its base (its box,
+      // which holds it): each corner costs a pass over the occluder's
+      // outline, and a round lamp over a round table of 1,024 corners each
+      // took 1 M steps a vertex.
+      for (const Vec3& v : e.loops[0].size() <= kMostBaseCorners ? e.loops[0] : e.base) {
         const double sv = glm::dot(v - c.outline[0], c.normal);
         if (!((sx > margin && sv < -margin) || (sx < -margin && sv > margin))) {
           all = false;
