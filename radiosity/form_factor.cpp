@@ -188,18 +188,19 @@ void point_source_pairs(const ReceiverPoints& r, const Triangle* const* sources,
     for (size_t q = 0; q < points; ++q) {
       const Vec3& x = r.x[q];
       if (glm::dot(x - t.v[0], t.normal) <= 0.0) continue;  // behind the source: it emits from its front only
+      Vec3 e[3];
+      double h[3];  // heights over the point's tangent plane
       bool in_front = true;
       for (size_t k = 0; k < 3; ++k) {
-        const Vec3 e = t.v[k] - x;
-        d[3 * k][n] = e.x;
-        d[3 * k + 1][n] = e.y;
-        d[3 * k + 2][n] = e.z;
-        in_front = in_front && glm::dot(r.normal, e) >= 0.0;
+        e[k] = t.v[k] - x;
+        d[3 * k][n] = e[k].x;
+        d[3 * k + 1][n] = e[k].y;
+        d[3 * k + 2][n] = e[k].z;
+        h[k] = glm::dot(r.normal, e[k]);
+        in_front = in_front && h[k] >= 0.0;
       }
       if (!in_front) {
         // Sutherland-Hodgman against the tangent plane (h >= 0 kept).
-        const Vec3 e[3] = {t.v[0] - x, t.v[1] - x, t.v[2] - x};
-        const double h[3] = {glm::dot(r.normal, e[0]), glm::dot(r.normal, e[1]), glm::dot(r.normal, e[2])};
         std::array<Vec3, 4> loop;
         int corners = 0;
         for (size_t k = 0; k < 3; ++k) {
