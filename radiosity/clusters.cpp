@@ -284,7 +284,7 @@ void ClusterTree::finish(const std::vector<std::vector<int>>& tree, const std::v
     Vec3 moment(0.0);
     for (const Item& it : items) {
       const int g = static_cast<int>(groups_.size());
-      groups_.push_back({it.s, it.moment / it.area, it.area, -1});
+      groups_.push_back({it.s, it.moment / it.area, it.area, -1, 0.0f, c});
       const Vec3 axis = direction(it);
       double cone = glm::length(axis) > 0.0 ? 0.0 : std::numbers::pi;
       for (const auto& [from, a] : it.from) {
@@ -411,6 +411,27 @@ int ClusterTree::position_at_area(int c, double u) const {
   const double a = lo + u * (hi - lo);
   const auto it = std::upper_bound(cumulative_.begin() + cl.begin + 1, cumulative_.begin() + cl.end, a);
   return static_cast<int>(it - cumulative_.begin() - 1);
+}
+
+int ClusterTree::root_at_area(int g, double u) const {
+  for (;;) {
+    const Cluster& cl = cluster(group(g).cluster);
+    double total = 0.0;
+    for (int k = cl.member_begin; k < cl.member_end; ++k)
+      if (members_[static_cast<size_t>(k)].group == g) total += members_[static_cast<size_t>(k)].area;
+    double at = u * total;
+    const Member* pick = nullptr;
+    for (int k = cl.member_begin; k < cl.member_end; ++k) {
+      const Member& m = members_[static_cast<size_t>(k)];
+      if (m.group != g) continue;
+      pick = &m;
+      if (at < m.area) break;
+      at -= m.area;
+    }
+    if (pick->from >= 0) return pick->from;
+    u = pick->area > 0.0 ? std::clamp(at / pick->area, 0.0, 1.0 - 1e-12) : 0.0;
+    g = -2 - pick->from;
+  }
 }
 
 }  // namespace radmesh

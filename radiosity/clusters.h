@@ -45,6 +45,7 @@ public:
     // s is 0): 0 for a flat group, and the group's light is exact for every
     // w further than it from the plane perpendicular to s.
     float cone = 0.0f;
+    int cluster = -1;  // the cluster it is a group of
   };
 
   static constexpr int code(int c) { return -2 - c; }
@@ -126,6 +127,9 @@ public:
   // The position (root_at(position)) of the root of cluster c holding
   // area fraction u in [0, 1) of it.
   int position_at_area(int c, double u) const;
+  // The root of group g holding area fraction u in [0, 1) of it (through
+  // its child groups, by their members' areas).
+  int root_at_area(int g, double u) const;
 
 private:
   // Lays out the clusters of `tree` (children lists of node codes, -2 - t
