@@ -356,6 +356,38 @@ TEST(Hierarchical, AClosedRoomAbsorbsWhatItEmitsAndMatchesTheMatrixMethod) {
   }
 }
 
+TEST(Clusters, RootAtAreaDrawsAGroupsRootsByTheirArea) {
+  // ClusterTree::root_at_area maps [0, 1) onto the roots of a group, through
+  // its child groups: each root gets an interval as long as its share of
+  // the group's area, so u on a grid of n points lands on root r within
+  // one or two points of n x area_r / area_g, and never on a root outside g.
+  const Scene s = sphere_room(1);
+  const std::vector<Triangle> roots = root_triangles(s, initial_mesh(s));
+  const std::vector<double> weights(roots.size(), 1.0);
+  for (const ClusterTree& ct : {ClusterTree::volume(roots, weights), ClusterTree::shape(roots, weights)}) {
+    int checked = 0;
+    for (int g = 0; g < static_cast<int>(ct.group_count()); g += 7) {
+      std::map<int, double> expected;
+      for (size_t r = 0; r < roots.size(); ++r)
+        for (int h = ct.root_group(static_cast<int>(r)); h >= 0; h = ct.group(h).up)
+          if (h == g) expected[static_cast<int>(r)] = roots[r].area / ct.group(g).area;
+      ASSERT_FALSE(expected.empty());
+      constexpr int n = 20000;
+      std::map<int, int> count;
+      for (int k = 0; k < n; ++k) ++count[ct.root_at_area(g, (k + 0.5) / n)];
+      for (const auto& [r, c] : count) {
+        ASSERT_TRUE(expected.count(r)) << "group " << g << " drew root " << r << ", not one of its own";
+        EXPECT_NEAR(c, n * expected.at(r), 2.0) << "group " << g << " root " << r;
+      }
+      double share = 0.0;
+      for (const auto& [r, f] : expected) share += f;
+      EXPECT_NEAR(share, 1.0, 1e-9);
+      ++checked;
+    }
+    EXPECT_GT(checked, 3);
+  }
+}
+
 TEST(Clusters, StraddleBoundsWhatAGroupsNetNormalGetsWrong) {
   // Light leaving a group towards w is taken as max(0, s . w), s the sum of
   // its members' area x normal; the members' own sum of max(0, n . w) A
