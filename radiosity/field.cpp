@@ -189,12 +189,6 @@ struct FieldEvaluator::Impl {
       reflected.push_back(r);
     }
   };
-  // The point form factor's kernel between x (normal n) and y (normal m),
-  // without its 1 / pi: a sample's weight.
-  static double kernel(const Vec3& x, const Vec3& n, const Vec3& y, const Vec3& m) {
-    const Vec3 r = y - x;
-    return std::max(0.0, glm::dot(n, r)) * std::max(0.0, -glm::dot(m, r)) / std::pow(glm::dot(r, r), 2);
-  }
   // Area-uniform stratified points y of triangles [begin .. end) of a
   // source, for the mean of V(x, y) R(y) seen from x (normal n): appended
   // to `batch` (those where the kernel is positive); returns the sum of
@@ -212,7 +206,7 @@ struct FieldEvaluator::Impl {
       const double a = rng.uniform(), b = rng.uniform();
       int t = -1;
       const Vec3 y = tree.sample(begin, end, u, a, b, t);
-      const double ws = kernel(x, n, y, tree.normal);
+      const double ws = point_kernel(x, n, y, tree.normal);  // a sample's weight
       weight += ws;
       if (ws > 0.0) batch.add(y, ws, tree.reflected[static_cast<size_t>(t)]);
     }
@@ -681,7 +675,7 @@ Rgb FieldEvaluator::Impl::gather_clustered(const Vec3& x, const Vec3& n, int pat
           const double u = rng.uniform(), a = rng.uniform(), b = rng.uniform();
           int tri = -1;
           const Vec3 y = s.sample(0, static_cast<int>(s.triangle.size()), u, a, b, tri);
-          const double w = kernel(x, n, y, s.normal);
+          const double w = point_kernel(x, n, y, s.normal);
           t.weight += w;
           if (!(w > 0.0)) continue;
           samples.add(y, w, s.reflected[static_cast<size_t>(tri)]);

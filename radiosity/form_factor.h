@@ -4,6 +4,7 @@
 
 #include "meshing/geometry.h"
 
+#include <algorithm>
 #include <array>
 #include <functional>
 #include <vector>
@@ -83,6 +84,14 @@ double element_form_factor(const Triangle& receiver, const Triangle& source,
 
 // Distance from p to a triangle, and to a planar polygon (holes ignored: a lower bound).
 double distance_to_triangle(const Vec3& p, const Triangle& t);
+
+// The point form factor's kernel between x (normal n) and y (normal m),
+// without its 1 / pi: max(0, n . r) max(0, -m . r) / |r|^4, r = y - x.
+inline double point_kernel(const Vec3& x, const Vec3& n, const Vec3& y, const Vec3& m) {
+  const Vec3 r = y - x;
+  const double d2 = glm::dot(r, r);
+  return std::max(0.0, glm::dot(n, r)) * std::max(0.0, -glm::dot(m, r)) / (d2 * d2);
+}
 double distance_to_polygon(const Vec3& p, const std::vector<Vec3>& poly, const Vec3& normal);
 
 // True when no point of `source` lies strictly in front of `receiver`'s plane

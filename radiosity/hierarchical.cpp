@@ -1443,10 +1443,7 @@ private:
       const double a = rng.uniform(), b = rng.uniform(), c = rng.uniform(), d = rng.uniform();
       const Vec3 from = triangle_point(t.v[0], t.v[1], t.v[2], a, b);
       const Vec3 to = triangle_point(s.v[0], s.v[1], s.v[2], c, d);
-      const Vec3 w = to - from;
-      const double d2 = glm::dot(w, w);
-      const double kernel = std::max(0.0, glm::dot(t.normal, w)) * std::max(0.0, -glm::dot(s.normal, w)) /
-                            (std::numbers::pi * d2 * d2);
+      const double kernel = point_kernel(from, t.normal, to, s.normal) / std::numbers::pi;
       if (!(kernel > 0.0) ||
           !visibility_.rays().visible_off_surfaces(from, t.normal, to, s.normal, node_patch(static_cast<int>(x)),
                                                    node_patch(node)))
