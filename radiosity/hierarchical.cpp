@@ -19,7 +19,6 @@
 #include <memory>
 #include <cmath>
 #include <string>
-#include <tuple>
 #include <limits>
 #include <numbers>
 #include <queue>
@@ -1903,13 +1902,24 @@ private:
     const bool swap = code_key(q) < code_key(p);
     const int a = swap ? q : p, b = swap ? p : q;
     const bool end_is_a = (p < 0 ? p : q) == a;  // the cluster end whose groups are told apart
-    // Per ray: the root its point at that end fell in, its weight, and
-    // whether it got through (sorted by group only when the link is partly
-    // visible, the only case where the groups can differ).
-    thread_local std::vector<std::tuple<int, double, bool>> seen;
-    seen.clear();
+    // The point pairs that face each other, drawn first (whether a draw
+    // is used does not depend on the rays), their rays then cast in one
+    // call; per ray, the root its point at the cluster end fell in, for the
+    // groups.
+    struct Draws {
+      std::vector<Vec3> x, nx, y, ny;
+      std::vector<int> px, py, root;
+      std::vector<double> w;
+      std::vector<unsigned char> through;
+      void clear() {
+        for (auto* v : {&x, &nx, &y, &ny}) v->clear();
+        for (auto* v : {&px, &py, &root}) v->clear();
+        w.clear();
+      }
+    };
+    thread_local Draws d;
+    d.clear();
     SplitMix rng(pair_seed(code_key(a), code_key(b)));
-    double weight = 0.0, open = 0.0;
     int used = 0;
     // A point of a whose plane leaves all of b's bounding sphere behind it
     // faces no point of b: b's point is not drawn, only skipped in the
@@ -1932,18 +1942,34 @@ private:
       const double w = cx * cy / (d2 * d2);
       if (!(w > 0.0)) continue;
       ++used;
-      const bool through = visibility_.visible(x, nx, y, ny, px, py);
-      weight += w;
-      if (through) open += w;
-      seen.emplace_back(end_is_a ? rx : ry, w, through);
+      d.x.push_back(x);
+      d.nx.push_back(nx);
+      d.y.push_back(y);
+      d.ny.push_back(ny);
+      d.px.push_back(px);
+      d.py.push_back(py);
+      d.root.push_back(end_is_a ? rx : ry);
+      d.w.push_back(w);
     }
     count.cast += used;
     if (used == 0) return -1.0;
+    const size_t n = d.w.size();
+    d.through.resize(n);
+    visibility_.visible(d.x.data(), d.nx.data(), d.y.data(), d.ny.data(), d.px.data(), d.py.data(), n,
+                        d.through.data());
+    double weight = 0.0, open = 0.0;
+    for (size_t k = 0; k < n; ++k) {
+      weight += d.w[k];
+      if (d.through[k]) open += d.w[k];
+    }
     const double visible = open / weight;
     if (visible > 0.0 && visible < 1.0) {
       const ClusterTree::Cluster& cl = ct_.cluster(cluster_of(p < 0 ? p : q));
       std::array<double, ClusterTree::kGroups> gweight{}, gopen{};
-      for (const auto& [root, w, through] : seen) {
+      for (size_t k = 0; k < n; ++k) {
+        const int root = d.root[k];
+        const double w = d.w[k];
+        const bool through = d.through[k] != 0;
         int g = ct_.root_group(root);
         while (g >= 0 && (g < cl.group_begin || g >= cl.group_end)) g = ct_.group(g).up;
         if (g < 0) continue;

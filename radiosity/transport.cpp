@@ -8,6 +8,7 @@
 #include <tbb/task_arena.h>
 
 #include <array>
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <numeric>
@@ -129,8 +130,13 @@ const Visibility& VisibilityEstimator::rays() const {
 
 VisibilityEstimator::~VisibilityEstimator() = default;
 
-bool VisibilityEstimator::visible(const Vec3& x, const Vec3& nx, const Vec3& y, const Vec3& ny, int pa, int pb) const {
-  return !impl_->embree || impl_->embree->visible_off_surfaces(x, nx, y, ny, pa, pb);
+void VisibilityEstimator::visible(const Vec3* x, const Vec3* nx, const Vec3* y, const Vec3* ny, const int* pa,
+                                  const int* pb, size_t n, unsigned char* seen) const {
+  if (!impl_->embree) {
+    std::fill(seen, seen + n, static_cast<unsigned char>(1));
+    return;
+  }
+  if (n > 0) impl_->embree->visible_off_surfaces_each(x, nx, y, ny, pa, pb, n, seen);
 }
 
 bool VisibilityEstimator::convex_enclosure() const { return impl_->occlusion.convex_enclosure(); }

@@ -103,11 +103,13 @@ public:
                           RayCount& count, int side = 0, bool test_shaft = true) const;
   int side() const { return side_; }
 
-  // The segment between x (on a surface facing nx) and y (on one facing
-  // ny), its ends lifted off their surfaces (Visibility::visible_off_surfaces),
-  // is clear of every patch but pa and pb (always in a convex enclosure).
-  // Thread-safe.
-  bool visible(const Vec3& x, const Vec3& nx, const Vec3& y, const Vec3& ny, int pa, int pb) const;
+  // Into seen[i]: whether the segment between x[i] (on a surface facing
+  // nx[i]) and y[i] (on one facing ny[i]), its ends lifted off their
+  // surfaces (Visibility::visible_off_surfaces_each), is clear of every
+  // patch but pa[i] and pb[i] (always in a convex enclosure). One call to
+  // Embree for all n. Thread-safe.
+  void visible(const Vec3* x, const Vec3* nx, const Vec3* y, const Vec3* ny, const int* pa, const int* pb, size_t n,
+               unsigned char* seen) const;
 
   // Embree's scene, built on the first call even in a convex enclosure
   // (where visible_fraction needs none). Thread-safe.

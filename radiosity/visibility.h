@@ -44,6 +44,11 @@ public:
                             int ignore_a, int ignore_b, unsigned char* seen) const;
   bool visible_off_surfaces(const Vec3& from, const Vec3& from_normal, const Vec3& to, const Vec3& to_normal,
                             int ignore_a, int ignore_b) const;
+  // The same with surfaces of its own per segment: from[i] on one facing
+  // from_normal[i], to[i] on one facing to_normal[i], hits on ignore_a[i]
+  // and ignore_b[i] ignored. One call to Embree for all n.
+  void visible_off_surfaces_each(const Vec3* from, const Vec3* from_normal, const Vec3* to, const Vec3* to_normal,
+                                 const int* ignore_a, const int* ignore_b, size_t n, unsigned char* seen) const;
 
   // The patch first hit by the ray from `from` along `direction` (any
   // length) between 1e-7 and 1 times `reach` times the direction's length

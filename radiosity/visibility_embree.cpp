@@ -21,7 +21,8 @@ struct QueryContext {
   RTCIntersectContext base;  // must come first: Embree passes &base back to us
   const int* prim_patch;
   int ignore_a, ignore_b;
-  const int* ignore_each;  // per ray (by its id), or null
+  const int* ignore_each;    // per ray (by its id), or null
+  const int* ignore_each_b;  // a second per ray, or null
 };
 
 void ignore_filter(const RTCFilterFunctionNArguments* args) {
@@ -31,7 +32,8 @@ void ignore_filter(const RTCFilterFunctionNArguments* args) {
     const unsigned prim = RTCHitN_primID(args->hit, args->N, i);
     const int patch = ctx->prim_patch[prim];
     if (patch == ctx->ignore_a || patch == ctx->ignore_b ||
-        (ctx->ignore_each && patch == ctx->ignore_each[RTCRayN_id(args->ray, args->N, i)]))
+        (ctx->ignore_each && patch == ctx->ignore_each[RTCRayN_id(args->ray, args->N, i)]) ||
+        (ctx->ignore_each_b && patch == ctx->ignore_each_b[RTCRayN_id(args->ray, args->N, i)]))
       args->valid[i] = 0;
   }
 }
@@ -140,6 +142,7 @@ QueryContext make_context(const std::vector<int>& prim_patch, int ignore_a, int 
   ctx.ignore_a = ignore_a;
   ctx.ignore_b = ignore_b;
   ctx.ignore_each = nullptr;
+  ctx.ignore_each_b = nullptr;
   return ctx;
 }
 
@@ -199,6 +202,22 @@ void Visibility::visible_off_surfaces(const Vec3* from, const Vec3& from_normal,
       [&](size_t i) {
         const Vec3 a = from[i] + up_from;
         return make_ray(a, m.origin, to[i] + up_to - a, 0.0f, 1.0f);
+      },
+      seen);
+}
+
+void Visibility::visible_off_surfaces_each(const Vec3* from, const Vec3* from_normal, const Vec3* to,
+                                           const Vec3* to_normal, const int* ignore_a, const int* ignore_b, size_t n,
+                                           unsigned char* seen) const {
+  const Impl& m = *impl_;
+  QueryContext ctx = make_context(m.prim_patch, -1, -1);
+  ctx.ignore_each = ignore_a;
+  ctx.ignore_each_b = ignore_b;
+  trace_coherent(
+      m.scene, ctx, n,
+      [&](size_t i) {
+        const Vec3 a = from[i] + m.lift * from_normal[i];
+        return make_ray(a, m.origin, to[i] + m.lift * to_normal[i] - a, 0.0f, 1.0f);
       },
       seen);
 }

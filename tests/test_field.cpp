@@ -589,6 +589,39 @@ TEST(Field, EachSegmentIgnoresItsOwnPatch) {
   for (size_t i = 0; i < seen.size(); ++i) EXPECT_EQ(seen[i], i % 2 ? 1 : 0) << i;
 }
 
+TEST(Field, EachLiftedSegmentIgnoresItsOwnTwoPatches) {
+  // Visibility::visible_off_surfaces_each: segments from under the parallel
+  // plates to points over them cross both plates. In one call, each
+  // segment ignores its own pair of patches: both plates (either way
+  // round) lets it through, one alone does not; every answer is the one
+  // the single-segment query gives.
+  const Scene scene = read_obj_scene(kData + "/parallel_plates/parallel_plates.obj");
+  const int emitter = patch_named(scene, "emitter"), receiver = patch_named(scene, "receiver");
+  ASSERT_GE(emitter, 0);
+  ASSERT_GE(receiver, 0);
+  const Visibility rays(scene);
+  const std::array<std::pair<int, int>, 4> ignored = {
+      {{emitter, receiver}, {receiver, emitter}, {emitter, -1}, {-1, receiver}}};
+  std::vector<Vec3> from, to, up, down;
+  std::vector<int> a, b;
+  for (int i = 0; i < 40; ++i) {
+    const double s = 0.2 + 0.015 * i;
+    from.emplace_back(s, 1.0 - s, -0.5);
+    to.emplace_back(1.0 - s, s, 1.5);
+    up.emplace_back(0.0, 0.0, 1.0);
+    down.emplace_back(0.0, 0.0, -1.0);
+    a.push_back(ignored[static_cast<size_t>(i % 4)].first);
+    b.push_back(ignored[static_cast<size_t>(i % 4)].second);
+  }
+  std::vector<unsigned char> seen(from.size(), 2);
+  rays.visible_off_surfaces_each(from.data(), up.data(), to.data(), down.data(), a.data(), b.data(), from.size(),
+                                 seen.data());
+  for (size_t i = 0; i < seen.size(); ++i) {
+    EXPECT_EQ(seen[i], i % 4 < 2 ? 1 : 0) << i;
+    EXPECT_EQ(seen[i] != 0, rays.visible_off_surfaces(from[i], up[i], to[i], down[i], a[i], b[i])) << i;
+  }
+}
+
 TEST(Field, TheClusteredGatherOfAConvexRoomOfTilesIsUniformWithoutRays) {
   // A closed cube room whose walls are 10 x 10 tiles each (600 patches):
   // a convex enclosure, so no shadow rays at all, and the far clusters'
