@@ -558,8 +558,11 @@ TEST(Field, PatchesNearAPointAreFoundByTheBoxTree) {
     const double r = ur(rng);
     occlusion.patches_near(x, r, near);
     EXPECT_TRUE(std::is_sorted(near.begin(), near.end()));
-    for (int p = 0; p < static_cast<int>(scene.patches.size()); ++p)
-      if (occlusion.distance(p, x) <= r) EXPECT_TRUE(std::binary_search(near.begin(), near.end(), p)) << trial << " " << p;
+    for (int p = 0; p < static_cast<int>(scene.patches.size()); ++p) {
+      if (occlusion.distance(p, x) <= r) {
+        EXPECT_TRUE(std::binary_search(near.begin(), near.end(), p)) << trial << " " << p;
+      }
+    }
     found += static_cast<long long>(near.size());
   }
   EXPECT_GT(found, 500);
