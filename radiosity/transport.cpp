@@ -179,22 +179,22 @@ double VisibilityEstimator::visible_fraction(const Triangle& a, int pa, uint64_t
     ys[static_cast<size_t>(k)] = triangle_point(tj.v[0], tj.v[1], tj.v[2], yu, yv);
   }
   impl_->embree->visible_off_surfaces(xs.data(), ti.normal, ys.data(), tj.normal, xs.size(), pi, pj, seen.data());
-  int open = 0, facing = 0, open_facing = 0;
+  int open = 0;
+  double weight = 0.0, open_weight = 0.0;
   for (size_t k = 0; k < xs.size(); ++k) {
-    const Vec3& x = xs[k];
-    const Vec3& y = ys[k];
     const bool visible = seen[k] != 0;
     open += visible;
     // Light passes between x and y only when each lies in front of the
     // other's plane; a ray behind either one (an element straddling the
     // other's plane) crosses what the exchange never does and says nothing.
-    if (glm::dot(x - tj.v[0], tj.normal) > 0.0 && glm::dot(y - ti.v[0], ti.normal) > 0.0) {
-      ++facing;
-      open_facing += visible;
+    const double w = point_kernel(xs[k], ti.normal, ys[k], tj.normal);
+    if (w > 0.0 && std::isfinite(w)) {
+      weight += w;
+      if (visible) open_weight += w;
     }
   }
   count.cast += rays;
-  return facing > 0 ? static_cast<double>(open_facing) / facing : static_cast<double>(open) / rays;
+  return weight > 0.0 ? open_weight / weight : static_cast<double>(open) / rays;
 }
 
 void BalanceAccumulator::add(double area, const Rgb& rho, const Rgb& emission, const Rgb& b, const Rgb& h,

@@ -377,6 +377,38 @@ TEST(Visibility, RaysThatCannotCarryLightDoNotCount) {
   }
 }
 
+TEST(Visibility, TheFractionIsTheTransportsWhereAnOccluderHidesTheSourcesFarPart) {
+  // Receiver A: a small square about the origin at z = 0, facing +z.
+  // Source: a triangle of B at z = 1, facing down, reaching from x = -1 to
+  // x = 3. A wall at z = 0.5 from x = 0.25 on hides every point of the
+  // source past x = 0.5 (to within A's size): the far part, whose points
+  // send A little (cos x cos / r^2 falls off with x). The visible fraction
+  // is that of the transport, the exact form factor to the seen part over
+  // that to the whole, not the seen part's share of the area (0.61).
+  const Scene s = receiver_source_wall("visibility_kernel",
+                                      {{{-0.01, -0.01, 0}, {0.01, -0.01, 0}, {0.01, 0.01, 0}, {-0.01, 0.01, 0}}},
+                                      {{{-1, -1, 1}, {-1, 1, 1}, {3, 1, 1}, {3, -1, 1}}},
+                                      {{{0.25, -3, 0.5}, {4, -3, 0.5}, {4, 3, 0.5}, {0.25, 3, 0.5}}});
+  const int a = test::patch_named(s, "a"), b = test::patch_named(s, "b");
+  ASSERT_GE(a, 0);
+  ASSERT_GE(b, 0);
+  const Vec3 up(0, 0, 1), down(0, 0, -1);
+  const Triangle ta = make_triangle(Vec3(-0.01, -0.01, 0), Vec3(0.01, -0.01, 0), Vec3(-0.01, 0.01, 0), up);
+  const Triangle tb = make_triangle(Vec3(-1, -1, 1), Vec3(3, -1, 1), Vec3(-1, 1, 1), down);
+  const std::array<Vec3, 4> seen_part = {Vec3(-1, -1, 1), Vec3(0.5, -1, 1), Vec3(0.5, 0.25, 1), Vec3(-1, 1, 1)};
+  const Vec3 c = ta.centroid();
+  const double exact = point_polygon_form_factor(c, up, seen_part.data(), seen_part.size(), down) /
+                       point_polygon_form_factor(c, up, tb.v.data(), tb.v.size(), down);
+  const double area_share = 2.4375 / 4.0;
+  ASSERT_GT(exact - area_share, 0.1);  // the scene tells the two apart
+  const VisibilityEstimator visibility(s, 16);
+  RayCount count;
+  const double v = visibility.visible_fraction(ta, a, 0, tb, b, 1, count, 16);
+  std::printf("[visibility] kernel-weighted fraction %.4f, exact %.4f, area share %.4f\n", v, exact, area_share);
+  EXPECT_EQ(count.cast, 256);
+  EXPECT_NEAR(v, exact, 0.03);
+}
+
 TEST(Visibility, AWallStandingOnTheReceiverBlocksRaysFromRightBesideIt) {
   // Receiver A: the floor x in [0, 1], z in [-1, 0] at y = 0, facing up. A
   // wall stands on it along z = 0, 1 high; source B hangs beyond the wall,
