@@ -43,10 +43,9 @@ struct Link {
   //   every group). The end is the receiver when it is a cluster, else the
   //   source.
   int slot = -1;
-  // Single precision (40 bytes a link before); a visible fraction of at
-  // most 4096 rays is exact.
+  // Single precision (40 bytes a link before).
   float f = 0.0f;         // F(receiver -> source) without occlusion
-  float visible = 1.0f;   // fraction of the shadow rays that got through
+  float visible = 1.0f;   // what got through of the shadow rays, each weighed by its point kernel
   float spread = 0.0f;    // how much the point form factor varies over the receiver (oracle)
   bool partial() const { return visible > 0.0 && visible < 1.0; }
 };
@@ -895,7 +894,9 @@ private:
       const double v = own_rays ? own_visible_fraction(static_cast<int>(x), l->source, leaf_rays_[x]) : l->visible;
       const double f = f0 * v;
       // The variance of the visible fraction the rays gave (binomial:
-      // v (1 - v) over their number), as it enters the row.
+      // v (1 - v) over their number), as it enters the row. The rays are
+      // weighed by their kernels (VisibilityEstimator), which makes them
+      // count for fewer where the weights differ: not counted here.
       const int rays = own_rays ? own_side() * own_side() : opt_.rays;
       noise += f0 * f0 * v * (1.0 - v) / rays;
       // Rays that all got through say v = 1 and variance 0, yet the link
