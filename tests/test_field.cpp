@@ -569,59 +569,61 @@ TEST(Field, PatchesNearAPointAreFoundByTheBoxTree) {
   EXPECT_LT(found, 500LL * static_cast<long long>(scene.patches.size()));
 }
 
-TEST(Field, EachSegmentIgnoresItsOwnPatch) {
-  // Visibility::visible_each: segments from under the parallel plates'
-  // lower plate to points above it, through it. Ignoring that plate for
-  // every other segment, in one call, those get through and the others
-  // are blocked.
-  const Scene scene = read_obj_scene(kData + "/parallel_plates/parallel_plates.obj");
-  const int emitter = patch_named(scene, "emitter"), receiver = patch_named(scene, "receiver");
-  ASSERT_GE(emitter, 0);
-  ASSERT_GE(receiver, 0);
-  const Visibility rays(scene);
+// The parallel plates (the emitter at z = 0 facing up, the receiver at
+// z = 1 facing down) and segments from 40 points under the lower plate,
+// along a diagonal, to the mirror points at height `top`.
+struct PlateSegments {
+  Scene scene = read_obj_scene(kData + "/parallel_plates/parallel_plates.obj");
+  int emitter = patch_named(scene, "emitter"), receiver = patch_named(scene, "receiver");
   std::vector<Vec3> from, to;
-  std::vector<int> ignore;
-  for (int i = 0; i < 40; ++i) {
-    const double s = 0.2 + 0.015 * i;
-    from.emplace_back(s, 1.0 - s, -0.5);
-    to.emplace_back(1.0 - s, s, 0.5);
-    ignore.push_back(i % 2 ? emitter : -1);
+  explicit PlateSegments(double top) {
+    for (int i = 0; i < 40; ++i) {
+      const double s = 0.2 + 0.015 * i;
+      from.emplace_back(s, 1.0 - s, -0.5);
+      to.emplace_back(1.0 - s, s, top);
+    }
   }
-  std::vector<unsigned char> seen(from.size(), 2);
-  rays.visible_each(from.data(), to.data(), from.size(), receiver, ignore.data(), seen.data());
+};
+
+TEST(Field, EachSegmentIgnoresItsOwnPatch) {
+  // Visibility::visible_each: segments from under the lower plate to
+  // points above it, through it. Ignoring that plate for every other
+  // segment, in one call, those get through and the others are blocked.
+  const PlateSegments p(0.5);
+  ASSERT_GE(p.emitter, 0);
+  ASSERT_GE(p.receiver, 0);
+  const Visibility rays(p.scene);
+  std::vector<int> ignore;
+  for (size_t i = 0; i < p.from.size(); ++i) ignore.push_back(i % 2 ? p.emitter : -1);
+  std::vector<unsigned char> seen(p.from.size(), 2);
+  rays.visible_each(p.from.data(), p.to.data(), p.from.size(), p.receiver, ignore.data(), seen.data());
   for (size_t i = 0; i < seen.size(); ++i) EXPECT_EQ(seen[i], i % 2 ? 1 : 0) << i;
 }
 
 TEST(Field, EachLiftedSegmentIgnoresItsOwnTwoPatches) {
-  // Visibility::visible_off_surfaces_each: segments from under the parallel
-  // plates to points over them cross both plates. In one call, each
-  // segment ignores its own pair of patches: both plates (either way
-  // round) lets it through, one alone does not; every answer is the one
-  // the single-segment query gives.
-  const Scene scene = read_obj_scene(kData + "/parallel_plates/parallel_plates.obj");
-  const int emitter = patch_named(scene, "emitter"), receiver = patch_named(scene, "receiver");
-  ASSERT_GE(emitter, 0);
-  ASSERT_GE(receiver, 0);
-  const Visibility rays(scene);
+  // Visibility::visible_off_surfaces_each: segments from under the plates
+  // to points over them cross both. In one call, each segment ignores its
+  // own pair of patches: both plates (either way round) lets it through,
+  // one alone does not; every answer is the one the single-segment query
+  // gives.
+  const PlateSegments p(1.5);
+  ASSERT_GE(p.emitter, 0);
+  ASSERT_GE(p.receiver, 0);
+  const Visibility rays(p.scene);
   const std::array<std::pair<int, int>, 4> ignored = {
-      {{emitter, receiver}, {receiver, emitter}, {emitter, -1}, {-1, receiver}}};
-  std::vector<Vec3> from, to, up, down;
+      {{p.emitter, p.receiver}, {p.receiver, p.emitter}, {p.emitter, -1}, {-1, p.receiver}}};
+  const size_t n = p.from.size();
+  const std::vector<Vec3> up(n, Vec3(0.0, 0.0, 1.0)), down(n, Vec3(0.0, 0.0, -1.0));
   std::vector<int> a, b;
-  for (int i = 0; i < 40; ++i) {
-    const double s = 0.2 + 0.015 * i;
-    from.emplace_back(s, 1.0 - s, -0.5);
-    to.emplace_back(1.0 - s, s, 1.5);
-    up.emplace_back(0.0, 0.0, 1.0);
-    down.emplace_back(0.0, 0.0, -1.0);
-    a.push_back(ignored[static_cast<size_t>(i % 4)].first);
-    b.push_back(ignored[static_cast<size_t>(i % 4)].second);
+  for (size_t i = 0; i < n; ++i) {
+    a.push_back(ignored[i % 4].first);
+    b.push_back(ignored[i % 4].second);
   }
-  std::vector<unsigned char> seen(from.size(), 2);
-  rays.visible_off_surfaces_each(from.data(), up.data(), to.data(), down.data(), a.data(), b.data(), from.size(),
-                                 seen.data());
-  for (size_t i = 0; i < seen.size(); ++i) {
+  std::vector<unsigned char> seen(n, 2);
+  rays.visible_off_surfaces_each(p.from.data(), up.data(), p.to.data(), down.data(), a.data(), b.data(), n, seen.data());
+  for (size_t i = 0; i < n; ++i) {
     EXPECT_EQ(seen[i], i % 4 < 2 ? 1 : 0) << i;
-    EXPECT_EQ(seen[i] != 0, rays.visible_off_surfaces(from[i], up[i], to[i], down[i], a[i], b[i])) << i;
+    EXPECT_EQ(seen[i] != 0, rays.visible_off_surfaces(p.from[i], up[i], p.to[i], down[i], a[i], b[i])) << i;
   }
 }
 
