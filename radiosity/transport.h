@@ -86,12 +86,13 @@ struct RayCount {
 // Cornell box's element values 0.1-0.3% low against a brute-force gather.
 // Each ray that counts is weighed by the point kernel between its ends
 // (cos x cos / r^2, as the link's form factor weighs the pair's points), so
-// the fraction is that of the transport, not of the point pairs: where an
-// occluder near the receiver hides the source's near part and not its far
-// part (a lamp 10 cm from a wall, facing it, between the wall and the
-// floor by the wall), the plain fraction of rays took the near part's
-// light as if it were the far part's. On that room 0.75% of the emitted
-// power escaped the closed scene (pixmap: 0.16%), now 0.44%.
+// the fraction is that of the transport, not of the point pairs: they
+// differ where what is hidden sends more (or less) than what is seen, as
+// where an occluder near the receiver hides a source's far part and not its
+// near part (test TheFractionIsTheTransportsWhereAnOccluderHidesTheSourcesFarPart).
+// In a closed room lit by a lamp hung 10 cm in front of a wall, facing it,
+// the plain fraction let 0.75% of the emitted power escape (pixmap: 0.16%);
+// weighed, 0.44%.
 class VisibilityEstimator {
 public:
   // `rays` is rounded up to a perfect square (the strata).
