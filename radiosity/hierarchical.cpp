@@ -1921,13 +1921,13 @@ private:
     thread_local Draws d;
     d.clear();
     SplitMix rng(pair_seed(code_key(a), code_key(b)));
-    int used = 0;
     // A point of a whose plane leaves all of b's bounding sphere behind it
     // faces no point of b: b's point is not drawn, only skipped in the
     // stream.
     const Vec3 centre_b = code_centre(b);
     const double radius_b = code_radius(b);
-    for (int k = 0; k < 4 * rays && used < rays && (used > 0 || k < rays); ++k) {
+    const size_t want = static_cast<size_t>(rays);
+    for (int k = 0; k < 4 * rays && d.w.size() < want && (!d.w.empty() || k < rays); ++k) {
       Vec3 x, nx, y, ny;
       int px = -1, py = -1, rx = -1, ry = -1;
       sample_node(a, rng, x, nx, px, rx);
@@ -1942,7 +1942,6 @@ private:
       const double d2 = glm::dot(r, r);
       const double w = cx * cy / (d2 * d2);
       if (!(w > 0.0)) continue;
-      ++used;
       d.x.push_back(x);
       d.nx.push_back(nx);
       d.y.push_back(y);
@@ -1952,9 +1951,9 @@ private:
       d.root.push_back(end_is_a ? rx : ry);
       d.w.push_back(w);
     }
-    count.cast += used;
-    if (used == 0) return -1.0;
     const size_t n = d.w.size();
+    count.cast += static_cast<long long>(n);
+    if (n == 0) return -1.0;
     d.through.resize(n);
     visibility_.visible(d.x.data(), d.nx.data(), d.y.data(), d.ny.data(), d.px.data(), d.py.data(), n,
                         d.through.data());
