@@ -96,14 +96,21 @@ Vec3 closest_on_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3
   return a + ab * (vb * denom) + ac * (vc * denom);
 }
 
+}  // namespace
+
+bool splits_piece(double size, double distance, const QuadratureOptions& options) {
+  return size > options.closeness * std::max(0.0, distance - size / std::sqrt(3.0));
+}
+
+namespace {
+
 void subdivide(const Vec3& a, const Vec3& b, const Vec3& c, int level, double total_area,
                const std::function<double(const Vec3&)>& distance, const QuadratureOptions& opt,
                ReceiverPoints& out) {
   const double size = std::max({glm::length(a - b), glm::length(b - c), glm::length(c - a)});
   if (level < opt.max_level) {
     const Vec3 centre = (a + b + c) / 3.0;
-    const double dist = std::max(0.0, distance(centre) - size / std::sqrt(3.0));
-    if (size > opt.closeness * dist) {
+    if (splits_piece(size, distance(centre), opt)) {
       const Vec3 ab = 0.5 * (a + b), bc = 0.5 * (b + c), ca = 0.5 * (c + a);
       subdivide(a, ab, ca, level + 1, total_area, distance, opt, out);
       subdivide(ab, b, bc, level + 1, total_area, distance, opt, out);
@@ -131,6 +138,19 @@ ReceiverPoints receiver_points(const Triangle& receiver, const std::function<dou
   return r;
 }
 
+int uniform_level(const Triangle& receiver, double distance, const QuadratureOptions& options) {
+  double size = std::max({glm::length(receiver.v[0] - receiver.v[1]), glm::length(receiver.v[1] - receiver.v[2]),
+                          glm::length(receiver.v[2] - receiver.v[0])});
+  int level = 0;
+  for (; level < options.max_level && splits_piece(size, distance, options); ++level) size *= 0.5;
+  return level;
+}
+
+ReceiverPoints uniform_points(const Triangle& receiver, int level) {
+  // A distance of 0 splits every piece of positive size.
+  return receiver_points(receiver, [](const Vec3&) { return 0.0; }, QuadratureOptions{1.0, level});
+}
+
 double form_factor(const ReceiverPoints& r, const Triangle& source) {
   const Triangle* one = &source;
   double f = 0.0;
@@ -140,49 +160,163 @@ double form_factor(const ReceiverPoints& r, const Triangle& source) {
 
 namespace {
 
-// Calls visit(j, q, F(x_q -> *sources[j])) for every pair whose point lies
-// in front of the source (the others are 0), in source order, then point
-// order. The pairs go through the vectorized kernel as struct of arrays. A
-// triangle crossing the point's tangent plane is clipped to it first: the
-// part in front is a triangle or a quad, the quad two triangles (a fan
-// from its first corner) whose sums are added, since the contour sum of a
-// polygon is the sum of its fan's (their shared edge cancels).
-template <class Visit>
-void point_source_pairs(const ReceiverPoints& r, const Triangle* const* sources, size_t count, Visit&& visit) {
-  struct Scratch {
-    std::array<std::vector<double>, 9> d;
-    std::vector<double> sum;
-    std::vector<int> source, point;
-  };
-  // Sized once for every pair and filled by index (no push_back per
-  // coordinate: that bookkeeping took longer than the kernel itself); a
-  // clipped quad's second item needs room beyond the pairs.
-  thread_local Scratch m;
-  const size_t points = r.x.size();
-  const size_t most = count * points;
-  if (m.source.size() < most) {
-    for (auto& v : m.d) v.resize(2 * most);
-    m.sum.resize(2 * most);
-    m.source.resize(most);
-    m.point.resize(most);
+// The part of triangle (e[0], e[1], e[2]) (corners relative to a point)
+// on or in front of the point's tangent plane, h[k] the corners' heights
+// over it (Sutherland-Hodgman, h >= 0 kept): 0, 3 or 4 corners.
+int clip_to_tangent_plane(const Vec3 (&e)[3], const double (&h)[3], std::array<Vec3, 4>& loop) {
+  int corners = 0;
+  for (size_t k = 0; k < 3; ++k) {
+    const size_t k1 = k == 2 ? 0 : k + 1;
+    if (h[k] >= 0.0) loop[static_cast<size_t>(corners++)] = e[k];
+    if ((h[k] >= 0.0) != (h[k1] >= 0.0)) loop[static_cast<size_t>(corners++)] = e[k] + (e[k1] - e[k]) * (h[k] / (h[k] - h[k1]));
   }
-  std::array<double*, 9> d;
-  for (size_t k = 0; k < 9; ++k) d[k] = m.d[k].data();
-  auto put = [&](size_t i, const Vec3& a, const Vec3& b, const Vec3& c) {
+  return corners < 3 ? 0 : corners;
+}
+
+// Lambert's sums of triangles given by their corners relative to the
+// point, through the vectorized kernel: `put` them, then `sum` them all.
+// A clipped quad is two triangles (a fan from its first corner) whose sums
+// are added, since the contour sum of a polygon is the sum of its fan's
+// (their shared edge cancels): its second triangle goes after every first
+// one.
+struct LambertBatch {
+  std::array<std::vector<double>, 9> d;
+  std::vector<double> sum;
+  std::vector<std::array<Vec3, 4>> quad_loops;
+  std::vector<int> quad_items;
+  size_t n = 0;
+  // Room for `items` first triangles (and as many seconds) without
+  // reallocating: filled by index (no push_back per coordinate: that
+  // bookkeeping took longer than the kernel itself).
+  void start(size_t items) {
+    if (sum.size() < 2 * items) {
+      for (auto& v : d) v.resize(2 * items);
+      sum.resize(2 * items);
+    }
+    quad_loops.clear();
+    quad_items.clear();
+    n = 0;
+  }
+  void put(size_t i, const Vec3& a, const Vec3& b, const Vec3& c) {
     const Vec3* corner[3] = {&a, &b, &c};
     for (size_t k = 0; k < 3; ++k) {
       d[3 * k][i] = corner[k]->x;
       d[3 * k + 1][i] = corner[k]->y;
       d[3 * k + 2][i] = corner[k]->z;
     }
-  };
-  // The quads' second items go after every pair's first: their loops
-  // and pairs are kept until the pairs are counted.
-  thread_local std::vector<std::array<Vec3, 4>> quad_loops;
-  thread_local std::vector<int> quad_pairs;
-  quad_loops.clear();
-  quad_pairs.clear();
-  size_t n = 0;
+  }
+  // Appends a clipped loop of 3 or 4 corners; returns its item.
+  size_t add_loop(const std::array<Vec3, 4>& loop, int corners) {
+    put(n, loop[0], loop[1], loop[2]);
+    if (corners == 4) {
+      quad_loops.push_back(loop);
+      quad_items.push_back(static_cast<int>(n));
+    }
+    return n++;
+  }
+  void sum_all(const Vec3& normal) {
+    const size_t quads = quad_items.size();
+    for (size_t k = 0; k < quads; ++k) put(n + k, quad_loops[k][0], quad_loops[k][2], quad_loops[k][3]);
+    detail::lambert_triangle_sums(n + quads, {d[0].data(), d[1].data(), d[2].data(), d[3].data(), d[4].data(),
+                                              d[5].data(), d[6].data(), d[7].data(), d[8].data()},
+                                  normal.x, normal.y, normal.z, sum.data());
+    for (size_t k = 0; k < quads; ++k) sum[static_cast<size_t>(quad_items[k])] += sum[n + k];
+  }
+};
+
+// Sources at least this many: point_source_pairs takes them point by point
+// (lambert_point_sums, the sources packed once) instead of packing every
+// (point, source) pair.
+constexpr size_t kPointMajorSources = 4;
+
+// Calls visit(j, q, F(x_q -> *sources[j])) for every pair whose point lies
+// in front of the source (the others are 0), in source order, then point
+// order. A triangle crossing the point's tangent plane is clipped to it
+// first: the part in front is a triangle or a quad (LambertBatch). Many
+// sources go through lambert_point_sums, one call per point over all of
+// them, with only the crossing pairs clipped and batched; few go pair by
+// pair through the batch. Both give the same sums.
+template <class Visit>
+void point_source_pairs(const ReceiverPoints& r, const Triangle* const* sources, size_t count, Visit&& visit) {
+  thread_local LambertBatch batch;
+  const size_t points = r.x.size();
+  if (count >= kPointMajorSources) {
+    struct Scratch {
+      std::array<std::vector<double>, 12> s;  // the sources' corners and normals
+      std::vector<double> sum, kind;          // per (point, source), point-major
+      std::vector<int> clipped;               // per (point, source): its batch item, -1 none
+    };
+    thread_local Scratch m;
+    if (m.s[0].size() < count)
+      for (auto& v : m.s) v.resize(count);
+    if (m.sum.size() < count * points) {
+      m.sum.resize(count * points);
+      m.kind.resize(count * points);
+      m.clipped.resize(count * points);
+    }
+    for (size_t j = 0; j < count; ++j) {
+      const Triangle& t = *sources[j];
+      for (size_t k = 0; k < 3; ++k) {
+        m.s[3 * k][j] = t.v[k].x;
+        m.s[3 * k + 1][j] = t.v[k].y;
+        m.s[3 * k + 2][j] = t.v[k].z;
+      }
+      m.s[9][j] = t.normal.x;
+      m.s[10][j] = t.normal.y;
+      m.s[11][j] = t.normal.z;
+    }
+    const detail::LambertSources src{m.s[0].data(), m.s[1].data(), m.s[2].data(),  m.s[3].data(),
+                                     m.s[4].data(), m.s[5].data(), m.s[6].data(),  m.s[7].data(),
+                                     m.s[8].data(), m.s[9].data(), m.s[10].data(), m.s[11].data()};
+    size_t crossing = 0;
+    for (size_t q = 0; q < points; ++q) {
+      const Vec3& x = r.x[q];
+      double* kind = m.kind.data() + q * count;
+      detail::lambert_point_sums(count, src, x.x, x.y, x.z, r.normal.x, r.normal.y, r.normal.z,
+                                 m.sum.data() + q * count, kind);
+      for (size_t j = 0; j < count; ++j) crossing += kind[j] == detail::kSourceCrosses;
+    }
+    if (crossing > 0) {
+      batch.start(crossing);
+      for (size_t q = 0; q < points; ++q)
+        for (size_t j = 0; j < count; ++j) {
+          const size_t i = q * count + j;
+          m.clipped[i] = -1;
+          if (m.kind[i] != detail::kSourceCrosses) continue;
+          const Triangle& t = *sources[j];
+          Vec3 e[3];
+          double h[3];
+          for (size_t k = 0; k < 3; ++k) {
+            e[k] = t.v[k] - r.x[q];
+            h[k] = glm::dot(r.normal, e[k]);
+          }
+          std::array<Vec3, 4> loop;
+          const int corners = clip_to_tangent_plane(e, h, loop);
+          if (corners > 0) m.clipped[i] = static_cast<int>(batch.add_loop(loop, corners));
+        }
+      batch.sum_all(r.normal);
+    }
+    for (size_t j = 0; j < count; ++j)
+      for (size_t q = 0; q < points; ++q) {
+        const size_t i = q * count + j;
+        double sum;
+        if (m.kind[i] == detail::kSourceInFront)
+          sum = m.sum[i];
+        else if (m.kind[i] == detail::kSourceCrosses && m.clipped[i] >= 0)
+          sum = batch.sum[static_cast<size_t>(m.clipped[i])];
+        else
+          continue;
+        visit(j, q, std::abs(sum) / (2.0 * std::numbers::pi));
+      }
+    return;
+  }
+  thread_local std::vector<int> source, point;  // per batch item
+  const size_t most = count * points;
+  if (source.size() < most) {
+    source.resize(most);
+    point.resize(most);
+  }
+  batch.start(most);
   for (size_t j = 0; j < count; ++j) {
     const Triangle& t = *sources[j];
     for (size_t q = 0; q < points; ++q) {
@@ -193,42 +327,26 @@ void point_source_pairs(const ReceiverPoints& r, const Triangle* const* sources,
       bool in_front = true;
       for (size_t k = 0; k < 3; ++k) {
         e[k] = t.v[k] - x;
-        d[3 * k][n] = e[k].x;
-        d[3 * k + 1][n] = e[k].y;
-        d[3 * k + 2][n] = e[k].z;
         h[k] = glm::dot(r.normal, e[k]);
         in_front = in_front && h[k] >= 0.0;
       }
-      if (!in_front) {
-        // Sutherland-Hodgman against the tangent plane (h >= 0 kept).
+      size_t item;
+      if (in_front) {
+        batch.put(batch.n, e[0], e[1], e[2]);
+        item = batch.n++;
+      } else {
         std::array<Vec3, 4> loop;
-        int corners = 0;
-        for (size_t k = 0; k < 3; ++k) {
-          const size_t k1 = k == 2 ? 0 : k + 1;
-          if (h[k] >= 0.0) loop[static_cast<size_t>(corners++)] = e[k];
-          if ((h[k] >= 0.0) != (h[k1] >= 0.0))
-            loop[static_cast<size_t>(corners++)] = e[k] + (e[k1] - e[k]) * (h[k] / (h[k] - h[k1]));
-        }
-        if (corners < 3) continue;  // nothing in front: F = 0
-        put(n, loop[0], loop[1], loop[2]);
-        if (corners == 4) {
-          quad_loops.push_back(loop);
-          quad_pairs.push_back(static_cast<int>(n));
-        }
+        const int corners = clip_to_tangent_plane(e, h, loop);
+        if (corners == 0) continue;  // nothing in front: F = 0
+        item = batch.add_loop(loop, corners);
       }
-      m.source[n] = static_cast<int>(j);
-      m.point[n] = static_cast<int>(q);
-      ++n;
+      source[item] = static_cast<int>(j);
+      point[item] = static_cast<int>(q);
     }
   }
-  const size_t quads = quad_pairs.size();
-  for (size_t k = 0; k < quads; ++k) put(n + k, quad_loops[k][0], quad_loops[k][2], quad_loops[k][3]);
-  detail::lambert_triangle_sums(n + quads, {d[0], d[1], d[2], d[3], d[4], d[5], d[6], d[7], d[8]}, r.normal.x,
-                                r.normal.y, r.normal.z, m.sum.data());
-  for (size_t k = 0; k < quads; ++k) m.sum[static_cast<size_t>(quad_pairs[k])] += m.sum[n + k];
-  for (size_t i = 0; i < n; ++i)
-    visit(static_cast<size_t>(m.source[i]), static_cast<size_t>(m.point[i]),
-          std::abs(m.sum[i]) / (2.0 * std::numbers::pi));
+  batch.sum_all(r.normal);
+  for (size_t i = 0; i < batch.n; ++i)
+    visit(static_cast<size_t>(source[i]), static_cast<size_t>(point[i]), std::abs(batch.sum[i]) / (2.0 * std::numbers::pi));
 }
 
 }  // namespace

@@ -54,6 +54,7 @@ struct QuadratureOptions {
   double closeness = 1.0;
   int max_level = 2;
 };
+constexpr int kMaxQuadratureLevel = 10;  // the largest max_level accepted (check_solve_options)
 
 struct ReceiverPoints {
   Vec3 normal{0.0};
@@ -65,6 +66,15 @@ struct ReceiverPoints {
 // surface that can send light to the receiver.
 ReceiverPoints receiver_points(const Triangle& receiver, const std::function<double(const Vec3&)>& distance,
                                const QuadratureOptions& options);
+
+// Whether receiver_points splits a piece of longest edge `size` whose centre
+// lies at least `distance` from the nearest source.
+bool splits_piece(double size, double distance, const QuadratureOptions& options);
+// Where every piece's distance bound is the same `distance`, receiver_points
+// takes all of `receiver` to one level: this one.
+int uniform_level(const Triangle& receiver, double distance, const QuadratureOptions& options);
+// The points of `receiver` split `level` times everywhere (3 x 4^level).
+ReceiverPoints uniform_points(const Triangle& receiver, int level);
 
 // Unoccluded F(receiver -> source) = sum_q w_q F(x_q -> source).
 double form_factor(const ReceiverPoints& receiver, const Triangle& source);

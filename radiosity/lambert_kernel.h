@@ -29,6 +29,36 @@ struct LambertItems {
 };
 void lambert_triangle_sums(size_t count, const LambertItems& items, double nx, double ny, double nz, double* out);
 
+// Struct of arrays of source triangles: corners a, b, c (absolute) and the
+// plane's unit normal m.
+struct LambertSources {
+  const double* ax;
+  const double* ay;
+  const double* az;
+  const double* bx;
+  const double* by;
+  const double* bz;
+  const double* cx;
+  const double* cy;
+  const double* cz;
+  const double* mx;
+  const double* my;
+  const double* mz;
+};
+// What a point sees of one source, for lambert_point_sums.
+constexpr double kSourceBehind = 0.0;   // the point lies on or behind the source's plane: it sends the point nothing
+constexpr double kSourceInFront = 1.0;  // the source lies wholly on or in front of the point's tangent plane
+constexpr double kSourceCrosses = 2.0;  // the source crosses that plane: it must be clipped first
+// One point p (tangent-plane normal n) against `count` sources: kind[i] says
+// which of the three cases above source i is, and out[i] is its contour sum
+// relative to p (as lambert_triangle_sums would give for the corners less p)
+// where kind[i] is kSourceInFront, anything finite otherwise. The corners
+// less p, the heights over the tangent plane and the side of the source's
+// plane are computed here as the scalar code would (same operations, same
+// order), so the sums equal those of the corners packed one pair at a time.
+void lambert_point_sums(size_t count, const LambertSources& s, double px, double py, double pz, double nx, double ny,
+                        double nz, double* out, double* kind);
+
 // tan(k pi / 16), k = 0..4, and the midpoints tan((2k + 1) pi / 32) between them.
 constexpr double kTan[5] = {0.0, 0.19891236737965800691, 0.41421356237309504880, 0.66817863791929891999, 1.0};
 constexpr double kMid[4] = {0.098491403357164253078, 0.30334668360734239167, 0.53451113595079149367,

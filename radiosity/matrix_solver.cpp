@@ -395,8 +395,8 @@ void check_solve_options(const SolveOptions& o) {
   if (o.threads < 0) bad("--threads", o.threads, ">= 0 (0 = all cores)");
   if (o.rays < 1 || o.rays > 4096) bad("--rays", o.rays, "[1, 4096]");
   if (!(o.quadrature.closeness > 0.0)) bad("closeness", o.quadrature.closeness, "> 0");
-  if (o.quadrature.max_level < 0 || o.quadrature.max_level > 10)
-    bad("max_level", o.quadrature.max_level, "[0, 10]");
+  if (o.quadrature.max_level < 0 || o.quadrature.max_level > kMaxQuadratureLevel)
+    bad("max_level", o.quadrature.max_level, "[0, " + std::to_string(kMaxQuadratureLevel) + "]");
   if (!(o.max_memory_gb >= 0.0)) bad("--max-memory", o.max_memory_gb, ">= 0 GiB");
   if (!(o.crease_angle >= 0.0 && o.crease_angle <= 180.0)) bad("crease_angle", o.crease_angle, "[0, 180]");
 }
