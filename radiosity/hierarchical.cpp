@@ -1549,7 +1549,7 @@ private:
           // No rays: the exact terms are off by their quadrature alone, which
           // a leaf's approximate part, where it has one, takes with its own.
           if (!(approx > 0.0)) exact_miss = std::clamp(miss, -kRowTolerance, kRowTolerance);
-        } else if (F_sum_[x] > 0.0) {
+        } else if (F_sum_[x] > 0.0 && approx > 0.0) {
           double rays_off = kRowTolerance + 3.0 * std::sqrt(static_cast<double>(F_noise_[x]));
           if (miss < -rays_off && approx > 0.0) {
             // Over 1 by more than the exact terms' rays explain: the
