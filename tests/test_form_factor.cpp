@@ -193,7 +193,8 @@ TEST(SubtendedAngle, MatchesAtan2AcrossDecadesAndAtTheAxes) {
 TEST(ElementFormFactor, ManySourcesAtOnceEqualOneByOne) {
   // form_factors (the vectorized pass) against Lambert's scalar formula
   // point by point, on sources in front, straddling the receiver's tangent
-  // plane (clipped), behind it and facing away.
+  // plane (clipped), behind it and facing away. Many sources go point by
+  // point (lambert_point_sums), one source pair by pair: the same sums.
   const Triangle receiver = make_triangle(Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 0, -1), Vec3(0, 1, 0));
   const ReceiverPoints pts = receiver_points(receiver, [](const Vec3&) { return 0.0; }, {1.0, 2});
   ASSERT_EQ(pts.x.size(), 48u);
@@ -227,4 +228,31 @@ TEST(ElementFormFactor, ManySourcesAtOnceEqualOneByOne) {
   EXPECT_GT(clipped, 100);  // the set covers the clipped path ...
   EXPECT_GT(zero, 5);       // ... and sources seen from behind
   EXPECT_LT(zero, 30);
+}
+
+TEST(ReceiverPoints, AConstantDistanceTakesTheWholeReceiverToUniformLevel) {
+  // receiver_points with the same distance bound everywhere splits every
+  // piece alike: the points of uniform_points at uniform_level's level,
+  // 3 x 4^level of them, the same points in the same order.
+  const Triangle t = make_triangle(Vec3(0, 0, 0), Vec3(2, 0, 0), Vec3(0.5, 1.5, 0), Vec3(0, 0, 1));
+  const QuadratureOptions opt{1.0, 3};
+  int seen[4] = {0, 0, 0, 0};
+  for (double d = 0.0; d < 8.0; d += 0.05) {
+    const ReceiverPoints graded = receiver_points(t, [d](const Vec3&) { return d; }, opt);
+    const int level = uniform_level(t, d, opt);
+    ASSERT_GE(level, 0);
+    ASSERT_LE(level, 3);
+    ++seen[level];
+    const ReceiverPoints uniform = uniform_points(t, level);
+    ASSERT_EQ(graded.x.size(), size_t{3} << (2 * level)) << d;
+    ASSERT_EQ(uniform.x.size(), graded.x.size()) << d;
+    double sum = 0.0;
+    for (size_t i = 0; i < uniform.x.size(); ++i) {
+      EXPECT_EQ(uniform.x[i], graded.x[i]) << d << " " << i;
+      EXPECT_EQ(uniform.w[i], graded.w[i]) << d << " " << i;
+      sum += uniform.w[i];
+    }
+    EXPECT_NEAR(sum, 1.0, 1e-14);
+  }
+  for (int level = 0; level <= 3; ++level) EXPECT_GT(seen[level], 0) << level;  // every level met
 }
