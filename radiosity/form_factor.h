@@ -46,10 +46,12 @@ Triangle make_triangle(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& 
 // surface that can send it light, up to `max_level` levels: pieces next to a
 // contact get many points, pieces far from everything get three.
 //
-// All sources of one receiver are integrated at the same points, so in a
-// closed scene each row of form factors sums to 1 up to rounding (Lambert's
+// All sources of one receiver integrated at the same points make a row of
+// form factors that sums to 1 up to rounding in a closed scene (Lambert's
 // formula is exact at every point and the point form factors to a closed
-// enclosure add up to 1).
+// enclosure add up to 1): the matrix method does so. The hierarchical
+// solver's leaves take each source at the level its own distance asks for
+// (uniform_level), and allow for the quadrature in their rows.
 struct QuadratureOptions {
   double closeness = 1.0;
   int max_level = 2;
