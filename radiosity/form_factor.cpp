@@ -265,9 +265,11 @@ void point_source_pairs(const ReceiverPoints& r, const Triangle* const* sources,
       m.s[10][j] = t.normal.y;
       m.s[11][j] = t.normal.z;
     }
-    const detail::LambertSources src{m.s[0].data(), m.s[1].data(), m.s[2].data(),  m.s[3].data(),
-                                     m.s[4].data(), m.s[5].data(), m.s[6].data(),  m.s[7].data(),
-                                     m.s[8].data(), m.s[9].data(), m.s[10].data(), m.s[11].data()};
+    const detail::LambertSources src{{m.s[0].data(), m.s[1].data(), m.s[2].data(), m.s[3].data(), m.s[4].data(),
+                                      m.s[5].data(), m.s[6].data(), m.s[7].data(), m.s[8].data()},
+                                     m.s[9].data(),
+                                     m.s[10].data(),
+                                     m.s[11].data()};
     size_t crossing = 0;
     for (size_t q = 0; q < points; ++q) {
       const Vec3& x = r.x[q];

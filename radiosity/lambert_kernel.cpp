@@ -35,39 +35,27 @@ __attribute__((target_clones("avx512f", "avx2", "default"))) void lambert_point_
                                                                                     double px, double py, double pz,
                                                                                     double nx, double ny, double nz,
                                                                                     double* out, double* kind) {
-  const double* __restrict sax = s.ax;
-  const double* __restrict say = s.ay;
-  const double* __restrict saz = s.az;
-  const double* __restrict sbx = s.bx;
-  const double* __restrict sby = s.by;
-  const double* __restrict sbz = s.bz;
-  const double* __restrict scx = s.cx;
-  const double* __restrict scy = s.cy;
-  const double* __restrict scz = s.cz;
-  const double* __restrict smx = s.mx;
-  const double* __restrict smy = s.my;
-  const double* __restrict smz = s.mz;
-  double* __restrict o = out;
-  double* __restrict k = kind;
+  const LambertItems c = s.corners;  // the pointers in locals: loaded once
+  const double *mx = s.mx, *my = s.my, *mz = s.mz;
   // The arrays never overlap (GCC does not take __restrict on locals as
   // proof, and more than ten run-time checks stop it vectorizing).
 #pragma GCC ivdep
   for (size_t i = 0; i < count; ++i) {
     // (p - a) . m, the products summed x, y, then z, as glm::dot does.
-    const double side = ((px - sax[i]) * smx[i] + (py - say[i]) * smy[i]) + (pz - saz[i]) * smz[i];
-    const double ax = sax[i] - px, ay = say[i] - py, az = saz[i] - pz;
-    const double bx = sbx[i] - px, by = sby[i] - py, bz = sbz[i] - pz;
-    const double cx = scx[i] - px, cy = scy[i] - py, cz = scz[i] - pz;
+    const double side = ((px - c.ax[i]) * mx[i] + (py - c.ay[i]) * my[i]) + (pz - c.az[i]) * mz[i];
+    const double ax = c.ax[i] - px, ay = c.ay[i] - py, az = c.az[i] - pz;
+    const double bx = c.bx[i] - px, by = c.by[i] - py, bz = c.bz[i] - pz;
+    const double cx = c.cx[i] - px, cy = c.cy[i] - py, cz = c.cz[i] - pz;
     const double ha = (nx * ax + ny * ay) + nz * az;
     const double hb = (nx * bx + ny * by) + nz * bz;
     const double hc = (nx * cx + ny * cy) + nz * cz;
-    o[i] = lambert_edge(ax, ay, az, bx, by, bz, nx, ny, nz) + lambert_edge(bx, by, bz, cx, cy, cz, nx, ny, nz) +
-           lambert_edge(cx, cy, cz, ax, ay, az, nx, ny, nz);
+    out[i] = lambert_edge(ax, ay, az, bx, by, bz, nx, ny, nz) + lambert_edge(bx, by, bz, cx, cy, cz, nx, ny, nz) +
+             lambert_edge(cx, cy, cz, ax, ay, az, nx, ny, nz);
     // Selects, not branches, so that the loop vectorizes (the heights are
     // finite: the lowest is >= 0 exactly when all three are).
     const double lowest = std::min(ha, std::min(hb, hc));
     const double seen = lowest >= 0.0 ? kSourceInFront : kSourceCrosses;
-    k[i] = side <= 0.0 ? kSourceBehind : seen;
+    kind[i] = side <= 0.0 ? kSourceBehind : seen;
   }
 }
 

@@ -29,18 +29,10 @@ struct LambertItems {
 };
 void lambert_triangle_sums(size_t count, const LambertItems& items, double nx, double ny, double nz, double* out);
 
-// Struct of arrays of source triangles: corners a, b, c (absolute) and the
-// plane's unit normal m.
+// Struct of arrays of source triangles: corners a, b, c (absolute, not
+// relative to a point) and the plane's unit normal m.
 struct LambertSources {
-  const double* ax;
-  const double* ay;
-  const double* az;
-  const double* bx;
-  const double* by;
-  const double* bz;
-  const double* cx;
-  const double* cy;
-  const double* cz;
+  LambertItems corners;
   const double* mx;
   const double* my;
   const double* mz;
