@@ -884,13 +884,13 @@ private:
       slot_of[static_cast<size_t>(level)].push_back(sources++);
     }
     unoccluded.resize(sources);
-    thread_local std::vector<double> f;
+    thread_local std::vector<double> at_level;
     for (size_t level = 0; level < by_level.size(); ++level) {
       const auto& group = by_level[level];
       if (group.empty()) continue;
-      f.resize(group.size());
-      form_factors(uniform_points(t, static_cast<int>(level)), group.data(), group.size(), f.data());
-      for (size_t i = 0; i < group.size(); ++i) unoccluded[slot_of[level][i]] = f[i];
+      at_level.resize(group.size());
+      form_factors(uniform_points(t, static_cast<int>(level)), group.data(), group.size(), at_level.data());
+      for (size_t i = 0; i < group.size(); ++i) unoccluded[slot_of[level][i]] = at_level[i];
     }
     size_t next = 0;
     for (size_t k = 0; k < path.size(); ++k) {
