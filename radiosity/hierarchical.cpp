@@ -378,11 +378,11 @@ private:
   static constexpr double kSplittableArea = 4.0;  // in min_area_: an element above it may be split
   bool splittable(int n) const { return tri_[static_cast<size_t>(n)].area > kSplittableArea * min_area_; }
 
-  // F(p -> q) without occlusion, from points on p graded toward q.
+  // F(p -> q) without occlusion, from points on p graded toward q (the
+  // caller, link_pairs, has dropped pairs facing away).
   double form_factor_to(int p, int q) const {
     const Triangle& a = tri_[static_cast<size_t>(p)];
     const Triangle& b = tri_[static_cast<size_t>(q)];
-    if (facing_away(a, b)) return 0.0;
     const ReceiverPoints pts =
         receiver_points(a, [&](const Vec3& x) { return distance_to_triangle(x, b); }, quadrature_);
     return form_factor(pts, b);
@@ -1576,13 +1576,13 @@ private:
     row_scale_.resize(n, 1.0);
     exact_scale_.resize(n, 1.0);
     enclosed_.resize(n, -1);
+    const bool convex = visibility_.convex_enclosure();
     tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 64), [&](const tbb::blocked_range<size_t>& r) {
       for (size_t x = r.begin(); x != r.end(); ++x) {
         row_scale_[x] = 1.0;
         exact_scale_[x] = 1.0;
         if (!out_.tree.is_leaf(static_cast<int>(x))) continue;
         const double approx = approx_row_sum(x);
-        const bool convex = visibility_.convex_enclosure();
         if (!(approx > 0.0) && !(convex && F_sum_[x] > 0.0)) continue;
         if (enclosed_[x] < 0) enclosed_[x] = enclosed(x) ? 1 : 0;
         const double row = F_sum_[x] + approx;
