@@ -95,7 +95,8 @@ Method make_hierarchical_method() {
        "no shading jump) or split (split neighbours until no T-vertex is left, no zero-area triangles)",
        0.0, 0.0, 0.0, {to_string(d.tvertex), "anchor", "split"}},
       {"min_area", Kind::real, "scene units^2",
-       "links are not refined below this area, and Baum's criterion splits leaves down to a quarter of it "
+       "links are not refined below this area, an input triangle smaller than it weighs the oracle's error by "
+       "its share of it, and Baum's criterion splits leaves down to a quarter of it "
        "(0 = (scene diagonal / 150)^2 / 2)", d.min_area, 0.0, 1e300, {}},
       {"baum", Kind::real, "",
        "also split a leaf whose vertex values differ by more than this fraction of the largest reflected "

@@ -109,6 +109,37 @@ TEST(Hierarchical, AreaWeightLinksSmallReceiversMoreCoarselyAndKeepsFurnaceAndBa
   EXPECT_THROW(solve_hierarchical(s, m, {}, bad), InputError);
 }
 
+TEST(Hierarchical, InputTrianglesBelowTheLinkFloorAreLinkedByTheirShareOfIt) {
+  // A receiver smaller than min_area weighs its oracle error by its share
+  // of it. The box on the floor meshed at the floor's size and 16 times
+  // finer: without the weight every root took as many links as one at the
+  // floor (35.8 against 35.9 per root), with it fewer than half as many
+  // (14.7 against 33.4); the energy still balances, and a furnace meshed
+  // below the floor stays E / (1 - rho) at every leaf (rows sum to 1
+  // whatever the links).
+  HierarchicalOptions ho;
+  ho.min_area = 0.1;
+  const Scene s = read_obj_scene(kData + "/box_on_floor/box_on_floor.obj");
+  const Mesh at_floor = coarse_mesh(s, 0.5, DiscontinuityMode::off);
+  const Mesh finer = coarse_mesh(s, 0.125, DiscontinuityMode::off);
+  ASSERT_GT(finer.triangle_count(), 12 * at_floor.triangle_count());
+  const HierarchicalSolution a = solve_hierarchical(s, at_floor, {}, ho);
+  const HierarchicalSolution b = solve_hierarchical(s, finer, {}, ho);
+  const double per_root_a = static_cast<double>(a.stats.links) / at_floor.triangle_count();
+  const double per_root_b = static_cast<double>(b.stats.links) / finer.triangle_count();
+  std::printf("[hierarchical] links per root: %.1f at the floor, %.1f 16 x finer\n", per_root_a, per_root_b);
+  EXPECT_LT(per_root_b, 0.5 * per_root_a);
+  EXPECT_LT(std::abs(relative_imbalance(b.solution.stats)), 1e-4);
+  const Scene f = read_obj_scene(kData + "/furnace_cube/furnace_cube.obj");
+  const Mesh m = coarse_mesh(f, 0.25);
+  HierarchicalOptions hf;
+  hf.min_area = 0.2;  // above every root
+  const HierarchicalSolution h = solve_hierarchical(f, m, {}, hf);
+  const Material& mat = f.material_of(0);
+  const double expected = mat.emission.x / (1.0 - mat.reflectance.x);
+  for (const Rgb& v : h.solution.element) EXPECT_NEAR(v.x, expected, 1e-5 * expected);
+}
+
 TEST(Hierarchical, CornellBoxAgreesWithTheMatrixSolveAndBalancesEnergy) {
   const Scene s = read_obj_scene(kData + "/cornell_box/cornell_box.obj");
   const Mesh coarse = coarse_mesh(s, 200.0);
