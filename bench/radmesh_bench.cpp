@@ -677,7 +677,7 @@ int main(int argc, char** argv) {
   so.radmesh = RADMESH_CLI;
   std::string modes = "volume,shape,off";
   app.add_flag("--scaling", scaling,
-               "scaling benchmark instead: rooms of 10^3 .. --max-triangles input triangles and the bunny, each "
+               "scaling benchmark instead: rooms of 10^3 .. --max-triangles input triangles and the bunny (also cut into 4^L x its triangles), each "
                "run by the radmesh program in its own process; writes scaling.csv, scaling_time.png, "
                "scaling_links.png");
   app.add_option("--max-triangles", so.max_triangles, "--scaling: the largest generated scene (input triangles)");

@@ -220,6 +220,82 @@ double loglog_slope(const std::vector<double>& x, const std::vector<double>& y, 
 
 }  // namespace
 
+std::string write_bunny_room(const std::string& dir, const std::string& data, int level) {
+  // The bundled bunny: an ASCII PLY of integer coordinates (data/make_bunny.py).
+  const std::string ply = data + "/bunny/bunny.ply";
+  std::ifstream in(ply);
+  std::string line;
+  long long nv = -1, nf = -1;
+  while (std::getline(in, line) && line != "end_header") {
+    std::istringstream words(line);
+    std::string a, b;
+    long long n = -1;
+    if (words >> a >> b >> n && a == "element") (b == "vertex" ? nv : nf) = n;
+  }
+  if (!in || nv < 0 || nf < 0) throw IoError(ply + ": no PLY header with vertex and face counts");
+  std::vector<P3> v(static_cast<size_t>(nv));
+  for (P3& p : v)
+    if (!(in >> p[0] >> p[1] >> p[2])) throw IoError(ply + ": a vertex line could not be read");
+  std::vector<std::array<int, 3>> f(static_cast<size_t>(nf));
+  for (auto& t : f) {
+    int corners = 0;
+    if (!(in >> corners >> t[0] >> t[1] >> t[2]) || corners != 3) throw IoError(ply + ": a face line is not a triangle");
+  }
+  // Each triangle into four by its edges' midpoints, `level` times: the same
+  // surface, 4^level times the triangles (written in full; OBJ is read in
+  // double, so the midpoints stay exact).
+  for (int l = 0; l < level; ++l) {
+    std::map<std::pair<int, int>, int> mid;
+    auto at = [&](int a, int b) {
+      const auto [it, fresh] = mid.try_emplace({std::min(a, b), std::max(a, b)}, static_cast<int>(v.size()));
+      if (fresh) {
+        const P3& p = v[static_cast<size_t>(a)];
+        const P3& q = v[static_cast<size_t>(b)];
+        v.push_back({0.5 * (p[0] + q[0]), 0.5 * (p[1] + q[1]), 0.5 * (p[2] + q[2])});
+      }
+      return it->second;
+    };
+    std::vector<std::array<int, 3>> g;
+    g.reserve(4 * f.size());
+    for (const auto& [a, b, c] : f) {
+      const int ab = at(a, b), bc = at(b, c), ca = at(c, a);
+      g.push_back({a, ab, ca});
+      g.push_back({ab, b, bc});
+      g.push_back({ca, bc, c});
+      g.push_back({ab, bc, ca});
+    }
+    f.swap(g);
+  }
+  fs::create_directories(dir);
+  const std::string stem = "bunny_" + std::to_string(level);
+  const fs::path obj = fs::path(dir) / (stem + ".obj");
+  {
+    std::ofstream out(obj);
+    out << "# written by radmesh_bench --scaling: " << ply << " cut into 4^" << level << " x its triangles\n";
+    char buf[96];
+    for (const P3& p : v) {
+      std::snprintf(buf, sizeof buf, "v %.17g %.17g %.17g\n", p[0], p[1], p[2]);
+      out << buf;
+    }
+    for (const auto& [a, b, c] : f) out << "f " << a + 1 << ' ' << b + 1 << ' ' << c + 1 << '\n';
+    if (!out) throw IoError(obj.string() + ": cannot write the scene");
+  }
+  // The bundled room's JSON (its material and transform), the bunny's file
+  // replaced, the room's named where it lies.
+  const std::string room_json = data + "/bunny/bunny_room.json";
+  std::ifstream js(room_json);
+  nlohmann::json scene = nlohmann::json::parse(js);
+  for (auto& object : scene.at("objects")) {
+    const std::string file = object.at("file").get<std::string>();
+    object["file"] = file == "bunny.ply" ? obj.string() : fs::absolute(fs::path(data) / "bunny" / file).string();
+  }
+  const fs::path path = fs::path(dir) / (stem + ".json");
+  std::ofstream out(path);
+  out << scene.dump(1) << '\n';
+  if (!out) throw IoError(path.string() + ": cannot write the scene");
+  return path.string();
+}
+
 int scaling_benchmark(const ScalingOptions& o) {
   const std::string scene_dir = (fs::path(o.out_dir) / "scaling").string();
   fs::create_directories(scene_dir);
@@ -229,7 +305,13 @@ int scaling_benchmark(const ScalingOptions& o) {
     scenes.emplace_back(20.0 * std::pow(4.0, level) + 7, write_sphere_room(scene_dir, level));
   for (int k = 8; 5.0 * k * k <= o.max_triangles; k *= 2) scenes.emplace_back(5.0 * k * k + 7, write_boxes_room(scene_dir, k));
   const std::string bunny = o.data + "/bunny/bunny_room.json";
-  if (fs::exists(bunny)) scenes.emplace_back(3684, bunny);
+  if (fs::exists(bunny)) {
+    scenes.emplace_back(3684, bunny);
+    // The scanned mesh cut finer: a real mesh's series (its links were
+    // those of every bunny triangle alone once they fell below --min-area).
+    for (int level = 1; 3674.0 * std::pow(4.0, level) + 10 <= o.max_triangles; ++level)
+      scenes.emplace_back(3674.0 * std::pow(4.0, level) + 10, write_bunny_room(scene_dir, o.data, level));
+  }
   std::stable_sort(scenes.begin(), scenes.end());
 
   std::vector<Run> runs;

@@ -1,6 +1,6 @@
 // The scaling benchmark: closed rooms lit from the ceiling holding ever more
 // input triangles (a tessellated sphere, a field of small boxes) and the
-// scanned bunny; every run is the command line `radmesh run` in its own
+// scanned bunny, also cut finer; every run is the command line `radmesh run` in its own
 // process, timed per phase (summary.json) with its peak memory (wait4's
 // rusage). One CSV row per run, two log-log plots (time and links against
 // input triangles, one series per clusters mode).
@@ -30,5 +30,9 @@ int scaling_benchmark(const ScalingOptions& options);
 // boxes: k x k boxes of five faces standing on the floor. Return the OBJ path.
 std::string write_sphere_room(const std::string& dir, int level);
 std::string write_boxes_room(const std::string& dir, int k);
+// bunny: the bundled bunny room (`data`/bunny) with each bunny triangle cut
+// into 4^level by midpoint subdivision (the same surface); returns the JSON
+// scene's path (bunny_<level>.json beside bunny_<level>.obj).
+std::string write_bunny_room(const std::string& dir, const std::string& data, int level);
 
 }  // namespace radmesh::bench
