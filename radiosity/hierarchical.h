@@ -60,8 +60,8 @@ struct HierarchicalOptions {
   double area_weight = 0.0;
   // Elements are not split below this area; 0 = (scene diagonal / 150)^2 / 2.
   // An input triangle (or a cluster of them) smaller than it weighs its
-  // oracle error by its area / min_area: a mesh finer than this floor is
-  // linked about as a mesh at the floor would be.
+  // oracle error by its area / min_area: a mesh cut finer than this floor
+  // asks for fewer links per triangle the finer it is.
   double min_area = 0.0;
   // Refinement rounds after the first solve (each: refine links where the
   // current radiosity says it matters, then solve again). Stops earlier when
