@@ -1627,7 +1627,7 @@ private:
   // together for what one receiver of that size would, and an input mesh
   // finer than the floor multiplies the links far less (the bunny room
   // with its bunny cut into 4 x its 3,674 triangles: 10.2 M -> 6.6 M links;
-  // into 16 x: 32 M -> 14 M). Then HierarchicalOptions::area_weight.
+  // into 16 x: 32 M -> 15 M). Then HierarchicalOptions::area_weight.
   double pw(int code) const {
     const double a = code_area(code);
     double w = a < min_area_ ? a / min_area_ : 1.0;
