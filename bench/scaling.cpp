@@ -230,7 +230,9 @@ std::string write_bunny_room(const std::string& dir, const std::string& data, in
     std::istringstream words(line);
     std::string a, b;
     long long n = -1;
-    if (words >> a >> b >> n && a == "element") (b == "vertex" ? nv : nf) = n;
+    if (!(words >> a >> b >> n) || a != "element") continue;
+    if (b == "vertex") nv = n;
+    if (b == "face") nf = n;
   }
   if (!in || nv < 0 || nf < 0) throw IoError(ply + ": no PLY header with vertex and face counts");
   std::vector<P3> v(static_cast<size_t>(nv));
