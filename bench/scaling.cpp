@@ -3,6 +3,7 @@
 #include "bench/mesh_writers.h"
 #include "bench/plot.h"
 #include "io/atomic_file.h"
+#include "io/scene_reader.h"
 #include "meshing/errors.h"
 
 #include <nlohmann/json.hpp>
@@ -221,31 +222,31 @@ double loglog_slope(const std::vector<double>& x, const std::vector<double>& y, 
 }  // namespace
 
 std::string write_bunny_room(const std::string& dir, const std::string& data, int level) {
-  // The bundled bunny: an ASCII PLY of integer coordinates (data/make_bunny.py).
-  const std::string ply = data + "/bunny/bunny.ply";
-  std::ifstream in(ply);
-  std::string line;
-  long long nv = -1, nf = -1;
-  while (std::getline(in, line) && line != "end_header") {
-    std::istringstream words(line);
-    std::string a, b;
-    long long n = -1;
-    if (!(words >> a >> b >> n) || a != "element") continue;
-    if (b == "vertex") nv = n;
-    if (b == "face") nf = n;
+  // The bundled room as radmesh reads it (its transform applied, in double);
+  // the bunny's faces are those named after its file.
+  const fs::path room_json = fs::path(data) / "bunny" / "bunny_room.json";
+  const Scene room = read_scene(room_json.string());
+  std::vector<P3> v;
+  std::vector<std::array<int, 3>> f;
+  std::map<int, int> id;  // scene vertex -> v
+  for (const Patch& p : room.patches) {
+    if (p.name != "bunny") continue;
+    if (p.outer.size() != 3 || !p.holes.empty()) throw InputError(room_json.string() + ": a bunny face is not a triangle");
+    std::array<int, 3> t{};
+    for (size_t k = 0; k < 3; ++k) {
+      const auto [it, fresh] = id.try_emplace(p.outer[k], static_cast<int>(v.size()));
+      if (fresh) {
+        const Vec3& x = room.vertices[static_cast<size_t>(p.outer[k])];
+        v.push_back({x.x, x.y, x.z});
+      }
+      t[k] = it->second;
+    }
+    f.push_back(t);
   }
-  if (!in || nv < 0 || nf < 0) throw IoError(ply + ": no PLY header with vertex and face counts");
-  std::vector<P3> v(static_cast<size_t>(nv));
-  for (P3& p : v)
-    if (!(in >> p[0] >> p[1] >> p[2])) throw IoError(ply + ": a vertex line could not be read");
-  std::vector<std::array<int, 3>> f(static_cast<size_t>(nf));
-  for (auto& t : f) {
-    int corners = 0;
-    if (!(in >> corners >> t[0] >> t[1] >> t[2]) || corners != 3) throw IoError(ply + ": a face line is not a triangle");
-  }
+  if (f.empty()) throw InputError(room_json.string() + ": no face named 'bunny'");
   // Each triangle into four by its edges' midpoints, `level` times: the same
   // surface, 4^level times the triangles (written in full; OBJ is read in
-  // double, so the midpoints stay exact).
+  // double).
   for (int l = 0; l < level; ++l) {
     std::map<std::pair<int, int>, int> mid;
     auto at = [&](int a, int b) {
@@ -273,7 +274,8 @@ std::string write_bunny_room(const std::string& dir, const std::string& data, in
   const fs::path obj = fs::path(dir) / (stem + ".obj");
   {
     std::ofstream out(obj);
-    out << "# written by radmesh_bench --scaling: " << ply << " cut into 4^" << level << " x its triangles\n";
+    out << "# written by radmesh_bench --scaling: the bunny of " << room_json.string() << " cut into 4^" << level
+        << " x its triangles\n";
     char buf[96];
     for (const P3& p : v) {
       std::snprintf(buf, sizeof buf, "v %.17g %.17g %.17g\n", p[0], p[1], p[2]);
@@ -282,14 +284,18 @@ std::string write_bunny_room(const std::string& dir, const std::string& data, in
     for (const auto& [a, b, c] : f) out << "f " << a + 1 << ' ' << b + 1 << ' ' << c + 1 << '\n';
     if (!out) throw IoError(obj.string() + ": cannot write the scene");
   }
-  // The bundled room's JSON (its material and transform), the bunny's file
-  // replaced, the room's named where it lies.
-  const std::string room_json = data + "/bunny/bunny_room.json";
+  // The bundled JSON with the bunny's file replaced (its coordinates are
+  // placed already: no transform) and the room's named where it lies.
   std::ifstream js(room_json);
   nlohmann::json scene = nlohmann::json::parse(js);
   for (auto& object : scene.at("objects")) {
     const std::string file = object.at("file").get<std::string>();
-    object["file"] = file == "bunny.ply" ? obj.string() : fs::absolute(fs::path(data) / "bunny" / file).string();
+    if (fs::path(file).stem() == "bunny") {
+      object["file"] = obj.string();
+      object.erase("transform");
+    } else {
+      object["file"] = fs::absolute(room_json.parent_path() / file).string();
+    }
   }
   const fs::path path = fs::path(dir) / (stem + ".json");
   std::ofstream out(path);
