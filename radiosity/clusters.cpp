@@ -1,5 +1,7 @@
 #include "radiosity/clusters.h"
 
+#include "radiosity/sampling.h"
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -407,36 +409,8 @@ double ClusterTree::straddle(int c, const Vec3& x, double rx) const {
 
 int ClusterTree::position_at_area(int c, double u) const {
   const Cluster& cl = cluster(c);
-  const double* cum = cumulative_.data();
-  const double lo = cum[cl.begin], hi = cum[cl.end];
-  const double a = lo + u * (hi - lo);
-  // The last position i in [begin, end) with cum[i] <= a. A binary search
-  // over a large cluster's roots missed the cache at nearly every step (6%
-  // of a box field's run): the search starts where the roots' mean area
-  // puts a, and gallops from there to a bracket it then halves.
-  const int n = cl.end - cl.begin;
-  const int guess = cl.begin + std::clamp(static_cast<int>(u * n), 0, n - 1);
-  int below = guess, above = cl.end;  // cum[below] <= a; the answer is in [below, above)
-  if (cum[guess] <= a) {
-    for (int step = 1; guess + step < cl.end; step *= 2) {
-      if (cum[guess + step] > a) {
-        above = guess + step;
-        break;
-      }
-      below = guess + step;
-    }
-  } else {
-    above = guess;
-    below = cl.begin;
-    for (int step = 1; guess - step > cl.begin; step *= 2) {
-      if (cum[guess - step] <= a) {
-        below = guess - step;
-        break;
-      }
-      above = guess - step;
-    }
-  }
-  return static_cast<int>(std::upper_bound(cum + below + 1, cum + above, a) - cum - 1);
+  const double lo = cumulative_[static_cast<size_t>(cl.begin)], hi = cumulative_[static_cast<size_t>(cl.end)];
+  return area_index(cumulative_.data(), cl.begin, cl.end, lo + u * (hi - lo), u);
 }
 
 int ClusterTree::root_at_area(int g, double u) const {

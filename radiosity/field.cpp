@@ -88,8 +88,7 @@ struct SourceTree {
   Vec3 sample(int begin, int end, double u, double a, double b, int& triangle_index) const {
     const double target = cumulative[static_cast<size_t>(begin)] +
                           u * (cumulative[static_cast<size_t>(end)] - cumulative[static_cast<size_t>(begin)]);
-    auto it = std::upper_bound(cumulative.begin() + begin + 1, cumulative.begin() + end, target);
-    const size_t i = static_cast<size_t>(it - cumulative.begin() - 1);
+    const size_t i = static_cast<size_t>(area_index(cumulative.data(), begin, end, target, u));
     triangle_index = static_cast<int>(i);
     const Triangle& t = triangle[i];
     return triangle_point(t.v[0], t.v[1], t.v[2], a, b);

@@ -53,6 +53,39 @@ inline Vec3 triangle_point(const Vec3& a, const Vec3& b, const Vec3& c, double u
   return (1.0 - s) * a + s * (1.0 - v) * b + s * v * c;
 }
 
+// The last i in [begin, end) with cum[i] <= target, for a nondecreasing
+// cum (prefix sums of areas) with cum[begin] <= target: what
+// std::upper_bound over (begin, end) gives, less one. Sampling an area
+// fraction u of a long run of triangles, a binary search missed the cache
+// at nearly every step (6% of a box field's run): the search starts at
+// begin + u (end - begin), where equal areas would put target, and
+// gallops from there to a bracket that it then halves.
+inline int area_index(const double* cum, int begin, int end, double target, double u) {
+  const int n = end - begin;
+  const int guess = begin + std::clamp(static_cast<int>(u * n), 0, n - 1);
+  int below = guess, above = end;  // cum[below] <= target; the answer is in [below, above)
+  if (cum[guess] <= target) {
+    for (int step = 1; guess + step < end; step *= 2) {
+      if (cum[guess + step] > target) {
+        above = guess + step;
+        break;
+      }
+      below = guess + step;
+    }
+  } else {
+    above = guess;
+    below = begin;
+    for (int step = 1; guess - step > begin; step *= 2) {
+      if (cum[guess - step] <= target) {
+        below = guess - step;
+        break;
+      }
+      above = guess - step;
+    }
+  }
+  return static_cast<int>(std::upper_bound(cum + below + 1, cum + above, target) - cum - 1);
+}
+
 // Side of the stratification grid for at least `rays` samples.
 inline int strata_side(int rays) {
   int k = 1;

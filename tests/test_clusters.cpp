@@ -724,6 +724,33 @@ TEST(Clusters, SkippingDrawsLeavesTheStreamWhereDrawingWould) {
   }
 }
 
+// area_index starts its search where equal areas would put the target: on
+// areas of very unequal sizes and runs of zero area (ties) it must still
+// give the last index whose prefix sum is at most the target, what a
+// binary search over the whole range gives.
+TEST(Clusters, AreaIndexFindsWhatABinarySearchFinds) {
+  SplitMix rng(7);
+  for (int trial = 0; trial < 200; ++trial) {
+    const int n = 1 + static_cast<int>(rng.uniform() * 300);
+    std::vector<double> cum(1, 0.0);
+    for (int i = 0; i < n; ++i) {
+      const double r = rng.uniform();
+      // A few large areas among many small ones, and some zero ones.
+      cum.push_back(cum.back() + (r < 0.2 ? 0.0 : (r < 0.25 ? 1000.0 * rng.uniform() : rng.uniform())));
+    }
+    const int begin = static_cast<int>(rng.uniform() * n);
+    const int end = begin + 1 + static_cast<int>(rng.uniform() * (n - begin));
+    for (int k = 0; k < 64; ++k) {
+      const double u = k < 2 ? (k == 0 ? 0.0 : std::nextafter(1.0, 0.0)) : rng.uniform();
+      const double target = cum[static_cast<size_t>(begin)] + u * (cum[static_cast<size_t>(end)] - cum[static_cast<size_t>(begin)]);
+      const int want =
+          static_cast<int>(std::upper_bound(cum.begin() + begin + 1, cum.begin() + end, target) - cum.begin() - 1);
+      ASSERT_EQ(area_index(cum.data(), begin, end, target, u), want)
+          << "trial " << trial << " range [" << begin << ", " << end << ") u " << u;
+    }
+  }
+}
+
 TEST(Clusters, ParseAndName) {
   EXPECT_EQ(parse_cluster_mode("volume"), ClusterMode::volume);
   EXPECT_EQ(parse_cluster_mode("shape"), ClusterMode::shape);
