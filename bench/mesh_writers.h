@@ -205,6 +205,34 @@ inline void write_gltf(const std::filesystem::path& p, const PolyMesh& m, const 
 // The unit icosphere of 20 x 4^level triangles (each level splits every
 // triangle in four at its edge midpoints, pushed out to the sphere),
 // counter-clockwise seen from outside. Double precision.
+// Cuts every triangle into four at its edges' midpoints (each edge's
+// midpoint made once, passed through `place`: the identity keeps the
+// surface, a projection pushes it out to a sphere), keeping each
+// triangle's orientation.
+template <class Place>
+void subdivide_at_midpoints(std::vector<std::array<double, 3>>& positions, std::vector<std::array<int, 3>>& triangles,
+                            Place&& place) {
+  std::map<std::pair<int, int>, int> mid;
+  auto m = [&](int a, int b) {
+    const auto key = std::make_pair(std::min(a, b), std::max(a, b));
+    if (auto it = mid.find(key); it != mid.end()) return it->second;
+    const auto& pa = positions[static_cast<size_t>(a)];
+    const auto& pb = positions[static_cast<size_t>(b)];
+    positions.push_back(place(std::array<double, 3>{0.5 * (pa[0] + pb[0]), 0.5 * (pa[1] + pb[1]), 0.5 * (pa[2] + pb[2])}));
+    return mid[key] = static_cast<int>(positions.size()) - 1;
+  };
+  std::vector<std::array<int, 3>> next;
+  next.reserve(4 * triangles.size());
+  for (const auto& [a, b, c] : triangles) {
+    const int ab = m(a, b), bc = m(b, c), ca = m(c, a);
+    next.push_back({a, ab, ca});
+    next.push_back({b, bc, ab});
+    next.push_back({c, ca, bc});
+    next.push_back({ab, bc, ca});
+  }
+  triangles.swap(next);
+}
+
 struct Icosphere {
   std::vector<std::array<double, 3>> positions;
   std::vector<std::array<int, 3>> triangles;  // 0-based
@@ -222,27 +250,7 @@ inline Icosphere icosphere(int level) {
   s.triangles = {{0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11}, {1, 5, 9},  {5, 11, 4},
                  {11, 10, 2}, {10, 7, 6}, {7, 1, 8},  {3, 9, 4},   {3, 4, 2},  {3, 2, 6},   {3, 6, 8},
                  {3, 8, 9},  {4, 9, 5},  {2, 4, 11}, {6, 2, 10},  {8, 6, 7},  {9, 8, 1}};
-  for (int l = 0; l < level; ++l) {
-    std::map<std::pair<int, int>, int> mid;
-    auto m = [&](int a, int b) {
-      const auto key = std::make_pair(std::min(a, b), std::max(a, b));
-      if (auto it = mid.find(key); it != mid.end()) return it->second;
-      const auto& pa = s.positions[static_cast<size_t>(a)];
-      const auto& pb = s.positions[static_cast<size_t>(b)];
-      s.positions.push_back(unit({pa[0] + pb[0], pa[1] + pb[1], pa[2] + pb[2]}));
-      return mid[key] = static_cast<int>(s.positions.size()) - 1;
-    };
-    std::vector<std::array<int, 3>> next;
-    next.reserve(4 * s.triangles.size());
-    for (const auto& [a, b, c] : s.triangles) {
-      const int ab = m(a, b), bc = m(b, c), ca = m(c, a);
-      next.push_back({a, ab, ca});
-      next.push_back({b, bc, ab});
-      next.push_back({c, ca, bc});
-      next.push_back({ab, bc, ca});
-    }
-    s.triangles.swap(next);
-  }
+  for (int l = 0; l < level; ++l) subdivide_at_midpoints(s.positions, s.triangles, unit);
   return s;
 }
 

@@ -33,6 +33,15 @@ namespace {
 
 using P3 = std::array<double, 3>;
 
+// OBJ vertex lines, every digit of the doubles kept (OBJ is read in double).
+void write_vertices(std::ostream& out, const std::vector<P3>& positions) {
+  char buf[96];
+  for (const P3& p : positions) {
+    std::snprintf(buf, sizeof buf, "v %.17g %.17g %.17g\n", p[0], p[1], p[2]);
+    out << buf;
+  }
+}
+
 // One OBJ being written: a vertex pool and objects of faces.
 class ObjWriter {
 public:
@@ -57,11 +66,7 @@ public:
            "newmtl light\nKd 0 0 0\nKe 10 10 10\n";
     std::ofstream out(obj);
     out << "# written by radmesh_bench --scaling\nmtllib " << stem << ".mtl\n";
-    char buf[96];
-    for (const P3& p : positions_) {
-      std::snprintf(buf, sizeof buf, "v %.17g %.17g %.17g\n", p[0], p[1], p[2]);
-      out << buf;
-    }
+    write_vertices(out, positions_);
     out << faces_.str();
     if (!out || !mtl) throw IoError(obj.string() + ": cannot write the scene");
     return obj.string();
@@ -248,28 +253,7 @@ std::string write_bunny_room(const std::string& dir, const std::string& data, in
   // Each triangle into four by its edges' midpoints, `level` times: the same
   // surface, 4^level times the triangles (written in full; OBJ is read in
   // double).
-  for (int l = 0; l < level; ++l) {
-    std::map<std::pair<int, int>, int> mid;
-    auto at = [&](int a, int b) {
-      const auto [it, fresh] = mid.try_emplace({std::min(a, b), std::max(a, b)}, static_cast<int>(v.size()));
-      if (fresh) {
-        const P3& p = v[static_cast<size_t>(a)];
-        const P3& q = v[static_cast<size_t>(b)];
-        v.push_back({0.5 * (p[0] + q[0]), 0.5 * (p[1] + q[1]), 0.5 * (p[2] + q[2])});
-      }
-      return it->second;
-    };
-    std::vector<std::array<int, 3>> g;
-    g.reserve(4 * f.size());
-    for (const auto& [a, b, c] : f) {
-      const int ab = at(a, b), bc = at(b, c), ca = at(c, a);
-      g.push_back({a, ab, ca});
-      g.push_back({ab, b, bc});
-      g.push_back({ca, bc, c});
-      g.push_back({ab, bc, ca});
-    }
-    f.swap(g);
-  }
+  for (int l = 0; l < level; ++l) test::subdivide_at_midpoints(v, f, [](const P3& p) { return p; });
   fs::create_directories(dir);
   const std::string stem = "bunny_" + std::to_string(level);
   const fs::path obj = fs::path(dir) / (stem + ".obj");
@@ -277,11 +261,7 @@ std::string write_bunny_room(const std::string& dir, const std::string& data, in
     std::ofstream out(obj);
     out << "# written by radmesh_bench --scaling: the bunny of " << room_json.string() << " cut into 4^" << level
         << " x its triangles\n";
-    char buf[96];
-    for (const P3& p : v) {
-      std::snprintf(buf, sizeof buf, "v %.17g %.17g %.17g\n", p[0], p[1], p[2]);
-      out << buf;
-    }
+    write_vertices(out, v);
     for (const auto& [a, b, c] : f) out << "f " << a + 1 << ' ' << b + 1 << ' ' << c + 1 << '\n';
     if (!out) throw IoError(obj.string() + ": cannot write the scene");
   }

@@ -114,7 +114,7 @@ TEST(Hierarchical, InputTrianglesBelowTheLinkFloorAreLinkedByTheirShareOfIt) {
   // of it. The box on the floor meshed at the floor's size and 16 times
   // finer: without the weight every root took as many links as one at the
   // floor (35.8 against 35.9 per root), with it fewer than half as many
-  // (14.7 against 33.4); the energy still balances, and a furnace meshed
+  // (14.7 against 33.5); the energy still balances, and a furnace meshed
   // below the floor stays E / (1 - rho) at every leaf (rows sum to 1
   // whatever the links).
   HierarchicalOptions ho;
