@@ -52,8 +52,10 @@ struct FieldReport {
 // within the patch: their sum is scaled to the exact form factor to the
 // whole patch (Lambert's formula on its outline and holes), so a uniform
 // source is gathered exactly, and in a closed scene the form factors at a
-// point sum to 1 whatever the tree. Visibility: options.rays / 4
-// stratified shadow rays per node or triangle taken, cast only where the
+// point sum to 1 whatever the tree. Visibility: stratified shadow rays per
+// node or triangle taken, in proportion to the light it sends x (options.rays
+// / 4 for each kRayShare of what the solve says x gathers; at least 1, at
+// most options.rays / 2: FieldEvaluator::Impl::rays_for), cast only where the
 // shaft from x to the node's rectangle (or the triangle) may hold another
 // patch, of those that the shaft from x to the whole source may hold (found
 // once per point and source whose cut has 8 parts or more: on the Cornell
@@ -73,7 +75,8 @@ struct FieldReport {
 // kClusterStraddle of its area (ClusterTree::straddle): its groups' form
 // factors (each a point form factor at the group's centroid) times the
 // kernel-weighted mean of the visible reflected radiosity over
-// options.rays / 4 area-stratified points of its patches, their rays cast
+// area-stratified points of its patches (as many as for a node sending as
+// much), their rays cast
 // together. Other clusters are opened; the patches reached are gathered as
 // above. The clusters' form factors are not scaled to an exact sum, so a
 // point's row is exact only to the far clusters' error, about
@@ -103,8 +106,11 @@ public:
   // streams. Thread-safe, like the two parts below.
   Rgb radiosity(const Vec3& x, int patch, uint64_t id, FieldReport& report) const;
   // The reflected direct light (exact) and the reflected gathered light.
+  // `solved`: what the solve puts at x, B - E over the reflectance in the
+  // brightest channel (the scale each part's share of the shadow rays is
+  // taken against); 0 where unknown: every part gets options.rays / 4.
   Rgb direct(const Vec3& x, int patch, FieldReport& report) const;
-  Rgb indirect(const Vec3& x, int patch, uint64_t id, FieldReport& report) const;
+  Rgb indirect(const Vec3& x, int patch, uint64_t id, FieldReport& report, double solved = 0.0) const;
 
   // Whether the gather goes by the cluster tree over the patches.
   bool clustered() const;

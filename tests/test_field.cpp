@@ -5,6 +5,7 @@
 #include "io/obj_reader.h"
 #include "meshing/errors.h"
 #include "radiosity/direct.h"
+#include "radiosity/error_metric.h"
 #include "radiosity/field.h"
 #include "radiosity/form_factor.h"
 #include "radiosity/gather_node.h"
@@ -489,6 +490,54 @@ TEST(Field, TheClusteredGatherAgreesWithTheGatherOverEveryPatch) {
   for (size_t i = 0; i < points.size(); ++i) {
     const auto& s = sums[scene.patches[static_cast<size_t>(points[i].second)].name];
     EXPECT_NEAR(b[i].x, a[i].x, 0.1 * s[0] / s[2]) << i;
+  }
+}
+
+TEST(Field, EachPartsShadowRaysFollowItsShareOfWhatThePointGathers) {
+  // The room of 16 boxes: every part that sends light and whose shaft may
+  // be blocked casts options.rays / 4 rays when the point's solved value is
+  // unknown (0), one when it is so large that every part's share is
+  // negligible, and options.rays / 2 when it is so small that every part's
+  // is large (the lamp's parts, reflecting nothing, cast none). With the
+  // solved values themselves the rays fall, and the gathered light stays
+  // what the uniform rays give: the split changes the noise, not the mean.
+  const Scene scene = test::room_with(box_grid(4));
+  const MethodResult r = solve(scene, "matrix", 0.5, DiscontinuityMode::contacts);
+  SolveOptions so;
+  so.rays = 16;
+  const FieldEvaluator field(scene, r.mesh, r.solution.element, so, GatherSources::every_patch);
+  const auto points = triangle_centroids(r.mesh);
+  const std::vector<Rgb> solved = element_values(scene, r.mesh, r.solution.element, [&] {
+    std::vector<SurfaceSample> at;
+    for (const auto& [x, patch] : points) at.push_back({patch, x, 1.0});
+    return at;
+  }());
+  FieldReport unknown, huge, tiny, own;
+  std::map<std::string, std::array<double, 2>> sums;  // uniform, own rays
+  for (size_t i = 0; i < points.size(); ++i) {
+    const auto& [x, patch] = points[i];
+    const Material& m = scene.material_of(patch);
+    const Rgb u = field.indirect(x, patch, i, unknown, 0.0);
+    field.indirect(x, patch, i, huge, 1e300);
+    field.indirect(x, patch, i, tiny, 1e-300);
+    const double value = max3(solved[i] - m.emission) / max3(m.reflectance);
+    const Rgb o = field.indirect(x, patch, i, own, value);
+    auto& s = sums[scene.patches[static_cast<size_t>(patch)].name];
+    s[0] += u.x;
+    s[1] += o.x;
+  }
+  std::printf("[field] shadow rays: uniform %lld, shares negligible %lld, large %lld, the solve's values %lld\n",
+              unknown.rays_cast, huge.rays_cast, tiny.rays_cast, own.rays_cast);
+  ASSERT_GT(huge.rays_cast, 1000);
+  EXPECT_EQ(unknown.rays_cast, 4 * huge.rays_cast);
+  EXPECT_EQ(tiny.rays_cast, 8 * huge.rays_cast);
+  EXPECT_LT(own.rays_cast, unknown.rays_cast);
+  EXPECT_GT(own.rays_cast, huge.rays_cast);
+  for (const auto& [name, s] : sums) {
+    if (!(s[0] > 0.0)) continue;
+    std::printf("[field] %s: gathered with uniform rays %.5f, by shares %.5f (%+.3f%%)\n", name.c_str(), s[0], s[1],
+                100.0 * (s[1] / s[0] - 1.0));
+    EXPECT_NEAR(s[1] / s[0], 1.0, 0.01) << name;
   }
 }
 
