@@ -55,7 +55,8 @@ struct FieldReport {
 // point sum to 1 whatever the tree. Visibility: stratified shadow rays per
 // node or triangle taken, in proportion to the light it sends x (options.rays
 // / 4 for each kRayShare of what the solve says x gathers; at least 1, at
-// most options.rays / 2: FieldEvaluator::Impl::rays_for), cast only where the
+// most options.rays / 2: FieldEvaluator::Impl::rays_for; a point drawn where
+// the kernel is 0 is drawn again, up to 8 times), cast only where the
 // shaft from x to the node's rectangle (or the triangle) may hold another
 // patch, of those that the shaft from x to the whole source may hold (found
 // once per point and source whose cut has 8 parts or more: on the Cornell
@@ -76,7 +77,8 @@ struct FieldReport {
 // factors (each a point form factor at the group's centroid) times the
 // kernel-weighted mean of the visible reflected radiosity over
 // area-stratified points of its patches (as many as for a node sending as
-// much), their rays cast
+// much, at least options.rays / 4; one on a patch facing away from x is
+// drawn again), their rays cast
 // together. Other clusters are opened; the patches reached are gathered as
 // above. The clusters' form factors are not scaled to an exact sum, so a
 // point's row is exact only to the far clusters' error, about
