@@ -651,9 +651,10 @@ Rgb FieldEvaluator::Impl::gather_patch(size_t q, const Vec3& x, const Vec3& n, i
 // with groups whose normals do not straddle the direction to x by more than
 // kClusterStraddle of its area, is taken whole: its groups' form factors
 // (ClusterTree::form_factors) times the kernel-weighted mean of V R over
-// area-stratified points of its patches (rays_for), one random stream
-// per (point, cluster). A cluster wholly behind the plane gives nothing;
-// any other is opened, down to the patches, which gather_patch takes.
+// area-stratified points of its patches (rays_for, at least rays_per_node),
+// one random stream per (point, cluster). A cluster wholly behind the plane
+// gives nothing; any other is opened, down to the patches, which
+// gather_patch takes.
 Rgb FieldEvaluator::Impl::gather_clustered(const Vec3& x, const Vec3& n, int patch, uint64_t id, double full,
                                            FieldReport& report) const {
   struct Far {
@@ -710,13 +711,13 @@ Rgb FieldEvaluator::Impl::gather_clustered(const Vec3& x, const Vec3& n, int pat
         // far sides of boxes) is drawn again, up to kDrawTries times: a
         // cluster whose points all fell there gave nothing, though its
         // groups facing x send light (with 4 points the 16 x 16 box field's
-        // ceiling came out 0.54% below the field with 64).
-        // At least rays_per_node of them: a cluster's groups differ in
-        // radiosity and kernel (a box's lit top, its dim sides), and the
-        // few points of a small share, taken by area, then stand for the
-        // groups by area instead of by kernel (with 1 or 2 points for the
-        // small shares the 16 x 16 box field's walls came out 0.2-0.65%
-        // above the field with 64 points, 0.08% with 4).
+        // ceiling came out 0.54% below the field with 64). As many points as
+        // rays_for gives, and at least rays_per_node: a cluster's groups
+        // differ in radiosity and kernel (a box's lit top, its dim sides),
+        // and the few points of a small share, taken by area, then stand for
+        // the groups by area instead of by kernel (with 1 or 2 points for the
+        // small shares the 16 x 16 box field's walls came out 0.2-0.65% above
+        // the field with 64 points, 0.08% with 4).
         SplitMix rng(pair_seed(pair_seed(id, uint64_t{1} << 40), static_cast<uint64_t>(c)));
         const int k = std::max(rays_per_node, rays_for(max3(t.send), full));
         t.begin = samples.to.size();
