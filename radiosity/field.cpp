@@ -180,6 +180,7 @@ struct FieldEvaluator::Impl {
   // stand for the reflecting patches (empty: every patch is visited).
   ClusterTree clusters;
   std::vector<int> cluster_patch;       // per root: its patch
+  std::vector<glm::dvec4> cluster_plane;  // per root: its patch's plane (unit normal, offset)
   std::vector<double> cluster_reach;    // per cluster: a sphere about its centre holding its patches
   std::vector<Box3> cluster_box;        // per cluster: the box of its patches
   std::vector<Rgb> group_reflected;     // per group: the area mean of B - E
@@ -347,9 +348,11 @@ void FieldEvaluator::Impl::build_clusters() {
     t.radius = r;
     roots.push_back(t);
     cluster_patch.push_back(static_cast<int>(p));
+    cluster_plane.emplace_back(s.normal, -glm::dot(s.normal, s.triangle[0].v[0]));
   }
   if (roots.size() < 2) {
     cluster_patch.clear();
+    cluster_plane.clear();
     return;
   }
   clusters = ClusterTree::volume(roots, std::vector<double>(roots.size(), 1.0));
@@ -725,6 +728,14 @@ Rgb FieldEvaluator::Impl::gather_clustered(const Vec3& x, const Vec3& n, int pat
           double at = (j + rng.uniform()) / k;
           for (int tries = 1;; ++tries) {
             const int root = clusters.root_at(clusters.position_at_area(c, at));
+            // A patch facing away is told by its plane alone, before its
+            // triangles are read.
+            const glm::dvec4& plane = cluster_plane[static_cast<size_t>(root)];
+            if (!(glm::dot(Vec3(plane), x) + plane.w > 0.0)) {
+              if (tries == kDrawTries) break;
+              at = rng.uniform();
+              continue;
+            }
             const size_t q = static_cast<size_t>(cluster_patch[static_cast<size_t>(root)]);
             const SourceTree& s = sources[q];
             const double u = rng.uniform(), a = rng.uniform(), b = rng.uniform();
