@@ -437,6 +437,18 @@ std::vector<RawFace> box_grid(int k) {
   return faces;
 }
 
+// test::room_with(box_grid(k)), solved by the matrix method (max edge 0.5,
+// contact lines).
+struct BoxRoom {
+  Scene scene;
+  MethodResult result;
+};
+BoxRoom solved_box_room(int k) {
+  BoxRoom room{test::room_with(box_grid(k)), {}};
+  room.result = solve(room.scene, "matrix", 0.5, DiscontinuityMode::contacts);
+  return room;
+}
+
 // Every triangle of positive area of `mesh`: its centroid and patch.
 std::vector<std::pair<Vec3, int>> triangle_centroids(const Mesh& mesh) {
   std::vector<std::pair<Vec3, int>> out;
@@ -453,8 +465,7 @@ TEST(Field, TheClusteredGatherAgreesWithTheGatherOverEveryPatch) {
   // rays per node so that the rays' noise does not hide a bias. Per object
   // the two area means must agree to 0.5% (measured within 0.1%), and each
   // point to 10% of the object's mean.
-  const Scene scene = test::room_with(box_grid(6));
-  const MethodResult r = solve(scene, "matrix", 0.5, DiscontinuityMode::contacts);
+  const auto [scene, r] = solved_box_room(6);
   SolveOptions so;
   so.rays = 64;
   const FieldEvaluator every(scene, r.mesh, r.solution.element, so, GatherSources::every_patch);
@@ -501,8 +512,7 @@ TEST(Field, EachPartsShadowRaysFollowItsShareOfWhatThePointGathers) {
   // is large (the lamp's parts, reflecting nothing, cast none). With the
   // solved values themselves the rays fall, and the gathered light stays
   // what the uniform rays give: the split changes the noise, not the mean.
-  const Scene scene = test::room_with(box_grid(4));
-  const MethodResult r = solve(scene, "matrix", 0.5, DiscontinuityMode::contacts);
+  const auto [scene, r] = solved_box_room(4);
   SolveOptions so;
   so.rays = 16;
   const FieldEvaluator field(scene, r.mesh, r.solution.element, so, GatherSources::every_patch);
@@ -737,8 +747,7 @@ TEST(Field, TheClusteredGatherOfAPointDoesNotDependOnThePointsBeforeIt) {
   // Per-thread scratch must not carry anything from one point to the next:
   // the same points in the opposite order, and with two threads, give the
   // same values to the bit (each point's rays come from its own streams).
-  const Scene scene = test::room_with(box_grid(4));
-  const MethodResult r = solve(scene, "matrix", 0.5, DiscontinuityMode::contacts);
+  const auto [scene, r] = solved_box_room(4);
   const FieldEvaluator clustered(scene, r.mesh, r.solution.element, SolveOptions{}, GatherSources::clustered);
   ASSERT_TRUE(clustered.clustered());
   const auto points = triangle_centroids(r.mesh);
