@@ -20,17 +20,20 @@
 
 namespace radmesh::fuzz {
 
-// A folder of this process's own, made once, removed at exit.
+// A folder of this process's own, made once, removed at exit. The path is
+// never destroyed: a static path object would be destroyed before the exit
+// handler registered during its construction ran, and the handler then
+// read a dead path and removed nothing (every run left its folder behind).
 inline const std::filesystem::path& scratch_dir() {
-  static const std::filesystem::path dir = [] {
+  static const std::filesystem::path* const dir = [] {
     const char* tmp = std::getenv("TMPDIR");
-    std::filesystem::path d = std::filesystem::path(tmp && *tmp ? tmp : "/tmp") /
-                              ("radmesh-fuzz-" + std::to_string(::getpid()));
-    std::filesystem::create_directories(d);
-    std::atexit([] { std::error_code ec; std::filesystem::remove_all(scratch_dir(), ec); });
+    auto* d = new std::filesystem::path(std::filesystem::path(tmp && *tmp ? tmp : "/tmp") /
+                                        ("radmesh-fuzz-" + std::to_string(::getpid())));
+    std::filesystem::create_directories(*d);
+    std::atexit([] { std::error_code ec; std::filesystem::remove_all(*dir, ec); });
     return d;
   }();
-  return dir;
+  return *dir;
 }
 
 inline std::string write_file(const std::string& name, std::string_view bytes) {

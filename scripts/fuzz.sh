@@ -30,7 +30,10 @@ for t in "${targets[@]}"; do
     bound=(-seed=1 -runs="${ci_runs[$t]}" -max_total_time=120)
   fi
   start=$SECONDS
-  if "$build/fuzz/$t" "${bound[@]}" -timeout=10 -rss_limit_mb=4096 \
+  # The target's scratch files go in its working copy, not /tmp: an input
+  # that crashes it leaves them there, beside the input.
+  mkdir -p "$work/$t/tmp"
+  if TMPDIR="$work/$t/tmp" "$build/fuzz/$t" "${bound[@]}" -timeout=10 -rss_limit_mb=4096 \
        -max_len=65536 -print_final_stats=1 -artifact_prefix="$work/$t/" "$work/$t/corpus" >"$log" 2>&1; then
     runs="$(sed -n 's/^stat::number_of_executed_units: *//p' "$log")"
     cov="$(grep -o 'cov: [0-9]*' "$log" | tail -1)"
