@@ -334,6 +334,7 @@ TEST(Mesh, ALineEndingNextToAVertexDoesNotCrashTheMesher) {
       kData + "/cornell_box/cornell_box", std::filesystem::path(testing::TempDir()) / "cornell_light_corner_up",
       [](const std::string& line, int) { return line == "v 213 548.8 332" ? std::string("v 213 548.9 332") : line; });
   const Scene s = read_obj_scene(obj);
+  std::filesystem::remove_all(std::filesystem::path(obj).parent_path());
   MeshingOptions o;
   o.max_elements = 2e4;
   MeshReport report;

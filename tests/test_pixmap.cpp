@@ -262,7 +262,9 @@ Scene quad_scene(const std::string& name, const std::vector<NamedQuad>& quads) {
     v += 4;
   }
   obj.close();
-  return read_obj_scene(dir + "/room.obj");
+  Scene scene = read_obj_scene(dir + "/room.obj");
+  std::filesystem::remove_all(dir);
+  return scene;
 }
 
 // The six walls of the closed box [0, x] x [0, y] x [0, z], facing in, named
@@ -739,6 +741,7 @@ TEST(PixmapSolver, OneAndTwoThreadsAndAResumeGiveIdenticalStates) {
   PixmapState saved = read_pixmap_state(dir);
   expect_same_state(saved, p.state);
   check_resumable(saved, scene, one.layout(), o, saved.source);
+  std::filesystem::remove_all(dir);
   const PixmapRun resumed = one.run(saved);
   EXPECT_EQ(resumed.shots_this_run, 35);
   expect_same_state(resumed.state, a.state);
