@@ -56,7 +56,7 @@ struct HierarchicalOptions {
   // off (a radiosity error, the same threshold at every size), 1 = the
   // transported power's error below the mean root's size. Small receivers
   // are then linked more coarsely: object means move little, single small
-  // faces more (README, "Area-weighted oracle").
+  // faces more (docs/hierarchical.md, "Area-weighted oracle").
   double area_weight = 0.0;
   // Elements are not split below this area; 0 = (scene diagonal / 150)^2 / 2.
   // An input triangle (or a cluster of them) smaller than it weighs its
@@ -70,7 +70,7 @@ struct HierarchicalOptions {
   // After the first refinement round, a round is made for the links the
   // oracle would refine only where one of them is over its threshold by
   // more than this factor; otherwise they stay as they are, and the
-  // solution's skips say how many (README, "Clusters": on the box fields
+  // solution's skips say how many (docs/clusters.md: on the box fields
   // the last rounds refined under 1% of the links, all within 2x, for up to
   // a fifth of the run). 1 = refine every link over the threshold.
   double marginal_refinement = 2.0;
@@ -84,13 +84,13 @@ struct HierarchicalOptions {
   // (its children gather over its links: no new links). 0 = off. On by
   // default: the gather field is exact at every vertex, so what is left of
   // its error is mostly the linear interpolation between vertices, and
-  // these splits put vertices where the field bends (README, "Baum's
+  // these splits put vertices where the field bends (docs/hierarchical.md, "Baum's
   // criterion").
   double baum_relative = 0.02;
   double baum_absolute = 0.0;
   // volume by default: on the Cornell box at equal time it is as accurate
   // as off, and on scenes of thousands of input triangles it is many times
-  // faster (README, "Clusters").
+  // faster (docs/clusters.md).
   ClusterMode clusters = ClusterMode::volume;
   // Copy the links into the solution at the end (links, cluster_links).
   // The radmesh program asks for them only with export_links: on a sphere

@@ -56,7 +56,7 @@ struct SolveOptions {
   // method's result; a solver's own field (compute_nodal) uses
   // nodal_method(field). automatic by default, which is gather on every
   // scene of up to a few thousand patches: on the Cornell box benchmark it
-  // gives a fraction of the error of the fit (README, "The field").
+  // gives a fraction of the error of the fit (docs/field.md).
   FieldMode field = FieldMode::automatic;
 };
 
