@@ -45,6 +45,14 @@ constexpr double kRayShare = 0.005;
 // or behind its tangent plane).
 constexpr int kDrawTries = 8;
 
+// Calls try_at(u), then try_at with a fresh uniform from `rng` while it
+// returns false (its point fell where the kernel is 0), kDrawTries calls
+// at most.
+template <class TryAt>
+void draw_facing(SplitMix& rng, double u, TryAt&& try_at) {
+  for (int tries = 1; !try_at(u) && tries < kDrawTries; ++tries) u = rng.uniform();
+}
+
 // Lambert's formula for a whole patch (outline less holes), front side only.
 double patch_form_factor(const Vec3& x, const Vec3& n, const std::vector<std::vector<Vec3>>& loops,
                          const Vec3& normal) {
@@ -218,22 +226,17 @@ struct FieldEvaluator::Impl {
               Samples& batch) const {
     SplitMix rng(seed);
     double weight = 0.0;
-    for (int s = 0; s < k; ++s) {
-      double u = (s + rng.uniform()) / k;
-      for (int tries = 1;; ++tries) {
+    for (int s = 0; s < k; ++s)
+      draw_facing(rng, (s + rng.uniform()) / k, [&](double u) {
         const double a = rng.uniform(), b = rng.uniform();
         int t = -1;
         const Vec3 y = tree.sample(begin, end, u, a, b, t);
         const double ws = point_kernel(x, n, y, tree.normal);  // a sample's weight
-        if (ws > 0.0) {
-          weight += ws;
-          batch.add(y, ws, tree.reflected[static_cast<size_t>(t)]);
-          break;
-        }
-        if (tries == kDrawTries) break;
-        u = rng.uniform();
-      }
-    }
+        if (!(ws > 0.0)) return false;
+        weight += ws;
+        batch.add(y, ws, tree.reflected[static_cast<size_t>(t)]);
+        return true;
+      });
     return weight;
   }
   // The weighted mean of R over samples [begin .. end) of `batch` whose
@@ -724,34 +727,25 @@ Rgb FieldEvaluator::Impl::gather_clustered(const Vec3& x, const Vec3& n, int pat
         SplitMix rng(pair_seed(pair_seed(id, uint64_t{1} << 40), static_cast<uint64_t>(c)));
         const int k = std::max(rays_per_node, rays_for(max3(t.send), full));
         t.begin = samples.to.size();
-        for (int j = 0; j < k; ++j) {
-          double at = (j + rng.uniform()) / k;
-          for (int tries = 1;; ++tries) {
+        for (int j = 0; j < k; ++j)
+          draw_facing(rng, (j + rng.uniform()) / k, [&](double at) {
             const int root = clusters.root_at(clusters.position_at_area(c, at));
             // A patch facing away is told by its plane alone, before its
             // triangles are read.
             const glm::dvec4& plane = cluster_plane[static_cast<size_t>(root)];
-            if (!(glm::dot(Vec3(plane), x) + plane.w > 0.0)) {
-              if (tries == kDrawTries) break;
-              at = rng.uniform();
-              continue;
-            }
+            if (!(glm::dot(Vec3(plane), x) + plane.w > 0.0)) return false;
             const size_t q = static_cast<size_t>(cluster_patch[static_cast<size_t>(root)]);
             const SourceTree& s = sources[q];
             const double u = rng.uniform(), a = rng.uniform(), b = rng.uniform();
             int tri = -1;
             const Vec3 y = s.sample(0, static_cast<int>(s.triangle.size()), u, a, b, tri);
             const double w = point_kernel(x, n, y, s.normal);
-            if (w > 0.0) {
-              t.weight += w;
-              samples.add(y, w, s.reflected[static_cast<size_t>(tri)]);
-              sample_patch.push_back(static_cast<int>(q));
-              break;
-            }
-            if (tries == kDrawTries) break;
-            at = rng.uniform();
-          }
-        }
+            if (!(w > 0.0)) return false;
+            t.weight += w;
+            samples.add(y, w, s.reflected[static_cast<size_t>(tri)]);
+            sample_patch.push_back(static_cast<int>(q));
+            return true;
+          });
         t.end = samples.to.size();
         report.rays_cast += k;
       }
