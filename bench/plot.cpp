@@ -1,10 +1,10 @@
 // Log-log error-versus-time plot through VTK's charts, rendered off screen.
 #include "bench/plot.h"
 
-#include "io/atomic_file.h"
-#include "io/vtk_render.h"
-#include "io/x_display.h"
-#include "meshing/errors.h"
+#include "io/writers/atomic_file.h"
+#include "io/render/vtk_render.h"
+#include "io/render/x_display.h"
+#include "radmesh/errors.h"
 
 #include <vtkAxis.h>
 #include <vtkChart.h>

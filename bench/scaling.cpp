@@ -2,9 +2,9 @@
 
 #include "bench/mesh_writers.h"
 #include "bench/plot.h"
-#include "io/atomic_file.h"
-#include "io/scene_reader.h"
-#include "meshing/errors.h"
+#include "io/writers/atomic_file.h"
+#include "radmesh/scene_reader.h"
+#include "radmesh/errors.h"
 
 #include <nlohmann/json.hpp>
 

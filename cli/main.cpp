@@ -2,19 +2,19 @@
 // `mesh` (mesh and quality only). Every error is caught here, once, and
 // printed as one line; the exit status is then non-zero.
 
-#include "io/histogram.h"
-#include "io/pixmap_io.h"
-#include "io/scene_reader.h"
-#include "io/png_render.h"
-#include "io/probe_file.h"
-#include "io/summary.h"
-#include "io/vtk_writer.h"
-#include "meshing/errors.h"
-#include "meshing/mesh.h"
-#include "radiosity/method.h"
-#include "radiosity/probe.h"
-#include "radiosity/solve.h"
-#include "radmesh_version.h"
+#include "radmesh/histogram.h"
+#include "io/writers/pixmap_io.h"
+#include "radmesh/scene_reader.h"
+#include "radmesh/png_render.h"
+#include "radmesh/probe_file.h"
+#include "radmesh/summary.h"
+#include "radmesh/vtk_writer.h"
+#include "radmesh/errors.h"
+#include "radmesh/mesh.h"
+#include "radmesh/method.h"
+#include "radmesh/probe.h"
+#include "radmesh/solve.h"
+#include "radmesh/version.h"
 
 #include <CLI/CLI.hpp>
 

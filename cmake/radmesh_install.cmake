@@ -1,5 +1,5 @@
 # cmake --install build --prefix P installs libradmesh, its public headers
-# (under P/include/radmesh), the radmesh program and a CMake package:
+# (P/include/radmesh: #include <radmesh/radmesh.h>), the radmesh program and a CMake package:
 # find_package(radmesh) gives radmesh::radmesh.
 include(CMakePackageConfigHelpers)
 
@@ -8,12 +8,8 @@ install(TARGETS radmesh_lib EXPORT radmeshTargets
         LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}
         RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
 install(TARGETS radmesh RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
-install(DIRECTORY meshing radiosity io DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/radmesh
-        FILES_MATCHING PATTERN "*.h"
-        PATTERN "x_display.h" EXCLUDE PATTERN "vtk_file.h" EXCLUDE PATTERN "vtk_render.h" EXCLUDE
-        PATTERN "scene_sources.h" EXCLUDE PATTERN "json_parse.h" EXCLUDE)  # private to io/ (and bench/)
-install(FILES radmesh.h ${PROJECT_BINARY_DIR}/generated/radmesh_version.h
-        DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/radmesh)
+install(DIRECTORY include/radmesh DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
+install(FILES ${PROJECT_BINARY_DIR}/generated/radmesh/version.h DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/radmesh)
 
 set(config_dir ${CMAKE_INSTALL_LIBDIR}/cmake/radmesh)
 install(EXPORT radmeshTargets NAMESPACE radmesh:: DESTINATION ${config_dir})

@@ -1,7 +1,7 @@
 // Reads a scene, meshes it, solves it with the default method, writes the
 // result for ParaView and prints every patch's mean radiosity.
 //   solve_scene SCENE OUT_DIR
-#include <radmesh.h>
+#include <radmesh/radmesh.h>
 
 #include <cstdio>
 #include <filesystem>

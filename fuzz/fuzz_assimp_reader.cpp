@@ -4,7 +4,7 @@
 // are read through a JSON scene that gives them one, as users must.
 
 #include "fuzz/fuzz_util.h"
-#include "io/scene_reader.h"
+#include "radmesh/scene_reader.h"
 
 #include <array>
 

@@ -3,7 +3,7 @@
 // fuzz/files/ at start), so mutations reach objects, materials and transforms.
 
 #include "fuzz/fuzz_util.h"
-#include "io/scene_reader.h"
+#include "radmesh/scene_reader.h"
 
 #include <filesystem>
 

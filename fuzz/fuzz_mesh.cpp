@@ -4,8 +4,8 @@
 // triangles covering exactly its area.
 
 #include "fuzz/fuzz_util.h"
-#include "io/scene_reader.h"
-#include "meshing/mesh.h"
+#include "radmesh/scene_reader.h"
+#include "radmesh/mesh.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   using namespace radmesh;

@@ -4,7 +4,7 @@
 // a hang or a scene that breaks build_scene's promises is a defect.
 
 #include "fuzz/fuzz_util.h"
-#include "io/scene_reader.h"
+#include "radmesh/scene_reader.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   using namespace radmesh;

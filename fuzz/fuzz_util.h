@@ -3,9 +3,9 @@
 // what a successful read or meshing must satisfy.
 #pragma once
 
-#include "meshing/errors.h"
-#include "meshing/mesh.h"
-#include "meshing/scene.h"
+#include "radmesh/errors.h"
+#include "radmesh/mesh.h"
+#include "radmesh/scene.h"
 
 #include <cmath>
 #include <cstdint>

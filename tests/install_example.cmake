@@ -12,7 +12,7 @@ function(step)
 endfunction()
 
 step(${CMAKE_COMMAND} --install ${BUILD_DIR} --prefix ${prefix})
-foreach(f lib/libradmesh.a bin/radmesh include/radmesh/radmesh.h include/radmesh/radiosity/method.h
+foreach(f lib/libradmesh.a bin/radmesh include/radmesh/radmesh.h include/radmesh/method.h include/radmesh/version.h
           lib/cmake/radmesh/radmeshConfig.cmake)
   if(NOT EXISTS ${prefix}/${f})
     message(FATAL_ERROR "not installed: ${prefix}/${f}")

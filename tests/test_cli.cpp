@@ -1,7 +1,7 @@
 // The radmesh program end to end: outputs on success, one-line errors and no
 // output on bad input.
 
-#include "io/pixmap_io.h"
+#include "io/writers/pixmap_io.h"
 #include "tests/edited_obj.h"
 
 #include <gtest/gtest.h>

@@ -1,9 +1,9 @@
 // Scene-wide structures that keep every phase near-linear: the box tree, and
 // the cluster hierarchy above the polygons.
 #include "bench/mesh_writers.h"
-#include "meshing/box_tree.h"
-#include "meshing/errors.h"
-#include "radiosity/sampling.h"
+#include "core/box_tree.h"
+#include "radmesh/errors.h"
+#include "radiosity/transport/sampling.h"
 
 #include <gtest/gtest.h>
 
@@ -52,11 +52,11 @@ TEST(BoxTree, FindsExactlyTheOverlappingBoxes) {
 
 // ---------------------------------------------------------------- clusters
 
-#include "meshing/mesh.h"
-#include "meshing/scene.h"
-#include "radiosity/clusters.h"
-#include "radiosity/hierarchical.h"
-#include "radiosity/solve.h"
+#include "radmesh/mesh.h"
+#include "radmesh/scene.h"
+#include "radiosity/transport/clusters.h"
+#include "radmesh/hierarchical.h"
+#include "radmesh/solve.h"
 
 #include <array>
 #include <cmath>

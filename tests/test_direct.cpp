@@ -1,10 +1,10 @@
 // The exact direct-illumination reference against closed forms and
 // hand-computed shadows.
 
-#include "io/obj_reader.h"
-#include "meshing/mesh.h"
-#include "radiosity/direct.h"
-#include "radiosity/error_metric.h"
+#include "radmesh/obj_reader.h"
+#include "radmesh/mesh.h"
+#include "radmesh/direct.h"
+#include "radmesh/error_metric.h"
 
 #include "tests/edited_obj.h"
 #include "tests/test_util.h"

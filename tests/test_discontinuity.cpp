@@ -1,13 +1,13 @@
 // Contact lines (D0): exact positions, and a mesh that never crosses them.
 
-#include "io/obj_reader.h"
-#include "io/vtk_writer.h"
-#include "meshing/discontinuity.h"
-#include "meshing/errors.h"
-#include "meshing/mesh.h"
-#include "radiosity/direct.h"
-#include "radiosity/error_metric.h"
-#include "radiosity/solve.h"
+#include "radmesh/obj_reader.h"
+#include "radmesh/vtk_writer.h"
+#include "radmesh/discontinuity.h"
+#include "radmesh/errors.h"
+#include "radmesh/mesh.h"
+#include "radmesh/direct.h"
+#include "radmesh/error_metric.h"
+#include "radmesh/solve.h"
 
 #include "tests/edited_obj.h"
 #include "tests/test_util.h"

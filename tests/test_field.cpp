@@ -2,17 +2,17 @@
 // the rest, against closed forms, the exact clip, energy balance and the
 // thread count.
 
-#include "io/obj_reader.h"
-#include "meshing/errors.h"
-#include "radiosity/direct.h"
-#include "radiosity/error_metric.h"
-#include "radiosity/field.h"
-#include "radiosity/form_factor.h"
-#include "radiosity/gather_node.h"
-#include "radiosity/method.h"
-#include "radiosity/occlusion.h"
-#include "radiosity/transport.h"
-#include "radiosity/visibility.h"
+#include "radmesh/obj_reader.h"
+#include "radmesh/errors.h"
+#include "radmesh/direct.h"
+#include "radmesh/error_metric.h"
+#include "radmesh/field.h"
+#include "radmesh/form_factor.h"
+#include "radiosity/transport/gather_node.h"
+#include "radmesh/method.h"
+#include "radiosity/transport/occlusion.h"
+#include "radiosity/transport/transport.h"
+#include "radiosity/transport/visibility.h"
 
 #include "tests/test_util.h"
 

@@ -1,7 +1,7 @@
 // Form factors against closed forms (Howell's catalogue) and physical identities.
 
-#include "radiosity/form_factor.h"
-#include "radiosity/lambert_kernel.h"
+#include "radmesh/form_factor.h"
+#include "radiosity/transport/lambert_kernel.h"
 
 #include <gtest/gtest.h>
 

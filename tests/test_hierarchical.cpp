@@ -1,15 +1,15 @@
 // Hierarchical radiosity: closed forms, energy balance, agreement with the
 // full-matrix solve, determinism and stress.
 
-#include "io/obj_reader.h"
-#include "io/summary.h"
-#include "meshing/errors.h"
-#include "meshing/scene.h"
-#include "meshing/mesh.h"
-#include "radiosity/field.h"
-#include "radiosity/form_factor.h"
-#include "radiosity/hierarchical.h"
-#include "radiosity/solve.h"
+#include "radmesh/obj_reader.h"
+#include "radmesh/summary.h"
+#include "radmesh/errors.h"
+#include "radmesh/scene.h"
+#include "radmesh/mesh.h"
+#include "radmesh/field.h"
+#include "radmesh/form_factor.h"
+#include "radmesh/hierarchical.h"
+#include "radmesh/solve.h"
 
 #include <gtest/gtest.h>
 

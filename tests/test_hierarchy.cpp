@@ -2,9 +2,9 @@
 // zero-area fans form a conforming mesh (checked with CGAL's Surface_mesh),
 // splits stay exact at depth, and the conventional closure leaves no T-vertex.
 
-#include "io/obj_reader.h"
-#include "meshing/hierarchy.h"
-#include "meshing/mesh.h"
+#include "radmesh/obj_reader.h"
+#include "radmesh/hierarchy.h"
+#include "radmesh/mesh.h"
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Surface_mesh.h>

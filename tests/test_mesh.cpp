@@ -1,8 +1,8 @@
 // The initial CGAL mesh: exact areas, conformity between patches, quality.
 
-#include "io/obj_reader.h"
-#include "meshing/errors.h"
-#include "meshing/mesh.h"
+#include "radmesh/obj_reader.h"
+#include "radmesh/errors.h"
+#include "radmesh/mesh.h"
 
 #include "tests/edited_obj.h"
 #include "tests/test_util.h"

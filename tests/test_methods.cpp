@@ -1,10 +1,10 @@
 // Conformance: every method of the table against every check a radiosity
 // method must pass. A method joins these tests by being in methods().
 
-#include "io/obj_reader.h"
-#include "io/summary.h"
-#include "meshing/errors.h"
-#include "radiosity/method.h"
+#include "radmesh/obj_reader.h"
+#include "radmesh/summary.h"
+#include "radmesh/errors.h"
+#include "radmesh/method.h"
 
 #include <gtest/gtest.h>
 

@@ -2,12 +2,12 @@
 // texel layout's exact areas, progressive refinement against the linear
 // system it solves, determinism, and saving and resuming.
 
-#include "io/obj_reader.h"
-#include "io/pixmap_io.h"
-#include "meshing/errors.h"
-#include "radiosity/form_factor.h"
-#include "radiosity/hemicube.h"
-#include "radiosity/pixmap.h"
+#include "radmesh/obj_reader.h"
+#include "io/writers/pixmap_io.h"
+#include "radmesh/errors.h"
+#include "radmesh/form_factor.h"
+#include "radiosity/pixmap/hemicube.h"
+#include "radmesh/pixmap.h"
 
 #include <gtest/gtest.h>
 

@@ -2,9 +2,9 @@
 // transforms, paths and materials, every error's message, the bundled bunny,
 // and loading a million triangles.
 
-#include "io/json_parse.h"
-#include "io/scene_reader.h"
-#include "meshing/errors.h"
+#include "io/readers/json_parse.h"
+#include "radmesh/scene_reader.h"
+#include "radmesh/errors.h"
 #include "bench/mesh_writers.h"
 
 #include <gtest/gtest.h>

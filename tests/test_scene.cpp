@@ -1,8 +1,8 @@
 // Scene reading and validation: the bundled scenes and every bad input.
 
-#include "io/obj_reader.h"
-#include "meshing/errors.h"
-#include "meshing/mesh.h"
+#include "radmesh/obj_reader.h"
+#include "radmesh/errors.h"
+#include "radmesh/mesh.h"
 
 #include <gtest/gtest.h>
 

@@ -1,12 +1,12 @@
 // The classic matrix solve against closed forms and physical identities.
 
-#include "io/obj_reader.h"
-#include "io/summary.h"
-#include "meshing/errors.h"
-#include "radiosity/error_metric.h"
-#include "radiosity/probe.h"
-#include "radiosity/solve.h"
-#include "radiosity/transport.h"
+#include "radmesh/obj_reader.h"
+#include "radmesh/summary.h"
+#include "radmesh/errors.h"
+#include "radmesh/error_metric.h"
+#include "radmesh/probe.h"
+#include "radmesh/solve.h"
+#include "radiosity/transport/transport.h"
 
 #include <gtest/gtest.h>
 

@@ -1,8 +1,8 @@
 // Small helpers several test files share.
 #pragma once
 
-#include "meshing/mesh.h"
-#include "meshing/scene.h"
+#include "radmesh/mesh.h"
+#include "radmesh/scene.h"
 
 #include <gtest/gtest.h>
 

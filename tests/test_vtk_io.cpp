@@ -1,9 +1,9 @@
 // VTK output: what write_vtu / write_mesh_vtu write is read back by VTK's own
 // reader field by field, failures leave no file, and render_png draws what the
 // camera convention and the winding convention promise.
-#include "io/png_render.h"
-#include "io/vtk_writer.h"
-#include "meshing/errors.h"
+#include "radmesh/png_render.h"
+#include "radmesh/vtk_writer.h"
+#include "radmesh/errors.h"
 
 #include <gtest/gtest.h>
 

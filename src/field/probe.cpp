@@ -1,0 +1,71 @@
+#include "radmesh/probe.h"
+
+#include "radmesh/errors.h"
+#include "radmesh/field.h"
+#include "radiosity/transport/transport.h"
+
+#include <tbb/parallel_for.h>
+
+#include <cmath>
+#include <limits>
+#include <sstream>
+
+namespace radmesh {
+
+namespace {
+
+// Barycentric inside test with a relative tolerance.
+bool inside(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c, double tol) {
+  const Vec3 n = glm::cross(b - a, c - a);
+  const double nn = glm::dot(n, n);
+  if (nn <= 0.0) return false;
+  const double u = glm::dot(glm::cross(c - b, p - b), n) / nn;
+  const double v = glm::dot(glm::cross(a - c, p - c), n) / nn;
+  const double w = 1.0 - u - v;
+  return u >= -tol && v >= -tol && w >= -tol;
+}
+
+}  // namespace
+
+std::vector<ProbeResult> evaluate_probes(const Scene& scene, const Mesh& mesh,
+                                         const std::vector<Rgb>& element_radiosity,
+                                         const std::vector<Probe>& probes, const SolveOptions& options) {
+  check_solve_options(options);
+  const double diag = scene.diagonal();
+  const int n = mesh.triangle_count();
+  std::vector<ProbeResult> out(probes.size());
+  // Locate every probe first, so that a bad one fails before any work.
+  for (size_t k = 0; k < probes.size(); ++k) {
+    const Probe& pr = probes[k];
+    double nearest = std::numeric_limits<double>::infinity();
+    for (int t = 0; t < n && out[k].patch < 0; ++t) {
+      const auto& tri = mesh.triangles[static_cast<size_t>(t)];
+      const Patch& patch = scene.patches[static_cast<size_t>(mesh.patch[static_cast<size_t>(t)])];
+      const Vec3& a = mesh.positions[tri[0]];
+      const double d = std::abs(glm::dot(pr.point - a, patch.normal));
+      nearest = std::min(nearest, glm::length(pr.point - mesh.centroid(t)));
+      if (d > 1e-6 * diag || glm::dot(pr.normal, patch.normal) < 0.99) continue;
+      if (inside(pr.point, a, mesh.positions[tri[1]], mesh.positions[tri[2]], 1e-9))
+        out[k].patch = mesh.patch[static_cast<size_t>(t)];
+    }
+    if (out[k].patch < 0) {
+      std::ostringstream m;
+      m << where(pr.file, pr.line) << "probe '" << pr.label << "' at (" << pr.point.x << " " << pr.point.y
+        << " " << pr.point.z << ") with normal (" << pr.normal.x << " " << pr.normal.y << " " << pr.normal.z
+        << ") lies on no surface facing that way (nearest element centre " << nearest << " away)";
+      throw InputError(m.str());
+    }
+  }
+
+  const FieldEvaluator field(scene, mesh, element_radiosity, options);
+  run_in_arena(options.threads, [&] {
+    tbb::parallel_for(size_t(0), probes.size(), [&](size_t k) {
+      FieldReport report;
+      // Seeds above any display vertex's: the probes' streams are their own.
+      out[k].radiosity = field.radiosity(probes[k].point, out[k].patch, (uint64_t{1} << 40) + k, report);
+    });
+  });
+  return out;
+}
+
+}  // namespace radmesh

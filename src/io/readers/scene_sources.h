@@ -1,0 +1,47 @@
+// Internal to radmesh_io (not installed, not for users): the faces and materials
+// one scene file carries, before build_scene, so that a JSON scene can combine
+// several files into one face list. The public entry point is io/scene_reader.h.
+#pragma once
+
+#include "radmesh/scene.h"
+
+#include <string>
+#include <vector>
+
+namespace radmesh::detail {
+
+struct SceneSource {
+  // Material indexes `materials`, or -1 where the file gives the face none.
+  std::vector<RawFace> faces;
+  std::vector<Material> materials;
+  // Why some face has no material (e.g. "PLY files carry no materials"); empty
+  // when every face has one.
+  std::string missing_material;
+  std::vector<std::string> warnings;  // things read but not used (textures, ...)
+};
+
+// OBJ + MTL (tinyobjloader, with our own line-numbered checks).
+SceneSource read_obj_source(const std::string& path);
+
+// PLY, STL, OFF, glTF 2.0 (.gltf, .glb) through assimp. With check_materials,
+// every material a face uses is checked here (messages name the format's keys);
+// without, the caller replaces them.
+SceneSource read_assimp_source(const std::string& path, bool check_materials);
+
+// The JSON scene file (io/scene_reader.h describes its keys).
+Scene read_json_scene(const std::string& path, const SceneOptions& options);
+
+// Checks that `path` names a regular file radmesh can read (IoError
+// otherwise: missing, a directory, a device or pipe such as /dev/zero that
+// would be read forever, or larger than kMaxInputBytes). `what` names the
+// file's role in the message ("OBJ file", "material library", ...).
+inline constexpr double kMaxInputBytes = 8.0 * 1024 * 1024 * 1024;
+void check_input_file(const std::string& path, const std::string& what);
+
+// The file name's extension, lower case, with its dot (".ply"); "" when none.
+std::string lower_extension(const std::string& path);
+
+// Whether `ext` (as lower_extension returns it) is read through assimp.
+bool is_assimp_extension(const std::string& ext);
+
+}  // namespace radmesh::detail

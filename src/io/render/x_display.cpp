@@ -1,0 +1,13 @@
+#include "io/render/x_display.h"
+
+#include <X11/Xlib.h>
+
+namespace radmesh::io_detail {
+
+XConnection::XConnection() : display_(XOpenDisplay(nullptr)) {}
+
+XConnection::~XConnection() {
+  if (display_ != nullptr) XCloseDisplay(static_cast<Display*>(display_));
+}
+
+}  // namespace radmesh::io_detail
