@@ -266,11 +266,12 @@ struct Row {
 // it sets (tvertex=split is another curve; a number such as epsilon is what
 // a curve sweeps).
 std::string series_key(const Settings& set) {
-  const MethodOptions checked(find_method(set.method).options, set.options, set.method);
   std::string key = set.method + " field=" + to_string(set.field);
-  for (const auto& [k, v] : set.options)
-    if (checked.spec(k).kind == OptionSpec::Kind::choice || checked.spec(k).kind == OptionSpec::Kind::flag)
-      key += " " + k + "=" + v;
+  for (const OptionSpec& spec : find_method(set.method).options) {
+    const auto given = set.options.find(spec.name);
+    if (given != set.options.end() && (spec.kind == OptionSpec::Kind::choice || spec.kind == OptionSpec::Kind::flag))
+      key += " " + spec.name + "=" + given->second;
+  }
   return key;
 }
 
@@ -306,7 +307,7 @@ Settings parse_settings(const std::string& text) {
       set.options[name] = f[k].substr(eq + 1);
   }
   // Checked now, before any run: unknown options and bad values are errors.
-  MethodOptions(find_method(set.method).options, set.options, set.method);
+  method_options(find_method(set.method), set.options);
   return set;
 }
 

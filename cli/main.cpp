@@ -3,7 +3,6 @@
 // printed as one line; the exit status is then non-zero.
 
 #include "radmesh/histogram.h"
-#include "io/writers/pixmap_io.h"
 #include "radmesh/scene_reader.h"
 #include "radmesh/png_render.h"
 #include "radmesh/probe_file.h"
@@ -39,25 +38,27 @@ using namespace radmesh;
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 
+// Options of one table (meshing, solve, a method's) as the command line
+// gave them: text per name, flags as bools; only those given are kept.
+struct GivenOptions {
+  std::map<std::string, std::string> text;
+  std::map<std::string, bool> flag;
+  OptionValues given;
+};
+
 struct Params {
   std::string scene;
   std::string out_dir = "radmesh-out";
-  MeshingOptions meshing;
-  std::vector<std::string> meshing_given;  // meshing flags given on the command line
-  SolveOptions solve;
   std::string probe_file;
-  std::string resume;  // --resume DIR: a pixmap run's -o directory
+  std::string resume;  // --resume DIR: the -o directory of a run that saved its state
   bool quiet = false;
   bool png = true;
-  std::string discontinuity = "full";
-  std::string field = "auto";
   std::string nodal;  // --nodal fit|mean: the older name of --field fit|mean
   std::string method = methods().front().name;
-  // Method options: text per declared name; flags as bools. Only those
-  // given on the command line reach the method (the others take defaults).
-  std::map<std::string, std::string> method_text;
-  std::map<std::string, bool> method_flag;
-  OptionValues method_given;
+  GivenOptions meshing_given, solve_given, method_given;
+  // Read and checked by check_params.
+  MeshingOptions meshing;  // the defaults with what was given on top (mesh, quality)
+  SolveOptions solve;
   MethodOptions method_options;
 };
 
@@ -114,10 +115,20 @@ void check_output_dir(const std::string& dir) {
     throw InputError("-o " + dir + ": cannot be created or written (" + d.string() + " is not writable)");
 }
 
-// What run and mesh write, and what quality writes.
-const char* const kRunOutputs =
-    R"((radiosity|mesh|links|discontinuities)\.vtu|radiosity_round_[0-9]+\.vtu|radiosity\.pvd|probes\.csv|)"
-    R"(radiosity\.png|summary\.json|patches\.csv|lightmapped\.(obj|mtl))";
+// What run and mesh write (and every method's own files), and what quality writes.
+std::string run_outputs() {
+  std::string ours = R"((radiosity|mesh|links|discontinuities)\.vtu|radiosity_round_[0-9]+\.vtu|radiosity\.pvd|)"
+                     R"(probes\.csv|radiosity\.png|summary\.json|patches\.csv)";
+  for (const Method& m : methods())
+    for (const std::string& name : m.files) {
+      ours += '|';
+      for (char c : name) {
+        if (!std::isalnum(static_cast<unsigned char>(c)) && c != '_') ours += '\\';
+        ours += c;
+      }
+    }
+  return ours;
+}
 
 // Ctrl-C during a method that can stop early (Method::resumable): the first
 // one asks it to stop and save its state, a second one (half a second or
@@ -142,7 +153,7 @@ const char* const kQualityOutputs = R"(quality\.csv|quality_(min_angle|aspect_ra
 // removes what an earlier run of the same command left there (files whose
 // names match `outputs`) that this run does not write again (round files,
 // links, probes, pictures), so the directory holds one run's results.
-void prepare_output_dir(const std::string& dir, const char* outputs, const std::vector<std::string>& will_write) {
+void prepare_output_dir(const std::string& dir, const std::string& outputs, const std::vector<std::string>& will_write) {
   std::error_code ec;
   fs::create_directories(dir, ec);
   if (ec) throw IoError("-o " + dir + ": cannot create the output directory: " + ec.message());
@@ -155,25 +166,38 @@ void prepare_output_dir(const std::string& dir, const char* outputs, const std::
   }
 }
 
+// The names given on the command line, of a table's options.
+std::vector<std::string> names_of(const OptionValues& given) {
+  std::vector<std::string> out;
+  for (const auto& entry : given) out.push_back(entry.first);
+  return out;
+}
+
 // Options that can be checked without reading anything: done before any work.
 void check_params(Params& p, bool solving) {
-  if (solving) {
-    // An option the method does not take, or a value out of its range, is
-    // an error here, for every method alike.
-    p.method_options = MethodOptions(find_method(p.method).options, p.method_given, p.method);
-  } else if (!p.method_given.empty()) {
-    throw InputError(p.method_given.begin()->first + ": a method option; only run takes it");
-  }
-  p.meshing.discontinuity = parse_discontinuity_mode(p.discontinuity);
   if (!p.nodal.empty()) {
-    if (p.field != "auto" && p.field != p.nodal)
-      throw InputError("--nodal " + p.nodal + " and --field " + p.field + " disagree; give one of them");
-    p.field = p.nodal;
+    const auto field = p.solve_given.given.find("field");
+    if (field != p.solve_given.given.end() && field->second != "auto" && field->second != p.nodal)
+      throw InputError("nodal " + p.nodal + " and field " + field->second + " disagree; give one of them",
+                       {"nodal", "field"});
+    p.solve_given.given["field"] = p.nodal;
   }
-  p.solve.field = parse_field_mode(p.field);
-  if (p.meshing.max_edge < 0.0 || !std::isfinite(p.meshing.max_edge))
-    throw InputError("--max-edge " + std::to_string(p.meshing.max_edge) + " must be > 0 (or 0 for auto)");
-  if (solving) check_solve_options(p.solve);
+  p.meshing = meshing_option_table().parse(p.meshing_given.given);
+  if (solving) {
+    p.solve = solve_option_table().parse(p.solve_given.given);
+    // An option the method does not take, one of the run's it does not
+    // use, or a value out of its range is an error here, for every method
+    // alike.
+    const Method& method = find_method(p.method);
+    p.method_options = method_options(method, p.method_given.given);
+    std::vector<std::string> shared = names_of(p.solve_given.given);
+    for (const std::string& name : names_of(p.meshing_given.given)) shared.push_back(name);
+    check_shared_options(method, shared, p.solve.field);
+    check_solve_options(p.solve);
+  } else if (!p.method_given.given.empty()) {
+    throw InputError(p.method_given.given.begin()->first + ": a method option; only run takes it",
+                     {p.method_given.given.begin()->first});
+  }
   check_output_dir(p.out_dir);
   if (!p.probe_file.empty() && !fs::exists(p.probe_file))
     throw InputError("--probe " + p.probe_file + ": no such file");
@@ -182,13 +206,9 @@ void check_params(Params& p, bool solving) {
 // The meshing a run starts from: the method's recommendation, with every
 // meshing option the user gave on top (mesh and quality: the defaults).
 MeshingOptions meshing_for(const Params& p, const Scene& scene, const Method* method) {
-  MeshingOptions mo = method ? method->meshing(scene) : MeshingOptions{};
-  for (const std::string& flag : p.meshing_given) {
-    if (flag == "--max-edge") mo.max_edge = p.meshing.max_edge;
-    if (flag == "--min-angle") mo.min_angle = p.meshing.min_angle;
-    if (flag == "--discontinuity") mo.discontinuity = p.meshing.discontinuity;
-    if (flag == "--max-shadow-lines") mo.shadow.max_lines_per_receiver = p.meshing.shadow.max_lines_per_receiver;
-  }
+  if (!method) return p.meshing;
+  MeshingOptions mo = method->meshing(scene);
+  meshing_option_table().apply(mo, p.meshing_given.given);
   return mo;
 }
 
@@ -210,7 +230,7 @@ int run(Params& p, bool solving) {
 
   info.meshing = resolve_meshing_options(scene, meshing_for(p, scene, method));
   info.method = method ? method->name : "none";
-  info.method_options = p.method_options;
+  info.method_options = p.method_options.values();
   rep.begin("mesh");
   const Mesh mesh = mesh_scene(scene, info.meshing, &info.mesh_report);
   info.seconds.push_back({"mesh", rep.end()});
@@ -228,16 +248,16 @@ int run(Params& p, bool solving) {
     SolveCallbacks cb;
     cb.progress = [&](const std::string& phase, double f) { rep.update(phase, f); };
     cb.on_round = [&](const MethodResult& r, int) { rounds.push_back(r); };
-    if (!p.resume.empty()) cb.resume = std::make_shared<const PixmapState>(read_pixmap_state(p.resume));
-    if (method->resumable) {
+    if (!p.resume.empty()) cb.resume = read_method_state(*method, p.resume);
+    if (method->resumable()) {
       struct sigaction sa {};
       sa.sa_handler = on_interrupt;
       sigemptyset(&sa.sa_mask);
       sigaction(SIGINT, &sa, nullptr);
       cb.cancelled = [] { return g_interrupted.load(); };
     }
-    result = run_method(*method, scene, mesh, p.solve, p.method_given, cb);
-    if (method->resumable) std::signal(SIGINT, SIG_DFL);
+    result = run_method(*method, scene, mesh, p.solve, p.method_options, cb);
+    if (method->resumable()) std::signal(SIGINT, SIG_DFL);
     rep.end();
     for (const auto& phase : result->seconds) info.seconds.push_back(phase);
     if (!result->report.empty()) rep.note(result->report);
@@ -268,11 +288,9 @@ int run(Params& p, bool solving) {
   if (!info.mesh_report.discontinuities.empty()) outputs.push_back("discontinuities.vtu");
   if (!probes.empty()) outputs.push_back("probes.csv");
   if (result && p.png) outputs.push_back("radiosity.png");
-  if (result && result->pixmaps) {
-    outputs.push_back("lightmapped.obj");
-    outputs.push_back("lightmapped.mtl");
-  }
-  prepare_output_dir(p.out_dir, kRunOutputs, outputs);
+  if (result)
+    for (const std::string& name : result->files.names) outputs.push_back(name);
+  prepare_output_dir(p.out_dir, run_outputs(), outputs);
   rep.begin("write");
   std::vector<std::string> written;
   auto path_in_out = [&](const std::string& name) { return (fs::path(p.out_dir) / name).string(); };
@@ -306,10 +324,8 @@ int run(Params& p, bool solving) {
     write_discontinuities_vtu(lines, info.mesh_report.discontinuities);
     written.push_back(lines);
   }
-  if (result && result->pixmaps) {
-    for (const std::string& f : write_pixmap_state(p.out_dir, scene, *result->pixmaps)) written.push_back(f);
-    for (const std::string& f : write_lightmaps(p.out_dir, out_mesh, *result->pixmaps)) written.push_back(f);
-  }
+  if (result && result->files.write)
+    for (const std::string& f : result->files.write(p.out_dir, out_mesh)) written.push_back(f);
   if (!probes.empty()) {
     const std::string csv = path_in_out("probes.csv");
     write_probe_csv(csv, scene, probes, probe_results);
@@ -325,7 +341,7 @@ int run(Params& p, bool solving) {
   }
   info.seconds.push_back({"write", rep.end()});
   const std::string summary = path_in_out("summary.json");
-  write_json(summary, make_summary(info, scene, out_mesh, out_quality, result ? &*result : nullptr));
+  write_summary(summary, info, scene, out_mesh, out_quality, result ? &*result : nullptr);
   written.push_back(summary);
   if (!patches_in_summary(scene)) {
     const std::string csv = path_in_out("patches.csv");
@@ -347,12 +363,10 @@ int run(Params& p, bool solving) {
   }
   for (const std::string& w : written) std::printf("%s\n", w.c_str());
   if (result && result->interrupted) {
-    const Counter* shots = result->counter("shots");
     std::fprintf(stderr,
-                 "[radmesh] interrupted after %lld shots; the state is saved in %s. Continue with the same options "
-                 "and: --resume %s\n",
-                 shots ? static_cast<long long>(shots->values[0]) : 0LL,
-                 (fs::path(p.out_dir) / "pixmaps").string().c_str(), p.out_dir.c_str());
+                 "[radmesh] interrupted after %s; the state is saved in %s. Continue with the same options and: "
+                 "--resume %s\n",
+                 result->progress.c_str(), p.out_dir.c_str(), p.out_dir.c_str());
     return 130;
   }
   return 0;
@@ -411,24 +425,45 @@ int quality(Params& p) {
   return 0;
 }
 
-void add_common(CLI::App* cmd, Params& p,
+// A value that reads as a number (the range is the option table's to check,
+// with a message naming the option): otherwise a usage error.
+const CLI::Validator kNumber(
+    [](std::string& text) {
+      char* end = nullptr;
+      std::strtod(text.c_str(), &end);
+      return !text.empty() && end != nullptr && *end == '\0' ? std::string() : "not a number: " + text;
+    },
+    "NUMBER");
+
+// One option of a table as a flag: its help with its unit, choices, default
+// and range, `prefix` first ("with --method pixmap: ").
+void add_table_option(CLI::App* cmd, const OptionSpec& spec, GivenOptions& to, const std::string& prefix,
+                      const std::string& default_text) {
+  std::string help = prefix + spec.help;
+  if (!spec.unit.empty()) help += ", in " + spec.unit;
+  if (spec.kind == OptionSpec::Kind::flag) {
+    cmd->add_flag(spec.flag(), to.flag[spec.name], help);
+    return;
+  }
+  help += " (default " + default_text;
+  if (spec.kind == OptionSpec::Kind::real || spec.kind == OptionSpec::Kind::integer)
+    help += "; range [" + format_number(spec.min) + ", " + format_number(spec.max) + "]";
+  CLI::Option* o = cmd->add_option(spec.flag(), to.text[spec.name], help + ")");
+  if (spec.kind == OptionSpec::Kind::choice)
+    o->check(CLI::IsMember(spec.choices));
+  else
+    o->check(kNumber);
+}
+
+void add_common(CLI::App* cmd, Params& p, bool solving,
                 const char* scene_help = "scene file: .obj (+ .mtl), .ply, .stl, .off, .gltf, .glb, or a .json scene") {
   cmd->add_option("SCENE", p.scene, scene_help)->required()->check(CLI::ExistingFile);
   cmd->add_option("-o,--output", p.out_dir, "output directory (created; default radmesh-out)");
-  cmd->add_option("--max-edge", p.meshing.max_edge,
-                  "longest mesh edge, in scene units (default: the method's; mesh and quality: scene "
-                  "diagonal / 12)")
-      ->check(CLI::Range(0.0, 1e300));
-  cmd->add_option("--min-angle", p.meshing.min_angle, "smallest triangle angle wanted, degrees (default 20)")
-      ->check(CLI::Range(0.0, 30.0));
-  cmd->add_option("--discontinuity", p.discontinuity,
-                  "discontinuity lines built into the initial mesh: off, contacts (where patches meet) or "
-                  "full (contacts and the D1/D2 shadow boundaries of every emitter). Default: the method's "
-                  "for run, full for mesh and quality")
-      ->check(CLI::IsMember({"off", "contacts", "full"}));
-  cmd->add_option("--max-shadow-lines", p.meshing.shadow.max_lines_per_receiver,
-                  "with --discontinuity full: shadow-line segments kept per receiving patch (default 400)")
-      ->check(CLI::Range(0, 1000000));
+  for (const OptionSpec& spec : meshing_option_table().specs())
+    add_table_option(cmd, spec, p.meshing_given, "",
+                     solving && (spec.name == "max_edge" || spec.name == "discontinuity")
+                         ? "the method's"
+                         : (spec.name == "max_edge" ? "scene diagonal / 12" : spec.default_text()));
   cmd->add_flag("-q,--quiet", p.quiet, "no progress on stderr");
 }
 
@@ -443,32 +478,43 @@ void add_method_options(CLI::App* cmd, Params& p) {
   for (const auto& [spec, takers] : all_method_options()) {
     std::string who;
     for (const std::string& t : takers) who += (who.empty() ? "" : ", ") + t;
-    std::string help = "with --method " + who + ": " + spec.help;
-    if (!spec.unit.empty()) help += ", in " + spec.unit;
-    if (spec.kind == OptionSpec::Kind::choice) {
-      help += " (";
-      for (size_t k = 0; k < spec.choices.size(); ++k) help += (k ? ", " : "") + spec.choices[k];
-      help += ")";
-    }
-    if (spec.kind == OptionSpec::Kind::flag) {
-      cmd->add_flag(spec.flag(), p.method_flag[spec.name], help);
-    } else {
-      help += " (default " + spec.default_text();
-      if (spec.kind != OptionSpec::Kind::choice)
-        help += "; range [" + format_number(spec.min) + ", " + format_number(spec.max) + "]";
-      cmd->add_option(spec.flag(), p.method_text[spec.name], help + ")");
-    }
+    add_table_option(cmd, spec, p.method_given, "with --method " + who + ": ", spec.default_text());
   }
 }
 
-// After parsing: the method options and meshing flags given on the command line.
-void collect_given(CLI::App* cmd, Params& p) {
-  for (const auto& [spec, takers] : all_method_options())
+// After parsing: the options of `specs` given on the command line.
+void collect_given(CLI::App* cmd, const std::vector<OptionSpec>& specs, GivenOptions& to) {
+  for (const OptionSpec& spec : specs)
     if (cmd->get_option_no_throw(spec.flag()) != nullptr && cmd->count(spec.flag()) > 0)
-      p.method_given[spec.name] =
-          spec.kind == OptionSpec::Kind::flag ? (p.method_flag[spec.name] ? "true" : "false") : p.method_text[spec.name];
-  for (const char* flag : {"--max-edge", "--min-angle", "--discontinuity", "--max-shadow-lines"})
-    if (cmd->count(flag) > 0) p.meshing_given.push_back(flag);
+      to.given[spec.name] =
+          spec.kind == OptionSpec::Kind::flag ? (to.flag[spec.name] ? "true" : "false") : to.text[spec.name];
+}
+
+void collect_given(CLI::App* cmd, Params& p) {
+  collect_given(cmd, meshing_option_table().specs(), p.meshing_given);
+  collect_given(cmd, solve_option_table().specs(), p.solve_given);
+  std::vector<OptionSpec> method_specs;
+  for (const auto& entry : all_method_options()) method_specs.push_back(entry.first);
+  collect_given(cmd, method_specs, p.method_given);
+}
+
+// An error's message with the options it names written as flags
+// (max_edge -> --max-edge).
+std::string as_flags(const Error& e) {
+  std::string message = e.what();
+  for (const std::string& name : e.options()) {
+    const std::string flag = option_flag(name);
+    auto word = [&](size_t k) { return k < message.size() && (std::isalnum(static_cast<unsigned char>(message[k])) || message[k] == '_' || message[k] == '-'); };
+    for (size_t k = message.find(name); k != std::string::npos; k = message.find(name, k)) {
+      if ((k > 0 && word(k - 1)) || word(k + name.size())) {
+        k += name.size();
+        continue;
+      }
+      message.replace(k, name.size(), flag);
+      k += flag.size();
+    }
+  }
+  return message;
 }
 
 }  // namespace
@@ -482,42 +528,29 @@ int main(int argc, char** argv) {
   Params run_p, mesh_p, quality_p;
 
   CLI::App* run_cmd = app.add_subcommand("run", "mesh the scene, solve radiosity, write .vtu, .png, summary.json");
-  add_common(run_cmd, run_p);
-  run_cmd->add_option("--tolerance", run_p.solve.tolerance,
-                      "Gauss-Seidel stops when a sweep changes radiosity by less than this fraction of the "
-                      "largest value (default 1e-6)")
-      ->check(CLI::Range(1e-15, 0.999));
-  run_cmd->add_option("--threads", run_p.solve.threads, "worker threads, 0 = all cores (default 0)")
-      ->check(CLI::Range(0, 4096));
-  run_cmd->add_option("--rays", run_p.solve.rays, "shadow rays per element pair (default 16)")
-      ->check(CLI::Range(1, 4096));
-  run_cmd->add_option("--max-memory", run_p.solve.max_memory_gb,
-                      "GiB the matrix method's form factors, the pixmap method's texels (with their display and files) and cached rows, or the whole run while the hierarchical method solves, may use (default 0 = half the memory)")
-      ->check(CLI::Range(0.0, 1e6));
+  add_common(run_cmd, run_p, true);
+  for (const OptionSpec& spec : solve_option_table().specs())
+    add_table_option(run_cmd, spec, run_p.solve_given, "", spec.default_text());
   run_cmd->add_option("--probe", run_p.probe_file,
                       "probe file: lines 'label x y z nx ny nz'; writes probes.csv")
       ->check(CLI::ExistingFile);
   run_cmd->add_flag("!--no-png", run_p.png, "do not render radiosity.png");
+  std::string resumable;
+  for (const Method& m : methods())
+    if (m.resumable()) resumable += (resumable.empty() ? "" : ", ") + m.name;
   run_cmd->add_option("--resume", run_p.resume,
-                      "continue the pixmap run whose -o directory this is (its pixmaps/state.json), with the "
-                      "same scene and options; --shots counts the shots made before")
+                      "continue the run whose -o directory this is, from the state it saved, with the same scene "
+                      "and options (--method " + resumable + "; --shots counts the shots made before)")
       ->check(CLI::ExistingDirectory);
-  run_cmd->add_option("--field", run_p.field,
-                      "vertex values: gather (exact direct light and a final gather of the solved radiosity "
-                      "at every vertex), fit (least-squares plane through the element values "
-                      "around the vertex), mean (their area-weighted mean) or auto (gather, by clusters of "
-                      "patches on large scenes, unless that would pass a budget of (vertex, source) pairs, "
-                      "then fit; the default)")
-      ->check(CLI::IsMember({"auto", "gather", "fit", "mean"}));
   run_cmd->add_option("--nodal", run_p.nodal, "the older name of --field fit|mean")
       ->check(CLI::IsMember({"fit", "mean"}));
   add_method_options(run_cmd, run_p);
 
   CLI::App* mesh_cmd = app.add_subcommand("mesh", "mesh the scene and report quality; writes mesh.vtu and summary.json");
-  add_common(mesh_cmd, mesh_p);
+  add_common(mesh_cmd, mesh_p, false);
   CLI::App* quality_cmd = app.add_subcommand(
       "quality", "mesh the scene; print per-patch and total mesh quality and write quality.csv");
-  add_common(quality_cmd, quality_p,
+  add_common(quality_cmd, quality_p, false,
              "scene file (.obj, .ply, .stl, .off, .gltf, .glb, .json), or a mesh written by radmesh (.vtu)");
 
   try {
@@ -540,7 +573,7 @@ int main(int argc, char** argv) {
     collect_given(mesh_cmd, mesh_p);
     return run(mesh_p, false);
   } catch (const radmesh::Error& e) {
-    std::fprintf(stderr, "radmesh: error: %s\n", e.what());
+    std::fprintf(stderr, "radmesh: error: %s\n", as_flags(e).c_str());
     return 1;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "radmesh: internal error: %s\n", e.what());

@@ -204,6 +204,7 @@ HierarchicalOptions one_round(ClusterMode mode, double epsilon, double min_area)
   ho.epsilon = epsilon;
   ho.min_area = min_area;
   ho.max_rounds = 1;
+  ho.export_links = true;
   return ho;
 }
 

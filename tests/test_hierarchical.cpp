@@ -254,7 +254,7 @@ TEST(Hierarchical, TVertexModes) {
   const Mesh m = coarse_mesh(s, 1.0);
   HierarchicalOptions ho;
   ho.epsilon = 0.01;
-  ho.baum_relative = 0.0;  // Baum's splits follow the vertex values, which the modes change
+  ho.baum = 0.0;  // Baum's splits follow the vertex values, which the modes change
   ho.tvertex = TVertexMode::free;
   const HierarchicalSolution free = solve_hierarchical(s, m, {}, ho);
   ho.tvertex = TVertexMode::anchor;
@@ -433,7 +433,7 @@ TEST(Hierarchical, BaumCriterionSplitsWhereVertexValuesDiffer) {
   HierarchicalOptions ho;
   ho.epsilon = 0.01;
   ho.max_rounds = 30;
-  ho.baum_relative = 0.0;
+  ho.baum = 0.0;
   // The fit: the splits' leaves are solved (with the gather they are not,
   // see BaumLeavesOfAGatheredFieldTakeTheirParentsRadiosity).
   SolveOptions fit;
@@ -441,7 +441,7 @@ TEST(Hierarchical, BaumCriterionSplitsWhereVertexValuesDiffer) {
   const HierarchicalSolution plain = solve_hierarchical(s, m, fit, ho);
   int within_budget = 0;
   for (double rel : {0.05, 0.1, 0.15, 0.2}) {
-    ho.baum_relative = rel;
+    ho.baum = rel;
     const HierarchicalSolution baum = solve_hierarchical(s, m, fit, ho);
     std::printf("[hierarchical] Baum %.0f%%: %d leaves (%d Baum splits, %d rounds) against %d without\n", 100 * rel,
                 baum.stats.leaves, baum.stats.baum_splits, baum.stats.rounds, plain.stats.leaves);
@@ -523,7 +523,7 @@ TEST(HierarchicalStress, MemoryLimitIsAClearErrorBeforeAnyCrash) {
   const Scene s = read_obj_scene(kData + "/cornell_box/cornell_box.obj");
   const Mesh coarse = coarse_mesh(s, 200.0);
   SolveOptions tiny, small;
-  tiny.max_memory_gb = 1e-6;
+  tiny.max_memory = 1e-6;
   for (ClusterMode mode : {ClusterMode::off, ClusterMode::volume, ClusterMode::shape}) {
     HierarchicalOptions ho;
     ho.clusters = mode;
@@ -536,13 +536,13 @@ TEST(HierarchicalStress, MemoryLimitIsAClearErrorBeforeAnyCrash) {
       return std::string("no error");
     };
     const std::string first = message(tiny);
-    small.max_memory_gb = (resident_memory_bytes() + 8.0 * kMiB) / kGiB;  // the process grows from one solve to the next
+    small.max_memory = (resident_memory_bytes() + 8.0 * kMiB) / kGiB;  // the process grows from one solve to the next
     const std::string later = message(small);
     // Without clusters the root pairs are refused; with them, the clusters.
     EXPECT_NE(first.find(mode == ClusterMode::off ? "pairs to link" : "clusters above"), std::string::npos) << first;
     EXPECT_NE(first.find("cornell_box.obj"), std::string::npos) << first;
     EXPECT_NE(later.find("refinement reached"), std::string::npos) << later;
-    EXPECT_NE(later.find("--epsilon"), std::string::npos) << later;
+    EXPECT_NE(later.find("raise epsilon"), std::string::npos) << later;
   }
 }
 
@@ -558,16 +558,15 @@ TEST(HierarchicalStress, MemoryLimitCountsTheWholeProcess) {
   HierarchicalOptions ho;
   ho.epsilon = 0.01;
   SolveOptions o;
-  o.max_memory_gb = (resident_memory_bytes() + 64.0 * kMiB) / kGiB;
+  o.max_memory = (resident_memory_bytes() + 64.0 * kMiB) / kGiB;
   EXPECT_NO_THROW(solve_hierarchical(s, coarse, o, ho));
   const std::vector<char> held(static_cast<size_t>(128.0 * kMiB), 1);
   try {
     solve_hierarchical(s, coarse, o, ho);
     ADD_FAILURE() << "no error";
   } catch (const NumericalError& e) {
-    const std::string m = e.what();
-    EXPECT_NE(m.find("the process holds"), std::string::npos) << m;
-    EXPECT_NE(m.find("--max-memory"), std::string::npos) << m;
+    EXPECT_NE(std::string(e.what()).find("the process holds"), std::string::npos) << e.what();
+    EXPECT_EQ(e.options(), (std::vector<std::string>{"max_edge", "max_memory"}));
   }
   EXPECT_EQ(held[held.size() / 2], 1);
 }
@@ -580,9 +579,10 @@ TEST(Hierarchical, SolverObjectStepsToTheOneOffResult) {
   const Mesh m = coarse_mesh(s, 1.0);
   HierarchicalOptions ho;
   ho.epsilon = 0.01;
+  ho.export_links = true;
   std::vector<long long> links_seen;
   HierarchicalOptions without_links = ho;  // changes what is copied out, nothing else
-  without_links.keep_links = false;
+  without_links.export_links = false;
   const HierarchicalSolution once =
       solve_hierarchical(s, m, {}, without_links, [&](const HierarchicalSolution& h, int round) {
         EXPECT_EQ(static_cast<int>(links_seen.size()), round);
@@ -644,7 +644,7 @@ TEST(Hierarchical, BaumLeavesOfAGatheredFieldTakeTheirParentsRadiosity) {
   HierarchicalOptions ho;
   ho.epsilon = 0.01;
   ho.max_rounds = 30;
-  ho.baum_relative = 0.05;
+  ho.baum = 0.05;
   SolveOptions gather, fit;
   gather.field = FieldMode::gather;
   fit.field = FieldMode::fit;

@@ -12,6 +12,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <numbers>
 #include <string>
 #include <vector>
@@ -21,6 +22,34 @@ using radmesh::test::transformed;
 
 namespace {
 const std::string kData = RADMESH_TEST_DATA;
+
+// What the conformance tests may expect of a method on their closed forms,
+// and the option values for a quick run (coarser, the same physics). A
+// method not named here runs with its defaults and must be exact: errors
+// that vanish with the solve's tolerance.
+struct TestSettings {
+  OptionValues quick;
+  double element = 0.0;     // relative error of an element value
+  double patch_mean = 0.0;  // of a patch's mean
+  double residual = 0.0;    // the solve's final residual at its defaults
+  bool casts_rays = true;   // occlusion by shadow rays (SolveStats::rays_cast)
+  bool error_bound = true;  // reports a max-norm bound (SolveStats::error_bound)
+};
+
+const TestSettings& settings(const std::string& method) {
+  static const std::map<std::string, TestSettings> table = {
+      {"hierarchical", {{{"epsilon", "0.02"}}}},
+      // Hemicube form factors shot from block centres, in float: measured
+      // at hemicube 64, the default texel and block 4, a rho 0.9 furnace's
+      // worst texel is 10.2% off, at rho 0.5 B - E within 3.1%; their area
+      // mean exact; Howell's plates +0.14%; rotated scenes 1.4%; the
+      // residual (unshot / radiosity) 4.4e-4 on the Cornell box at unshot 1e-3.
+      {"pixmap", {{{"hemicube_res", "64"}}, 0.12, 0.02, 1e-3, false, false}},
+  };
+  static const TestSettings exact;
+  const auto it = table.find(method);
+  return it != table.end() ? it->second : exact;
+}
 
 std::vector<std::string> method_names() {
   std::vector<std::string> names;
@@ -38,7 +67,7 @@ MethodResult solve(const std::string& method, const Scene& scene, double edge_fr
   MeshingOptions mo = m.meshing(scene);
   if (edge_fraction > 0.0) mo.max_edge = edge_fraction * scene.diagonal();
   mo.discontinuity = DiscontinuityMode::contacts;
-  return run_method(m, scene, mesh_scene(scene, mo), so, quick ? m.quick : OptionValues{});
+  return run_method(m, scene, mesh_scene(scene, mo), so, quick ? settings(method).quick : OptionValues{});
 }
 
 
@@ -49,17 +78,17 @@ class Conformance : public ::testing::TestWithParam<std::string> {};
 TEST_P(Conformance, DeclaresItsOptionsAndMeshing) {
   const Method& m = find_method(GetParam());
   EXPECT_FALSE(m.help.empty());
-  ASSERT_TRUE(m.meshing && m.solve);
+  ASSERT_TRUE(m.parse && m.meshing && m.solve);
   for (const OptionSpec& s : m.options) {
     EXPECT_FALSE(s.help.empty()) << s.name;
     // Every default is accepted by the method's own check.
-    EXPECT_NO_THROW(MethodOptions(m.options, {{s.name, s.default_text()}}, m.name)) << s.name;
+    EXPECT_NO_THROW(method_options(m, {{s.name, s.default_text()}})) << s.name;
     if (s.kind == OptionSpec::Kind::real || s.kind == OptionSpec::Kind::integer) {
-      EXPECT_THROW(MethodOptions(m.options, {{s.name, "nan"}}, m.name), InputError) << s.name;
-      EXPECT_THROW(MethodOptions(m.options, {{s.name, format_number(s.max * 2 + 1)}}, m.name), InputError) << s.name;
+      EXPECT_THROW(method_options(m, {{s.name, "nan"}}), InputError) << s.name;
+      EXPECT_THROW(method_options(m, {{s.name, format_number(s.max * 2 + 1)}}), InputError) << s.name;
     }
   }
-  EXPECT_THROW(MethodOptions(m.options, {{"no_such_option", "1"}}, m.name), InputError);
+  EXPECT_THROW(method_options(m, {{"no_such_option", "1"}}), InputError);
 }
 
 TEST_P(Conformance, FurnaceGivesEOverOneMinusRhoEverywhere) {
@@ -73,7 +102,7 @@ TEST_P(Conformance, FurnaceGivesEOverOneMinusRhoEverywhere) {
     const MethodResult r = solve(GetParam(), scene, 0.25, so);
     ASSERT_FALSE(r.solution.element.empty());
     ASSERT_EQ(r.solution.element.size(), r.mesh.triangles.size());
-    const Method::Accuracy& acc = find_method(GetParam()).accuracy;
+    const TestSettings& acc = settings(GetParam());
     const double tol = std::max(1e-6, acc.element) * expected;
     for (const Rgb& b : r.solution.element) EXPECT_NEAR(b.x, expected, tol) << file;
     for (const Rgb& b : r.solution.nodal.radiosity) EXPECT_NEAR(b.z, expected, tol) << file;
@@ -95,7 +124,7 @@ TEST_P(Conformance, ReflectanceNearOneConvergesAsFarAsItsStoppingRuleSays) {
   // B 0.05% low (and the solver said "residual 1e-6"). At the default
   // tolerance the error must now be within it, and the reported bound must
   // hold.
-  if (!find_method(GetParam()).accuracy.error_bound)
+  if (!settings(GetParam()).error_bound)
     GTEST_SKIP() << "reports no max-norm error bound; its own tests check rho = 0.999";
   Scene scene = read_obj_scene(kData + "/furnace_cube/furnace_cube.obj");
   for (Material& m : scene.materials) m.reflectance = Rgb(0.999);
@@ -117,7 +146,7 @@ TEST_P(Conformance, ParallelPlatesMatchHowellC11) {
   int found = 0;
   for (size_t p = 0; p < scene.patches.size(); ++p)
     if (scene.patches[p].name == "receiver") {
-      EXPECT_NEAR(means[p].x / (0.5 * 0.199825) - 1.0, 0.0, std::max(2e-4, find_method(GetParam()).accuracy.patch_mean));
+      EXPECT_NEAR(means[p].x / (0.5 * 0.199825) - 1.0, 0.0, std::max(2e-4, settings(GetParam()).patch_mean));
       ++found;
     }
   EXPECT_EQ(found, 1);
@@ -152,7 +181,7 @@ TEST_P(Conformance, CornellBoxBalancesEnergy) {
   const Scene scene = read_obj_scene(kData + "/cornell_box/cornell_box.obj");
   const MethodResult r = solve(GetParam(), scene, 0.25);
   const SolveStats& st = r.solution.stats;
-  const Method::Accuracy& acc = find_method(GetParam()).accuracy;
+  const TestSettings& acc = settings(GetParam());
   for (int c = 0; c < 3; ++c) {
     ASSERT_GT(st.power_emitted[c], 0.0);
     const double imbalance = (st.power_emitted[c] - st.power_absorbed[c] - st.power_escaped[c]) / st.power_emitted[c];
@@ -244,7 +273,7 @@ TEST_P(Conformance, TranslatedRotatedAndScaledScenesGiveTheSamePatchMeans) {
       for (size_t p = 0; p < ref.size(); ++p)
         for (int k = 0; k < 3; ++k)
           if (ref[p][k] > 0.0) worst = std::max(worst, std::abs(means[p][k] / ref[p][k] - 1.0));
-      EXPECT_LT(worst, std::max(c.tolerance, find_method(GetParam()).accuracy.patch_mean)) << c.file << ", " << what;
+      EXPECT_LT(worst, std::max(c.tolerance, settings(GetParam()).patch_mean)) << c.file << ", " << what;
       std::printf("%s %s: largest patch-mean difference %.3g\n", c.file, what.c_str(), worst);
     }
   }
@@ -342,11 +371,12 @@ TEST(MethodTable, UnknownMethodAndMisplacedOptionsAreErrors) {
   EXPECT_THROW(find_method("fastest"), InputError);
   // An option of one method given to another names the method that takes it.
   try {
-    MethodOptions(find_method("matrix").options, {{"epsilon", "0.01"}}, "matrix");
+    method_options(find_method("matrix"), {{"epsilon", "0.01"}});
     FAIL() << "no error";
   } catch (const InputError& e) {
+    ASSERT_FALSE(e.options().empty());
+    EXPECT_EQ(e.options().front(), "epsilon");
     EXPECT_NE(std::string(e.what()).find("hierarchical"), std::string::npos) << e.what();
-    EXPECT_NE(std::string(e.what()).find("--epsilon"), std::string::npos) << e.what();
   }
 }
 

@@ -737,7 +737,7 @@ TEST(PixmapSolver, OneAndTwoThreadsAndAResumeGiveIdenticalStates) {
   out.solver = std::shared_ptr<const PixmapSolver>(&part, [](const PixmapSolver*) {});
   out.state = p.state;
   out.display = part.display(p.state, part.ambient(p.state));
-  write_pixmap_state(dir, scene, out);
+  write_pixmap_state(dir, out);
   PixmapState saved = read_pixmap_state(dir);
   expect_same_state(saved, p.state);
   check_resumable(saved, scene, one.layout(), o, saved.source);
@@ -756,7 +756,7 @@ TEST(PixmapSolver, AStateFromOtherOptionsOrAnotherSceneIsRefused) {
   PixmapOptions other = o;
   other.hemicube_res = 128;
   EXPECT_TRUE(contains(message_of<InputError>([&] { check_resumable(st, scene, solver.layout(), other, "S"); }),
-                       "--hemicube-res 64, this run has --hemicube-res 128"));
+                       "hemicube_res 64, this run has hemicube_res 128"));
   Scene edited = scene;
   edited.materials[0].reflectance.x *= 0.5;
   EXPECT_TRUE(contains(message_of<InputError>([&] { check_resumable(st, edited, solver.layout(), o, "S"); }),

@@ -62,6 +62,31 @@ std::string message_of(F f) {
   return {};
 }
 
+// What an error said: its message and the options it names (Error::options).
+struct Thrown {
+  std::string message;
+  std::vector<std::string> options;
+  bool names(const std::string& option) const {
+    return std::find(options.begin(), options.end(), option) != options.end();
+  }
+};
+
+// Runs f, expects it to throw E (a radmesh error), returns what it said (a
+// test failure when it throws nothing or something else).
+template <class E, class F>
+Thrown thrown(F f) {
+  try {
+    f();
+  } catch (const E& e) {
+    return {e.what(), e.options()};
+  } catch (const std::exception& e) {
+    ADD_FAILURE() << "wrong exception type: " << e.what();
+    return {};
+  }
+  ADD_FAILURE() << "no exception";
+  return {};
+}
+
 inline bool contains(const std::string& s, const std::string& part) { return s.find(part) != std::string::npos; }
 
 // Index of the first patch named `name`, or -1.

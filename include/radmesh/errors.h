@@ -4,13 +4,23 @@
 
 #include <stdexcept>
 #include <string>
+#include <utility>
+#include <vector>
 
 namespace radmesh {
 
-// Base of every radmesh error.
+// Base of every radmesh error. A message that names an option names it as
+// its options struct does (`max_edge`, `epsilon`): options() lists those
+// names, so that a front end can show them as it spells them (the radmesh
+// program writes --max-edge, --epsilon).
 class Error : public std::runtime_error {
 public:
-  using std::runtime_error::runtime_error;
+  explicit Error(const std::string& message, std::vector<std::string> options = {})
+      : std::runtime_error(message), options_(std::move(options)) {}
+  const std::vector<std::string>& options() const noexcept { return options_; }
+
+private:
+  std::vector<std::string> options_;
 };
 
 // The input (scene file, probe file, options) is malformed or out of range.

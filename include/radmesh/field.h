@@ -21,6 +21,7 @@ namespace radmesh {
 // What the field pass did (gather only; fit and mean leave it zero).
 struct FieldReport {
   FieldMode mode = FieldMode::gather;  // the mode used (automatic resolved)
+  std::string own_field;               // FieldMode::own: the method's name for its field (Method::own_field)
   std::string why;                     // why automatic did not gather ("" otherwise)
   long long display_vertices = 0;
   DirectCounts direct;             // per (vertex, emitter) pair

@@ -79,24 +79,29 @@ struct HierarchicalOptions {
   // jump free leaves is a few 1e-4 of the largest radiosity.
   TVertexMode tvertex = TVertexMode::free;
   // Baum's a-posteriori criterion, after each solve: split a leaf whose
-  // vertex values differ by more than baum_relative x the largest reflected
+  // vertex values differ by more than baum x the largest reflected
   // radiosity (B - E) and by more than baum_absolute, down to min_area / 4
   // (its children gather over its links: no new links). 0 = off. On by
   // default: the gather field is exact at every vertex, so what is left of
   // its error is mostly the linear interpolation between vertices, and
   // these splits put vertices where the field bends (docs/hierarchical.md, "Baum's
   // criterion").
-  double baum_relative = 0.02;
+  double baum = 0.02;
   double baum_absolute = 0.0;
   // volume by default: on the Cornell box at equal time it is as accurate
   // as off, and on scenes of thousands of input triangles it is many times
   // faster (docs/clusters.md).
   ClusterMode clusters = ClusterMode::volume;
-  // Copy the links into the solution at the end (links, cluster_links).
-  // The radmesh program asks for them only with export_links: on a sphere
-  // room of 81,927 faces the copy of 5.8 M links took about 4 s of 97 (perf).
-  bool keep_links = true;
+  // Copy the links into the solution at the end (links, cluster_links;
+  // the radmesh program writes them to links.vtu). Off by default: on a
+  // sphere room of 81,927 faces the copy of 5.8 M links takes about 4% of
+  // the run.
+  bool export_links = false;
 };
+
+// The options a user sets, with their ranges (the radmesh program's flags,
+// the checks of HierarchicalSolver and radmesh::solve).
+const OptionTable<HierarchicalOptions>& hierarchical_option_table();
 
 struct HierarchicalStats {
   int rounds = 0;                 // solves done (the first one included)
@@ -155,7 +160,7 @@ struct HierarchicalSolution {
   ElementTree tree;
   std::vector<Rgb> node_radiosity;  // per tree node (inner nodes: area-weighted mean of children)
   std::vector<int> node_links;      // per tree node: links it gathers over
-  // Per receiver node, filled at the end (not in on_round) with keep_links.
+  // Per receiver node, filled at the end (not in on_round) with export_links.
   std::vector<std::vector<HierarchicalLink>> links;
   std::vector<HierarchicalClusterLink> cluster_links;  // the same; links = these + `links`
   Mesh mesh;                        // conforming mesh: leaves, then zero-area fans

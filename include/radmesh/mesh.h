@@ -3,6 +3,7 @@
 
 #include "radmesh/discontinuity.h"
 #include "radmesh/geometry.h"
+#include "radmesh/options.h"
 #include "radmesh/scene.h"
 
 #include <algorithm>
@@ -102,6 +103,11 @@ Mesh mesh_scene(const Scene& scene, const MeshingOptions& options, MeshReport* r
 // triangulation with no point added (holes and concave outlines respected).
 // Shared edges are not made conforming. Used for visibility.
 Mesh triangulate_patches(const Scene& scene);
+
+// The options a user sets (max_edge, min_angle, discontinuity,
+// max_shadow_lines: shadow.max_lines_per_receiver), with their ranges: the
+// radmesh program's flags and the checks of resolve_meshing_options.
+const OptionTable<MeshingOptions>& meshing_option_table();
 
 // Resolves MeshingOptions::max_edge = 0 to its scene-relative default and
 // checks the options; throws InputError when out of range.

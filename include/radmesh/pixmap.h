@@ -1,4 +1,4 @@
-// Pixmap radiosity (Egashira, Sato, Honda & Mima; ../shared/SEEDS.md part 3):
+// Pixmap radiosity (Egashira, Sato, Honda & Mima):
 // every planar group of patches gets a texel grid in its plane; texels are
 // the elements, square blocks of texels the shooters. Progressive refinement
 // (Cohen, Chen, Wallace & Greenberg 1988) shoots from the block with the most
@@ -12,6 +12,7 @@
 
 #include "radmesh/geometry.h"
 #include "radmesh/mesh.h"
+#include "radmesh/method.h"
 #include "radmesh/progress.h"
 #include "radmesh/scene.h"
 #include "radmesh/solution.h"
@@ -37,7 +38,14 @@ struct PixmapOptions {
   // power, or after `shots` shots in all (0: no limit), whichever is first.
   double unshot = 1e-4;
   long long shots = 0;
+  // The method's result as it stands every this many shots, counted over
+  // resumes (SolveCallbacks::on_round; 0: none).
+  long long snapshot_every = 0;
 };
+
+// The options a user sets, with their ranges (the radmesh program's flags,
+// the checks of PixmapSolver and radmesh::solve).
+const OptionTable<PixmapOptions>& pixmap_option_table();
 
 // One texel grid: x(s, t) = origin + s texel_u u + t texel_v v, for texel
 // coordinates s in [0, width], t in [0, height]; texel (i, j) has index
@@ -118,8 +126,9 @@ MeshingOptions pixmap_meshing_options(const Scene& scene);
 // range and NumericalError when the texels would not fit in `memory_bytes`.
 PixmapLayout make_pixmap_layout(const Scene& scene, const PixmapOptions& options, double memory_bytes);
 
-// The saved state of a run: enough to resume it bit for bit.
-struct PixmapState {
+// The saved state of a run: enough to resume it bit for bit
+// (MethodState::source: where it was read from, for messages; not saved).
+struct PixmapState : MethodState {
   long long shots = 0;
   // Per pixmap, 3 floats per texel (RGB): radiosity without the ambient
   // term, and the unshot radiosity. Texels that are not owners hold 0.
@@ -131,7 +140,6 @@ struct PixmapState {
   long long max_texels = 0;
   int hemicube_res = 0, block = 0;
   std::vector<std::array<int, 2>> sizes;  // per pixmap: width, height
-  std::string source;  // where it was read from, for messages (not saved)
 };
 
 // A digest of the geometry and materials of a scene (hex): equal for equal scenes.
@@ -167,7 +175,7 @@ struct PixmapCallbacks {
 
 class PixmapSolver {
 public:
-  // `scene` must outlive the solver. Builds the layout and display mesh on
+  // Keeps a copy of `scene`. Builds the layout and display mesh on
   // the patches cut along their contact lines (pixmap_meshing_options), and
   // the polygons the hemicube renders (the patches' coarsest triangulation).
   PixmapSolver(const Scene& scene, const PixmapOptions& options, const SolveOptions& solve);
@@ -175,6 +183,7 @@ public:
   PixmapSolver(const PixmapSolver&) = delete;
   PixmapSolver& operator=(const PixmapSolver&) = delete;
 
+  const Scene& scene() const;  // the solver's copy
   const PixmapLayout& layout() const;
   // Emitted power: E x area summed over the texels (the patches' E x area,
   // less the parts inside closed objects).
@@ -218,16 +227,6 @@ public:
 private:
   struct Impl;
   std::unique_ptr<Impl> impl_;
-};
-
-// What a pixmap run leaves for the files (io/pixmap_io.h): the grids, the
-// state to save, the texel values shown (with the ambient term) and the
-// display vertices' lightmap coordinates.
-struct PixmapOutput {
-  std::shared_ptr<const PixmapSolver> solver;
-  PixmapState state;
-  Rgb ambient{0.0};
-  std::vector<std::vector<float>> display;  // per pixmap, RGB per texel
 };
 
 }  // namespace radmesh

@@ -2,6 +2,7 @@
 #pragma once
 
 #include "radmesh/mesh.h"
+#include "radmesh/options.h"
 #include "radmesh/progress.h"
 #include "radmesh/scene.h"
 #include "radmesh/form_factor.h"
@@ -20,9 +21,10 @@ enum class NodalMethod { mean, linear_fit };
 // fit or mean (from the element values, compute_nodal); automatic: gather
 // where its cost, (display vertices) x (patches), is within
 // kGatherBudget, else fit, saying so (resolve_field_mode).
-// texels: the pixmap method's own field (bilinear over texel centres), what
-// automatic keeps for a method with Method::texel_field; not a --field value.
-enum class FieldMode { automatic, gather, fit, mean, texels };
+// own: the method's own field (Method::own_field: the pixmap method's
+// bilinear interpolation of texel centres), what automatic keeps for a
+// method that has one; not a value to ask for.
+enum class FieldMode { automatic, gather, fit, mean, own };
 // "auto", "gather", "fit", "mean"; InputError naming the value otherwise.
 FieldMode parse_field_mode(const std::string& text);
 std::string to_string(FieldMode mode);
@@ -48,7 +50,7 @@ struct SolveOptions {
   // (matrix method) or the whole process while it solves (hierarchical
   // method: its resident memory, and its links, leaf terms and clusters as
   // they are made).
-  double max_memory_gb = 0.0;
+  double max_memory = 0.0;
   // Vertex values are averaged only over triangles of one material whose
   // normals differ by less than this angle (degrees).
   double crease_angle = 20.0;
@@ -60,10 +62,19 @@ struct SolveOptions {
   FieldMode field = FieldMode::automatic;
 };
 
-// Checks option ranges; throws InputError naming the option and the value.
+// The options a user sets (tolerance, threads, rays, max_memory, field),
+// with their ranges: the radmesh program's flags and the library's checks.
+const OptionTable<SolveOptions>& solve_option_table();
+
+// Checks option ranges (solve_option_table and the rest); throws InputError
+// naming the option and the value.
 void check_solve_options(const SolveOptions& options);
 
-// The memory limit in bytes: max_memory_gb, or half the physical memory.
+// The matrix method has no options of its own (radmesh::solve(scene,
+// MatrixOptions{})).
+struct MatrixOptions {};
+
+// The memory limit in bytes: max_memory (GiB), or half the physical memory.
 double memory_limit_bytes(const SolveOptions& options);
 
 // The calling process's resident memory now, bytes (Linux: /proc/self/statm;

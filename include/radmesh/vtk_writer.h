@@ -6,6 +6,7 @@
 #include "radmesh/mesh.h"
 #include "radmesh/scene.h"
 #include "radmesh/method.h"
+#include "radmesh/run.h"
 #include "radmesh/solution.h"
 
 #include <array>
@@ -27,6 +28,9 @@ void write_vtu(const std::string& path, const Scene& scene, const Mesh& mesh,
                const TriangleQuality& quality, const Solution& solution,
                const std::vector<std::pair<std::string, std::vector<int>>>& int_cell_fields = {});
 
+// The result of radmesh::solve, as the radmesh program writes it.
+void write_vtu(const std::string& path, const Result& result);
+
 // A ParaView collection (.pvd) of `files` (names relative to the .pvd), one
 // time step each (0, 1, ...), so ParaView steps through them. Atomic; throws IoError.
 void write_pvd(const std::string& path, const std::vector<std::string>& files);
@@ -39,7 +43,7 @@ void write_pvd(const std::string& path, const std::vector<std::string>& files);
 void write_discontinuities_vtu(const std::string& path, const std::vector<DiscontinuitySegment>& segments);
 
 // Line segments with per-segment integer and real fields (cell data, see
-// LineSet in radiosity/method.h), as VTK_LINE cells: links of hierarchical
+// LineSet in radmesh/method.h), as VTK_LINE cells: links of hierarchical
 // radiosity. Every field must have one value per segment; real values must be
 // finite. Atomic; throws IoError.
 void write_lines_vtu(const std::string& path, const LineSet& lines);

@@ -127,7 +127,7 @@ FieldMode parse_field_mode(const std::string& text) {
   if (text == "gather") return FieldMode::gather;
   if (text == "fit") return FieldMode::fit;
   if (text == "mean") return FieldMode::mean;
-  throw InputError("--field " + text + ": expected one of auto, gather, fit, mean");
+  throw InputError("field " + text + ": expected one of auto, gather, fit, mean", {"field"});
 }
 
 std::string to_string(FieldMode mode) {
@@ -136,7 +136,7 @@ std::string to_string(FieldMode mode) {
     case FieldMode::gather: return "gather";
     case FieldMode::fit: return "fit";
     case FieldMode::mean: return "mean";
-    case FieldMode::texels: return "texels";
+    case FieldMode::own: return "own";
   }
   return "?";
 }

@@ -31,4 +31,25 @@ bool FeatureEdges::contains(int a, int b) const {
   return std::binary_search(keys_.begin(), keys_.end(), undirected_edge_key(a, b));
 }
 
+const OptionTable<MeshingOptions>& meshing_option_table() {
+  static const OptionTable<MeshingOptions> table = [] {
+    OptionTable<MeshingOptions> t("meshing");
+    t.real("max_edge", &MeshingOptions::max_edge, "scene units",
+           "longest mesh edge (0: the method's choice, scene diagonal / 12 for mesh and quality)", 0.0, 1e300);
+    t.real("min_angle", &MeshingOptions::min_angle, "degrees",
+           "smallest triangle angle wanted (CGAL's mesher may not terminate above about 30)", 0.0, 30.0);
+    t.choice("discontinuity", &MeshingOptions::discontinuity,
+             "discontinuity lines built into the initial mesh: off, contacts (where patches meet) or full (contacts "
+             "and the D1/D2 shadow boundaries of every emitter)",
+             {{"off", DiscontinuityMode::off}, {"contacts", DiscontinuityMode::contacts},
+              {"full", DiscontinuityMode::full}});
+    t.add({"max_shadow_lines", OptionSpec::Kind::integer, "",
+           "with discontinuity full: shadow-line segments kept per receiving patch", 0.0, 0.0, 1e6, {}},
+          [](const MeshingOptions& o) { return static_cast<double>(o.shadow.max_lines_per_receiver); },
+          [](MeshingOptions& o, double v) { o.shadow.max_lines_per_receiver = static_cast<int>(v); });
+    return t;
+  }();
+  return table;
+}
+
 }  // namespace radmesh

@@ -1102,11 +1102,7 @@ private:
 }  // namespace
 
 MeshingOptions resolve_meshing_options(const Scene& scene, MeshingOptions options) {
-  if (!std::isfinite(options.max_edge) || options.max_edge < 0.0)
-    throw InputError("--max-edge " + std::to_string(options.max_edge) + " must be >= 0 (0 = auto)");
-  if (!std::isfinite(options.min_angle) || options.min_angle < 0.0 || options.min_angle > 30.0)
-    throw InputError("--min-angle " + std::to_string(options.min_angle) +
-                     " must be in [0, 30] degrees (CGAL's mesher may not terminate above ~30)");
+  meshing_option_table().check(options);
   if (options.max_edge == 0.0) options.max_edge = scene.diagonal() / 12.0;
   // Equilateral triangles of side max_edge: the fewest the mesher can make.
   double area = 0.0;
@@ -1121,11 +1117,11 @@ MeshingOptions resolve_meshing_options(const Scene& scene, MeshingOptions option
           : "10^" + format_number(std::floor(std::log10(area) - 2.0 * std::log10(options.max_edge) -
                                              std::log10(std::sqrt(3.0) / 4.0)));
   if (estimate > options.max_elements)
-    throw InputError("--max-edge " + format_number(options.max_edge) + " would make at least " + count +
-                     " elements (total area " + format_number(area) +
-                     "), more than the " + format_number(options.max_elements) +
-                     " allowed; use --max-edge " +
-                     format_number(std::sqrt(area / (options.max_elements * std::sqrt(3.0) / 4.0))) + " or more");
+    throw InputError("max_edge " + format_number(options.max_edge) + " would make at least " + count +
+                         " elements (total area " + format_number(area) + "), more than the " +
+                         format_number(options.max_elements) + " allowed; use max_edge " +
+                         format_number(std::sqrt(area / (options.max_elements * std::sqrt(3.0) / 4.0))) + " or more",
+                     {"max_edge"});
   return options;
 }
 

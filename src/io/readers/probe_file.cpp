@@ -2,7 +2,7 @@
 
 #include "io/writers/atomic_file.h"
 #include "io/readers/scene_sources.h"
-#include "radmesh/summary.h"
+#include "io/writers/json_file.h"
 #include "radmesh/errors.h"
 
 #include <cmath>

@@ -5,7 +5,7 @@
 
 #include "io/writers/atomic_file.h"
 #include "io/readers/json_parse.h"
-#include "radmesh/summary.h"
+#include "io/writers/json_file.h"
 #include "io/writers/vtk_file.h"
 #include "radmesh/errors.h"
 
@@ -62,7 +62,8 @@ nlohmann::json vec(const Vec3& v) { return {v.x, v.y, v.z}; }
 
 }  // namespace
 
-std::vector<std::string> write_pixmap_state(const std::string& out_dir, const Scene& scene, const PixmapOutput& out) {
+std::vector<std::string> write_pixmap_state(const std::string& out_dir, const PixmapOutput& out) {
+  const Scene& scene = out.solver->scene();
   const PixmapLayout& L = out.solver->layout();
   const PixmapState& st = out.state;
   const fs::path dir = fs::path(out_dir) / "pixmaps";

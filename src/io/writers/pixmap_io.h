@@ -7,10 +7,21 @@
 #include "radmesh/scene.h"
 #include "radmesh/pixmap.h"
 
+#include <memory>
 #include <string>
 #include <vector>
 
 namespace radmesh {
+
+// What a pixmap run leaves for the files: the solver (its grids and its
+// copy of the scene), the state to save, and the texel values shown (with
+// the ambient term).
+struct PixmapOutput {
+  std::shared_ptr<const PixmapSolver> solver;
+  PixmapState state;
+  Rgb ambient{0.0};
+  std::vector<std::vector<float>> display;  // per pixmap, RGB per texel
+};
 
 // OUT/pixmaps/pixmap_K.vti (float RGB cell arrays "radiosity", "unshot",
 // and "coverage", the covered fraction, on the texel grid placed in its
@@ -18,7 +29,7 @@ namespace radmesh {
 // fingerprint, and which file is which patches). Files of an earlier run
 // there that this one does not write again are removed. Returns the paths
 // written; IoError naming the file when one cannot be written.
-std::vector<std::string> write_pixmap_state(const std::string& out_dir, const Scene& scene, const PixmapOutput& out);
+std::vector<std::string> write_pixmap_state(const std::string& out_dir, const PixmapOutput& out);
 
 // Reads DIR/pixmaps/state.json and its images. IoError when a file cannot
 // be read, InputError naming the file and the key or array when one is

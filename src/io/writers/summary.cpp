@@ -1,6 +1,7 @@
 #include "radmesh/summary.h"
 
 #include "io/writers/atomic_file.h"
+#include "io/writers/json_file.h"
 #include "radmesh/version.h"
 
 #include <algorithm>
@@ -154,14 +155,13 @@ nlohmann::json make_summary(const RunInfo& info, const Scene& scene, const Mesh&
                      {"extrapolations", st.extrapolations},
                      {"convex_enclosure", st.convex_enclosure}};
     // Numbers as numbers, flags as booleans, choices as written.
-    for (const auto& [name, text] : info.method_options.items()) {
-      const OptionSpec::Kind kind = info.method_options.spec(name).kind;
-      if (kind == OptionSpec::Kind::choice)
-        doc["solver"][name] = text;
-      else if (kind == OptionSpec::Kind::flag)
-        doc["solver"][name] = info.method_options.number(name) != 0.0;
+    for (const OptionValue& v : info.method_options) {
+      if (v.kind == OptionSpec::Kind::choice)
+        doc["solver"][v.name] = v.text;
+      else if (v.kind == OptionSpec::Kind::flag)
+        doc["solver"][v.name] = v.number != 0.0;
       else
-        doc["solver"][name] = info.method_options.number(name);
+        doc["solver"][v.name] = v.number;
     }
     json units = json::object();
     for (const Counter& c : result->counters) {
@@ -181,7 +181,7 @@ nlohmann::json make_summary(const RunInfo& info, const Scene& scene, const Mesh&
                      {"relative_imbalance", rgb(rel)}};
     doc["skips"] = st.skips;
     const FieldReport& f = result->field;
-    doc["field"] = {{"mode", to_string(f.mode)}};
+    doc["field"] = {{"mode", f.mode == FieldMode::own ? f.own_field : to_string(f.mode)}};
     if (!f.why.empty()) doc["field"]["why"] = f.why;
     if (f.mode == FieldMode::gather) {
       doc["field"]["display_vertices"] = f.display_vertices;
@@ -251,6 +251,24 @@ void write_quality_csv(const std::string& path, const std::vector<std::string>& 
           << r.aspect_p95 << ',' << r.aspect_max << ',' << r.contact_segments << ',' << r.d1_segments << ','
           << r.d2_segments << ',' << r.zero_area << '\n';
   });
+}
+
+void write_summary(const std::string& path, const RunInfo& info, const Scene& scene, const Mesh& mesh,
+                   const TriangleQuality& quality, const MethodResult* result) {
+  write_json(path, make_summary(info, scene, mesh, quality, result));
+}
+
+void write_summary(const std::string& path, const Result& result) {
+  RunInfo info;
+  info.command = "run";
+  info.scene_path = result.scene->source;
+  info.meshing = result.meshing;
+  info.solve = result.solve_options;
+  info.mesh_report = result.mesh_report;
+  info.seconds = result.seconds;
+  info.method = result.method;
+  info.method_options = result.options;
+  write_summary(path, info, *result.scene, result.mesh, compute_quality(result.mesh), &result);
 }
 
 void write_json(const std::string& path, const nlohmann::json& doc) {

@@ -166,6 +166,10 @@ void add_int_cell_fields(const std::string& path, vtkCellData* data,
 
 }  // namespace
 
+void write_vtu(const std::string& path, const Result& result) {
+  write_vtu(path, *result.scene, result.mesh, compute_quality(result.mesh), result.solution, result.cell_fields);
+}
+
 void write_pvd(const std::string& path, const std::vector<std::string>& files) {
   write_file_atomically(path, [&](std::ostream& out) {
     out << "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n  <Collection>\n";

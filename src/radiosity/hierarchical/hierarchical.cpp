@@ -105,8 +105,9 @@ public:
       throw NumericalError(scene_.source + ": " + std::to_string(tree.root_count()) + " initial elements make " +
                            format_number(facing_pairs) + " pairs to link, " + format_number(facing_pairs * kLinkBytes / kGiB) +
                            " GiB at least" + held_text() + ", more than the " + format_number(limit_ / kGiB) +
-                           " GiB allowed; use a larger --max-edge (hierarchical radiosity refines by itself) or "
-                           "raise --max-memory");
+                           " GiB allowed; use a larger max_edge (hierarchical radiosity refines by itself) or "
+                           "raise max_memory",
+                           {"max_edge", "max_memory"});
     // In blocks of receivers, so that a generation's scratch stays small.
     std::vector<std::pair<int, int>> pairs;
     for (int p = 0; p < tree.root_count(); ++p) {
@@ -168,7 +169,7 @@ public:
     out_.stats.links = count_links();
     out_.links.clear();
     out_.cluster_links.clear();
-    if (!hopt_.keep_links) return;
+    if (!hopt_.export_links) return;
     out_.links.assign(links_.size(), {});
     auto cluster_link = [&](int p, const Link& l) {
       HierarchicalClusterLink c;
@@ -297,7 +298,7 @@ private:
   }
 
   // Baum's a-posteriori criterion: a leaf whose vertex values (as last
-  // published) differ by more than baum_relative x the largest reflected radiosity
+  // published) differ by more than baum x the largest reflected radiosity
   // and more than baum_absolute is split, down to a quarter of the minimum
   // area (one level below the links' floor). Its children gather over its
   // links, so nothing needs relinking: the split costs leaves, not links.
@@ -319,7 +320,7 @@ private:
   // once (to the floor), since the spread halves with each level where the
   // field is linear over the leaf.
   int split_by_variation(bool round_made, bool deep = false) {
-    if (!(hopt_.baum_relative > 0.0)) return 0;
+    if (!(hopt_.baum > 0.0)) return 0;
     const HierarchicalSolution& o = out_;
     const double top = scale_;  // the largest reflected radiosity
     std::vector<std::pair<double, int>> todo;  // (spread, leaf)
@@ -332,13 +333,13 @@ private:
         hi = glm::max(hi, o.solution.nodal.radiosity[static_cast<size_t>(c)]);
       }
       const double spread = max3(hi - lo);
-      if (spread > hopt_.baum_relative * top && spread > hopt_.baum_absolute) todo.push_back({spread, n});
+      if (spread > hopt_.baum * top && spread > hopt_.baum_absolute) todo.push_back({spread, n});
     }
     const long long added = 3LL * out_.stats.baum_splits;
     const long long budget = static_cast<long long>(kBaumShare * static_cast<double>(o.stats.leaves - added)) - added;
     const long long wanted = std::min(3LL * static_cast<long long>(todo.size()), budget);
     if (!round_made && static_cast<double>(wanted) < kBaumRound * static_cast<double>(o.stats.leaves)) return 0;
-    const double threshold = std::max(hopt_.baum_relative * top, hopt_.baum_absolute);
+    const double threshold = std::max(hopt_.baum * top, hopt_.baum_absolute);
     // The largest spread is split first (ties: the lower node), one level at
     // a time; in depth, its children come back with half its spread while
     // that is over the threshold, so a bound budget goes level by level to
@@ -495,7 +496,8 @@ private:
       throw NumericalError(scene_.source + ": hierarchical refinement reached " + std::to_string(links) +
                            " links; with them the process needs " + format_number(bytes / kGiB) + " GiB (its links, leaf terms and clusters " +
                            format_number(own / kGiB) + "), more than the " + format_number(limit_ / kGiB) +
-                           " GiB allowed; raise --epsilon or --min-area, or raise --max-memory");
+                           " GiB allowed; raise epsilon or min_area, or raise max_memory",
+                           {"epsilon", "min_area", "max_memory"});
   }
   // Between blocks of link pairs and of leaf terms (in_blocks), the
   // resident memory alone (one read of /proc), so that a generation of
@@ -1667,8 +1669,9 @@ private:
       throw NumericalError(scene_.source + ": the " + std::to_string(roots - 1) + " clusters above " +
                            std::to_string(roots) + " initial elements need " + format_number(need / kGiB) +
                            " GiB at least" + held_text() + ", more than the " + format_number(limit_ / kGiB) +
-                           " GiB allowed; use a larger --max-edge (hierarchical radiosity refines by itself) or "
-                           "raise --max-memory");
+                           " GiB allowed; use a larger max_edge (hierarchical radiosity refines by itself) or "
+                           "raise max_memory",
+                           {"max_edge", "max_memory"});
     std::vector<double> weight(static_cast<size_t>(roots));
     for (int r = 0; r < roots; ++r) weight[static_cast<size_t>(r)] = element_oracle_rho(static_cast<size_t>(r));
     const std::vector<Triangle> root_triangles(tri_.begin(), tri_.begin() + roots);
@@ -2384,19 +2387,16 @@ namespace {
 
 void check_hierarchical_options(const Scene& scene, const SolveOptions& options, const HierarchicalOptions& hopt) {
   check_solve_options(options);
-  if (!(hopt.epsilon > 0.0) || !(hopt.area_weight >= 0.0 && hopt.area_weight <= 2.0) || !(hopt.min_area >= 0.0) ||
-      hopt.max_rounds < 0 || !(hopt.baum_relative >= 0.0) || !(hopt.baum_absolute >= 0.0) ||
-      !(hopt.marginal_refinement >= 1.0))
-    throw InputError("hierarchical options out of range: epsilon " + format_number(hopt.epsilon) + ", area weight " +
-                     format_number(hopt.area_weight) + " (0 to 2), min area " +
-                     format_number(hopt.min_area) + ", rounds " + std::to_string(hopt.max_rounds) + ", baum " +
-                     format_number(hopt.baum_relative) + " / " + format_number(hopt.baum_absolute) +
-                     ", marginal refinement " + format_number(hopt.marginal_refinement));
+  hierarchical_option_table().check(hopt);
+  if (hopt.max_rounds < 0 || !(hopt.baum_absolute >= 0.0))
+    throw InputError("hierarchical options out of range: max_rounds " + std::to_string(hopt.max_rounds) +
+                         ", baum_absolute " + format_number(hopt.baum_absolute) + " (both must be >= 0)",
+                     {"max_rounds", "baum_absolute"});
   const double diag2 = scene.diagonal() * scene.diagonal();
   if (hopt.min_area > 0.0 && hopt.min_area < 1e-8 * diag2)
-    throw InputError("minimum element area (--min-area) " + format_number(hopt.min_area) +
-                     " is below 1e-8 of the scene diagonal squared (" + format_number(diag2) +
-                     "): refinement to it would not end in time or memory");
+    throw InputError("min_area " + format_number(hopt.min_area) + " is below 1e-8 of the scene diagonal squared (" +
+                         format_number(diag2) + "): refinement to it would not end in time or memory",
+                     {"min_area"});
 }
 
 }  // namespace

@@ -4,6 +4,7 @@
 
 #include "radmesh/hierarchical.h"
 #include "radmesh/method.h"
+#include "radmesh/run.h"
 
 #include <algorithm>
 
@@ -52,14 +53,6 @@ LineSet link_line_set(const Scene& scene, const HierarchicalSolution& h) {
   return out;
 }
 
-// The cluster modes, the default first.
-std::vector<std::string> cluster_choices(ClusterMode first) {
-  std::vector<std::string> out = {to_string(first)};
-  for (ClusterMode m : {ClusterMode::volume, ClusterMode::shape, ClusterMode::off})
-    if (m != first) out.emplace_back(to_string(m));
-  return out;
-}
-
 // The per-cell level, zero_area flag and link count of a hierarchical
 // solution's conforming mesh.
 std::vector<std::pair<std::string, std::vector<int>>> hierarchical_fields(const HierarchicalSolution& h) {
@@ -76,48 +69,105 @@ std::vector<double> as_doubles(const auto& v) { return std::vector<double>(v.beg
 
 }  // namespace
 
+const OptionTable<HierarchicalOptions>& hierarchical_option_table() {
+  static const OptionTable<HierarchicalOptions> table = [] {
+    OptionTable<HierarchicalOptions> t("method hierarchical");
+    using H = HierarchicalOptions;
+    t.real("epsilon", &H::epsilon, "", "link refinement threshold, relative to the largest reflected radiosity", 1e-9,
+           1.0);
+    t.real("area_weight", &H::area_weight, "",
+           "weigh the oracle's error for a receiver smaller than the mean initial triangle by (its area / that "
+           "area)^this: 0 = off, 1 = the transported power's error (fewer links on small elements)",
+           0.0, 2.0);
+    t.choice("tvertex", &H::tvertex,
+             "vertex values on a neighbour's unsplit edge: free (from the finer side), anchor (the edge's "
+             "interpolant, no shading jump) or split (split neighbours until no T-vertex is left, no zero-area "
+             "triangles)",
+             {{"free", TVertexMode::free}, {"anchor", TVertexMode::anchor}, {"split", TVertexMode::split}});
+    t.real("min_area", &H::min_area, "scene units^2",
+           "links are not refined below this area, an input triangle smaller than it weighs the oracle's error by "
+           "its share of it, and Baum's criterion splits leaves down to a quarter of it "
+           "(0 = (scene diagonal / 150)^2 / 2)",
+           0.0, 1e300);
+    t.real("baum", &H::baum, "",
+           "also split a leaf whose vertex values differ by more than this fraction of the largest reflected "
+           "radiosity (Baum's criterion; 0 = off)",
+           0.0, 1.0);
+    t.real("marginal_refinement", &H::marginal_refinement, "",
+           "after the first refinement round, make a round only where a link the oracle would refine is over its "
+           "threshold by more than this factor (those left are counted in the summary's skips; 1 = refine every "
+           "link over the threshold)",
+           1.0, 1e6);
+    t.choice("clusters", &H::clusters,
+             "what sits above the initial mesh's triangles: volume (a box hierarchy of clusters with oriented "
+             "normal groups, links grow about linearly), shape (Tanaka and Noma's hierarchical shape "
+             "approximation: octree vertex clustering, the same groups and linking) or off (every pair of initial "
+             "triangles is linked)",
+             {{"volume", ClusterMode::volume}, {"shape", ClusterMode::shape}, {"off", ClusterMode::off}});
+    t.flag("export_links", &H::export_links,
+           "also write links.vtu, every link as a line from receiver to source (fields receiver_level, "
+           "source_level, receiver_patch, source_patch, form_factor, visible, transport; level and patch -1 at a "
+           "cluster end)");
+    return t;
+  }();
+  return table;
+}
+
+namespace {
+
+constexpr const char* kName = "hierarchical";
+
+}  // namespace
+
 Method make_hierarchical_method() {
-  using Kind = OptionSpec::Kind;
-  Method m;
-  m.name = "hierarchical";
-  m.help = "Hanrahan's hierarchical radiosity on an element hierarchy closed by zero-area triangles (also "
-           "writes radiosity.pvd, one file per refinement round)";
-  const HierarchicalOptions d;
-  m.options = {
-      {"epsilon", Kind::real, "", "link refinement threshold, relative to the largest reflected radiosity",
-       d.epsilon, 1e-9, 1.0, {}},
-      {"area_weight", Kind::real, "",
-       "weigh the oracle's error for a receiver smaller than the mean initial triangle by (its area / that "
-       "area)^this: 0 = off, 1 = the transported power's error (fewer links on small elements)",
-       d.area_weight, 0.0, 2.0, {}},
-      {"tvertex", Kind::choice, "",
-       "vertex values on a neighbour's unsplit edge: free (from the finer side), anchor (the edge's interpolant, "
-       "no shading jump) or split (split neighbours until no T-vertex is left, no zero-area triangles)",
-       0.0, 0.0, 0.0, {to_string(d.tvertex), "anchor", "split"}},
-      {"min_area", Kind::real, "scene units^2",
-       "links are not refined below this area, an input triangle smaller than it weighs the oracle's error by "
-       "its share of it, and Baum's criterion splits leaves down to a quarter of it "
-       "(0 = (scene diagonal / 150)^2 / 2)", d.min_area, 0.0, 1e300, {}},
-      {"baum", Kind::real, "",
-       "also split a leaf whose vertex values differ by more than this fraction of the largest reflected "
-       "radiosity (Baum's criterion; 0 = off)",
-       d.baum_relative, 0.0, 1.0, {}},
-      {"marginal_refinement", Kind::real, "",
-       "after the first refinement round, make a round only where a link the oracle would refine is over its "
-       "threshold by more than this factor (those left are counted in the summary's skips; 1 = refine every link "
-       "over the threshold)",
-       d.marginal_refinement, 1.0, 1e6, {}},
-      {"clusters", Kind::choice, "",
-       "what sits above the initial mesh's triangles: volume (a box hierarchy of clusters with oriented normal "
-       "groups, links grow about linearly), shape (Tanaka and Noma's hierarchical shape approximation: octree "
-       "vertex clustering, the same groups and linking) or off (every pair of initial triangles is linked)",
-       0.0, 0.0, 0.0, cluster_choices(d.clusters)},
-      {"export_links", Kind::flag, "",
-       "also write links.vtu, every link as a line from receiver to source (fields receiver_level, source_level, "
-       "receiver_patch, source_patch, form_factor, visible, transport; level and patch -1 at a cluster end)",
-       0.0, 0.0, 1.0, {}},
-  };
-  m.quick = {{"epsilon", "0.02"}};
+  Method m = make_method<HierarchicalOptions>(
+      kName,
+      "Hanrahan's hierarchical radiosity on an element hierarchy closed by zero-area triangles (also writes "
+      "radiosity.pvd, one file per refinement round)",
+      hierarchical_option_table(),
+      [](const Scene& scene, const Mesh& mesh, const SolveOptions& so, const HierarchicalOptions& ho,
+         const SolveCallbacks& cb) {
+        std::function<void(const HierarchicalSolution&, int)> on_round;
+        if (cb.on_round)
+          on_round = [&](const HierarchicalSolution& h, int round) {
+            MethodResult snapshot;
+            snapshot.mesh = h.mesh;
+            snapshot.solution = h.solution;
+            snapshot.cell_fields = hierarchical_fields(h);
+            cb.on_round(snapshot, round);
+          };
+        HierarchicalSolution h = solve_hierarchical(scene, mesh, so, ho, on_round, cb.progress);
+        MethodResult r;
+        r.cell_fields = hierarchical_fields(h);
+        if (ho.export_links) r.line_sets.emplace_back("links", link_line_set(scene, h));
+        const HierarchicalStats& hs = h.stats;
+        r.counters = {count("rounds", hs.rounds),
+                      count("links", static_cast<double>(hs.links)),
+                      count_series("links_per_round", as_doubles(hs.links_per_round)),
+                      count_series("leaves_per_round", as_doubles(hs.leaves_per_round)),
+                      count("leaves", hs.leaves),
+                      count("zero_area_triangles", hs.zero_area_triangles),
+                      count("leaf_terms", static_cast<double>(hs.leaf_terms)),
+                      count("links_examined", static_cast<double>(hs.links_examined)),
+                      count("sweeps", hs.sweeps),
+                      measure("last_change", hs.last_change),
+                      measure("row_sum_min", hs.row_sum_min),
+                      measure("row_sum_max", hs.row_sum_max),
+                      count("conforming_splits", hs.conforming_splits),
+                      measure("max_tvertex_jump", hs.max_tvertex_jump),
+                      measure("min_area", hs.min_area, "scene units^2"),
+                      count("baum_splits", hs.baum_splits),
+                      count("clusters", hs.clusters),
+                      count("cluster_groups", hs.cluster_groups),
+                      count("cluster_links", static_cast<double>(hs.cluster_links))};
+        r.seconds = {{"link", hs.seconds_link}, {"solve", hs.seconds_solve}};
+        r.report = std::to_string(hs.leaves) + " leaves, " + std::to_string(hs.links) + " links, " +
+                   std::to_string(hs.zero_area_triangles) + " zero-area triangles, " + std::to_string(hs.rounds) +
+                   " rounds";
+        r.mesh = std::move(h.mesh);
+        r.solution = std::move(h.solution);
+        return r;
+      });
   m.meshing = [](const Scene& scene) {
     // Hierarchical radiosity refines by itself: coarse roots, and the shadow
     // lines left to refinement (full lines make many roots, and every pair
@@ -127,59 +177,14 @@ Method make_hierarchical_method() {
     mo.discontinuity = DiscontinuityMode::contacts;
     return mo;
   };
-  m.solve = [](const Scene& scene, const Mesh& mesh, const SolveOptions& so, const MethodOptions& o,
-               const SolveCallbacks& cb) {
-    HierarchicalOptions ho;
-    ho.epsilon = o.number("epsilon");
-    ho.area_weight = o.number("area_weight");
-    ho.tvertex = parse_tvertex_mode(o.text("tvertex"));
-    ho.min_area = o.number("min_area");
-    ho.baum_relative = o.number("baum");
-    ho.marginal_refinement = o.number("marginal_refinement");
-    ho.clusters = parse_cluster_mode(o.text("clusters"));
-    ho.keep_links = o.number("export_links") != 0.0;
-    std::function<void(const HierarchicalSolution&, int)> on_round;
-    if (cb.on_round)
-      on_round = [&](const HierarchicalSolution& h, int round) {
-        MethodResult snapshot;
-        snapshot.mesh = h.mesh;
-        snapshot.solution = h.solution;
-        snapshot.cell_fields = hierarchical_fields(h);
-        cb.on_round(snapshot, round);
-      };
-    HierarchicalSolution h = solve_hierarchical(scene, mesh, so, ho, on_round, cb.progress);
-    MethodResult r;
-    r.cell_fields = hierarchical_fields(h);
-    if (o.number("export_links") != 0.0) r.line_sets.emplace_back("links", link_line_set(scene, h));
-    const HierarchicalStats& hs = h.stats;
-    r.counters = {count("rounds", hs.rounds),
-                  count("links", static_cast<double>(hs.links)),
-                  count_series("links_per_round", as_doubles(hs.links_per_round)),
-                  count_series("leaves_per_round", as_doubles(hs.leaves_per_round)),
-                  count("leaves", hs.leaves),
-                  count("zero_area_triangles", hs.zero_area_triangles),
-                  count("leaf_terms", static_cast<double>(hs.leaf_terms)),
-                  count("links_examined", static_cast<double>(hs.links_examined)),
-                  count("sweeps", hs.sweeps),
-                  measure("last_change", hs.last_change),
-                  measure("row_sum_min", hs.row_sum_min),
-                  measure("row_sum_max", hs.row_sum_max),
-                  count("conforming_splits", hs.conforming_splits),
-                  measure("max_tvertex_jump", hs.max_tvertex_jump),
-                  measure("min_area", hs.min_area, "scene units^2"),
-                  count("baum_splits", hs.baum_splits),
-                  count("clusters", hs.clusters),
-                  count("cluster_groups", hs.cluster_groups),
-                  count("cluster_links", static_cast<double>(hs.cluster_links))};
-    r.seconds = {{"link", hs.seconds_link}, {"solve", hs.seconds_solve}};
-    r.report = std::to_string(hs.leaves) + " leaves, " + std::to_string(hs.links) + " links, " +
-               std::to_string(hs.zero_area_triangles) + " zero-area triangles, " + std::to_string(hs.rounds) +
-               " rounds";
-    r.mesh = std::move(h.mesh);
-    r.solution = std::move(h.solution);
-    return r;
-  };
   return m;
+}
+
+Result solve(const Scene& scene, const HierarchicalOptions& options, const SolveOptions& common,
+             const SolveCallbacks& callbacks) {
+  const OptionTable<HierarchicalOptions>& table = hierarchical_option_table();
+  table.check(options);
+  return solve(scene, find_method(kName), MethodOptions(options, table.values(options)), common, callbacks);
 }
 
 }  // namespace radmesh

@@ -8,8 +8,6 @@
 #include <tbb/combinable.h>
 #include <tbb/parallel_for.h>
 
-#include <unistd.h>
-
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -26,26 +24,6 @@ using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point t) {
   return std::chrono::duration<double>(Clock::now() - t).count();
 }
-
-double physical_memory_bytes() {
-  const long pages = sysconf(_SC_PHYS_PAGES);
-  const long page = sysconf(_SC_PAGE_SIZE);
-  return pages > 0 && page > 0 ? static_cast<double>(pages) * static_cast<double>(page) : 8e9;
-}
-
-}  // namespace
-
-double resident_memory_bytes() {
-  std::FILE* f = std::fopen("/proc/self/statm", "r");
-  if (!f) return 0.0;
-  long size = 0, resident = 0;
-  const bool ok = std::fscanf(f, "%ld %ld", &size, &resident) == 2;
-  std::fclose(f);
-  const long page = sysconf(_SC_PAGE_SIZE);
-  return ok && page > 0 ? static_cast<double>(resident) * static_cast<double>(page) : 0.0;
-}
-
-namespace {
 
 struct Counters {
   long long form_factors = 0, zero_pairs = 0, receiver_points = 0;
@@ -374,37 +352,15 @@ void check_matrix_memory(const Scene& scene, long long n, const SolveOptions& op
     m << scene.source << ": the full matrix of " << n << " elements needs "
       << matrix_bytes(n) / (1024.0 * 1024.0 * 1024.0) << " GiB, more than the "
       << limit / (1024.0 * 1024.0 * 1024.0)
-      << " GiB allowed; use a larger --max-edge (the element count falls with its square) "
-         "or raise --max-memory";
-    throw NumericalError(m.str());
+      << " GiB allowed; use a larger max_edge (the element count falls with its square) "
+         "or raise max_memory";
+    throw NumericalError(m.str(), {"max_edge", "max_memory"});
   }
 }
 
 }  // namespace
 
 double matrix_bytes(long long n) { return static_cast<double>(n) * static_cast<double>(n) * 8.0; }
-
-void check_solve_options(const SolveOptions& o) {
-  auto bad = [](const std::string& what, double v, const std::string& range) {
-    std::ostringstream m;
-    m << what << " " << v << " is out of range: " << range;
-    throw InputError(m.str());
-  };
-  if (!(o.tolerance > 0.0 && o.tolerance < 1.0)) bad("--tolerance", o.tolerance, "(0, 1)");
-  if (o.max_iterations < 1) bad("max_iterations", o.max_iterations, ">= 1");
-  if (o.threads < 0) bad("--threads", o.threads, ">= 0 (0 = all cores)");
-  if (o.rays < 1 || o.rays > 4096) bad("--rays", o.rays, "[1, 4096]");
-  if (!(o.quadrature.closeness > 0.0)) bad("closeness", o.quadrature.closeness, "> 0");
-  if (o.quadrature.max_level < 0 || o.quadrature.max_level > kMaxQuadratureLevel)
-    bad("max_level", o.quadrature.max_level, "[0, " + std::to_string(kMaxQuadratureLevel) + "]");
-  if (!(o.max_memory_gb >= 0.0)) bad("--max-memory", o.max_memory_gb, ">= 0 GiB");
-  if (!(o.crease_angle >= 0.0 && o.crease_angle <= 180.0)) bad("crease_angle", o.crease_angle, "[0, 180]");
-}
-
-double memory_limit_bytes(const SolveOptions& options) {
-  return options.max_memory_gb > 0.0 ? options.max_memory_gb * 1024.0 * 1024.0 * 1024.0
-                                     : 0.5 * physical_memory_bytes();
-}
 
 std::vector<double> form_factor_matrix(const Scene& scene, const Mesh& mesh, const SolveOptions& options,
                                        SolveStats& st, const ProgressFn& progress) {

@@ -8,110 +8,10 @@
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
+#include <deque>
 #include <set>
 
 namespace radmesh {
-
-// ---- options ----------------------------------------------------------------
-
-std::string option_flag(const std::string& name) {
-  std::string f = "--" + name;
-  std::replace(f.begin(), f.end(), '_', '-');
-  return f;
-}
-
-std::string OptionSpec::flag() const { return option_flag(name); }
-
-std::string OptionSpec::default_text() const {
-  switch (kind) {
-    case Kind::choice: return choices.empty() ? std::string() : choices.front();
-    case Kind::flag: return default_value != 0.0 ? "true" : "false";
-    case Kind::integer: return std::to_string(static_cast<long long>(default_value));
-    case Kind::real: return format_number(default_value);
-  }
-  return {};
-}
-
-namespace {
-
-// Parses the text of option `s` as its kind wants; InputError naming the
-// flag, the method and the value otherwise.
-double parse_value(const OptionSpec& s, const std::string& text, const std::string& method) {
-  auto bad = [&](const std::string& why) -> double {
-    throw InputError(s.flag() + " " + text + " (method " + method + "): " + why);
-  };
-  switch (s.kind) {
-    case OptionSpec::Kind::flag:
-      if (text == "true" || text == "1" || text.empty()) return 1.0;
-      if (text == "false" || text == "0") return 0.0;
-      return bad("expected true or false");
-    case OptionSpec::Kind::choice: {
-      const auto it = std::find(s.choices.begin(), s.choices.end(), text);
-      if (it == s.choices.end()) {
-        std::string list;
-        for (const std::string& c : s.choices) list += (list.empty() ? "" : ", ") + c;
-        return bad("expected one of " + list);
-      }
-      return static_cast<double>(it - s.choices.begin());
-    }
-    case OptionSpec::Kind::integer:
-    case OptionSpec::Kind::real: {
-      char* end = nullptr;
-      const double v = std::strtod(text.c_str(), &end);
-      if (text.empty() || end == nullptr || *end != '\0') return bad("not a number");
-      if (!std::isfinite(v)) return bad("not a finite number");
-      if (s.kind == OptionSpec::Kind::integer && v != std::floor(v)) return bad("not an integer");
-      if (v < s.min || v > s.max)
-        return bad("out of range [" + format_number(s.min) + ", " + format_number(s.max) + "]" +
-                   (s.unit.empty() ? "" : " " + s.unit));
-      return v;
-    }
-  }
-  return 0.0;
-}
-
-}  // namespace
-
-MethodOptions::MethodOptions(const std::vector<OptionSpec>& specs, const OptionValues& given,
-                             const std::string& method)
-    : specs_(specs) {
-  for (const auto& entry : given) {
-    const std::string& name = entry.first;  // not a binding: the lambda below captures it
-    if (std::none_of(specs.begin(), specs.end(), [&](const OptionSpec& s) { return s.name == name; })) {
-      std::string takers;
-      for (const Method& m : methods())
-        for (const OptionSpec& s : m.options)
-          if (s.name == name) takers += (takers.empty() ? "" : ", ") + m.name;
-      throw InputError(option_flag(name) + " is not an option of method " + method +
-                       (takers.empty() ? std::string(" (no method takes it)")
-                                       : " (it applies to --method " + takers + " only)"));
-    }
-  }
-  for (const OptionSpec& s : specs) {
-    const auto it = given.find(s.name);
-    const std::string text = it != given.end() ? it->second : s.default_text();
-    numbers_[s.name] = parse_value(s, text, method);
-    items_.emplace_back(s.name, s.kind == OptionSpec::Kind::flag ? (numbers_[s.name] != 0.0 ? "true" : "false") : text);
-  }
-}
-
-const OptionSpec& MethodOptions::spec(const std::string& name) const {
-  for (const OptionSpec& s : specs_)
-    if (s.name == name) return s;
-  throw InputError("option '" + name + "' is not declared by this method");
-}
-
-double MethodOptions::number(const std::string& name) const {
-  spec(name);
-  return numbers_.at(name);
-}
-
-const std::string& MethodOptions::text(const std::string& name) const {
-  spec(name);
-  for (const auto& [n, t] : items_)
-    if (n == name) return t;
-  throw InputError("option '" + name + "' has no value");
-}
 
 Counter count(std::string name, double value, std::string unit) {
   return {std::move(name), {value}, std::move(unit), false, true};
@@ -131,27 +31,48 @@ const Counter* MethodResult::counter(const std::string& name) const {
 
 // ---- the table --------------------------------------------------------------
 
-// Each method's declaration, in its own file.
-Method make_hierarchical_method();  // hierarchical_method.cpp
-Method make_matrix_method();        // matrix_method.cpp
-Method make_pixmap_method();        // pixmap_method.cpp
+// Each method's declaration, in its own folder.
+Method make_hierarchical_method();  // hierarchical/method.cpp
+Method make_matrix_method();        // matrix/method.cpp
+Method make_pixmap_method();        // pixmap/method.cpp
 
-const std::vector<Method>& methods() {
-  static const std::vector<Method> table = {
+namespace {
+
+std::deque<Method>& table() {
+  // A deque: references to its entries stay valid when add_method appends.
+  static std::deque<Method> t = {
       make_hierarchical_method(),  // the default
       make_matrix_method(),
       make_pixmap_method(),
   };
-  return table;
+  return t;
 }
 
+std::string joined(const std::vector<std::string>& names) {
+  std::string out;
+  for (const std::string& n : names) out += (out.empty() ? "" : ", ") + n;
+  return out;
+}
+
+}  // namespace
+
+const std::deque<Method>& methods() { return table(); }
+
 const Method& find_method(const std::string& name) {
-  std::string names;
+  std::vector<std::string> names;
   for (const Method& m : methods()) {
     if (m.name == name) return m;
-    names += (names.empty() ? "" : ", ") + m.name;
+    names.push_back(m.name);
   }
-  throw InputError("unknown method '" + name + "': expected one of " + names);
+  throw InputError("unknown method '" + name + "': expected one of " + joined(names), {"method"});
+}
+
+void add_method(Method method) {
+  for (const Method& m : methods())
+    if (m.name == method.name) throw InputError("a method called '" + method.name + "' is in the table already");
+  if (!method.parse || !method.meshing || !method.solve)
+    throw InputError("method '" + method.name + "' lacks its parse, meshing or solve");
+  table().push_back(std::move(method));
 }
 
 std::vector<std::pair<OptionSpec, std::vector<std::string>>> all_method_options() {
@@ -163,6 +84,36 @@ std::vector<std::pair<OptionSpec, std::vector<std::string>>> all_method_options(
       it->second.push_back(m.name);
     }
   return out;
+}
+
+MethodOptions method_options(const Method& method, const OptionValues& given) {
+  for (const auto& entry : given) {
+    const std::string& name = entry.first;  // not a binding: the lambda below captures it
+    if (std::none_of(method.options.begin(), method.options.end(), [&](const OptionSpec& s) { return s.name == name; })) {
+      std::vector<std::string> takers;
+      for (const Method& m : methods())
+        for (const OptionSpec& s : m.options)
+          if (s.name == name) takers.push_back(m.name);
+      throw InputError(name + " is not an option of method " + method.name +
+                           (takers.empty() ? std::string(" (no method takes it)")
+                                           : " (it applies to method " + joined(takers) + " only)"),
+                       {name, "method"});
+    }
+  }
+  return method.parse(given);
+}
+
+void check_shared_options(const Method& method, const std::vector<std::string>& given, FieldMode field) {
+  for (const std::string& name : given) {
+    if (std::find(method.unused.begin(), method.unused.end(), name) == method.unused.end()) continue;
+    if (name == "rays" && field == FieldMode::gather) continue;  // the gather's shadow rays
+    std::vector<std::string> users;
+    for (const Method& m : methods())
+      if (std::find(m.unused.begin(), m.unused.end(), name) == m.unused.end()) users.push_back(m.name);
+    throw InputError(name + " is not used by method " + method.name +
+                         (users.empty() ? std::string() : " (it applies to method " + joined(users) + " only)"),
+                     {name, "method"});
+  }
 }
 
 namespace {
@@ -192,13 +143,29 @@ std::string unlit_warning(const Scene& scene, const MethodResult& r) {
 
 }  // namespace
 
+namespace {
+
+void check_resumable(const Method& method) {
+  if (method.resumable()) return;
+  std::vector<std::string> takers;
+  for (const Method& m : methods())
+    if (m.resumable()) takers.push_back(m.name);
+  throw InputError("resume applies to method " + joined(takers) + " only", {"resume", "method"});
+}
+
+}  // namespace
+
+std::shared_ptr<const MethodState> read_method_state(const Method& method, const std::string& out_dir) {
+  check_resumable(method);
+  return method.read_state(out_dir);
+}
+
 MethodResult run_method(const Method& method, const Scene& scene, const Mesh& mesh, const SolveOptions& options,
-                        const OptionValues& given, const SolveCallbacks& callbacks) {
+                        const MethodOptions& method_options, const SolveCallbacks& callbacks) {
   check_solve_options(options);
-  const MethodOptions opts(method.options, given, method.name);
-  if (callbacks.resume && !method.resumable) throw InputError("--resume applies to --method pixmap only");
+  if (callbacks.resume) check_resumable(method);
   const auto start = std::chrono::steady_clock::now();
-  MethodResult r = method.solve(scene, mesh, options, opts, callbacks);
+  MethodResult r = method.solve(scene, mesh, options, method_options, callbacks);
   // What the method's own phases leave out of its wall time (building its
   // structures: visibility, clusters) is its "setup", so that the phases
   // add up to the whole run.
@@ -206,9 +173,10 @@ MethodResult run_method(const Method& method, const Scene& scene, const Mesh& me
   for (const auto& [name, s] : r.seconds) phases += s;
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   r.seconds.insert(r.seconds.begin(), {"setup", std::max(0.0, wall - phases)});
-  if (method.texel_field) {
+  if (!method.own_field.empty()) {
     // Its own field stands unless another is asked for by name.
-    r.field.mode = options.field == FieldMode::automatic ? FieldMode::texels : options.field;
+    r.field.mode = options.field == FieldMode::automatic ? FieldMode::own : options.field;
+    r.field.own_field = method.own_field;
     if (r.field.mode == FieldMode::fit || r.field.mode == FieldMode::mean)
       r.solution.nodal = compute_nodal(scene, r.mesh, r.solution.element, options.crease_angle, nodal_method(r.field.mode));
   } else {
@@ -225,6 +193,11 @@ MethodResult run_method(const Method& method, const Scene& scene, const Mesh& me
   r.warnings.insert(r.warnings.end(), r.solution.stats.warnings.begin(), r.solution.stats.warnings.end());
   if (const std::string w = unlit_warning(scene, r); !w.empty()) r.warnings.push_back(w);
   return r;
+}
+
+MethodResult run_method(const Method& method, const Scene& scene, const Mesh& mesh, const SolveOptions& options,
+                        const OptionValues& given, const SolveCallbacks& callbacks) {
+  return run_method(method, scene, mesh, options, method_options(method, given), callbacks);
 }
 
 }  // namespace radmesh

@@ -18,7 +18,8 @@ namespace radmesh {
 
 void Hemicube::check_resolution(int resolution) {
   if (resolution < 2 || resolution % 2 != 0 || resolution > 16384)
-    throw InputError("--hemicube-res " + std::to_string(resolution) + ": expected an even number in [2, 16384]");
+    throw InputError("hemicube_res " + std::to_string(resolution) + ": expected an even number in [2, 16384]",
+                     {"hemicube_res"});
 }
 
 Hemicube::Hemicube(int resolution) : resolution_(resolution) {

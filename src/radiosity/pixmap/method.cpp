@@ -1,10 +1,12 @@
 // Pixmap radiosity (progressive refinement through hemicubes onto texel
 // grids) as an entry of the method table.
 
+#include "io/writers/pixmap_io.h"
+#include "radiosity/transport/occlusion.h"
 #include "radmesh/errors.h"
 #include "radmesh/method.h"
-#include "radiosity/transport/occlusion.h"
 #include "radmesh/pixmap.h"
+#include "radmesh/run.h"
 
 #include <chrono>
 #include <cstdio>
@@ -37,70 +39,63 @@ MethodResult result_of(const std::shared_ptr<const PixmapSolver>& solver, const 
   st.power_escaped = state.power_escaped + solver->power_enclosed();
   st.power_emitted = solver->power_emitted() + solver->power_enclosed();
   st.warnings = solver->warnings();
-  r.pixmaps = std::move(out);
+  // Its state (to resume from) and its lightmaps, beside radiosity.vtu.
+  r.files.names = {"lightmapped.obj", "lightmapped.mtl"};
+  r.files.write = [out = std::shared_ptr<const PixmapOutput>(std::move(out))](const std::string& dir, const Mesh& mesh) {
+    std::vector<std::string> written = write_pixmap_state(dir, *out);
+    for (const std::string& f : write_lightmaps(dir, mesh, *out)) written.push_back(f);
+    return written;
+  };
   return r;
 }
 
+constexpr const char* kName = "pixmap";
+
 }  // namespace
 
+const OptionTable<PixmapOptions>& pixmap_option_table() {
+  static const OptionTable<PixmapOptions> table = [] {
+    OptionTable<PixmapOptions> t("method pixmap");
+    using P = PixmapOptions;
+    t.real("texel_size", &P::texel_size, "scene units", "texel edge of the pixmaps (0: scene diagonal / 80)", 0.0,
+           1e300);
+    t.integer("max_texels", &P::max_texels, "", "most texels one pixmap may have (its texels grow to fit)", 1,
+              1 << 26);
+    t.integer("hemicube_res", &P::hemicube_res, "", "hemicube pixels along the top face's side (even)", 2, 16384);
+    t.integer("block", &P::block, "", "a shooter is a block of block x block texels", 1, 256);
+    t.real("unshot", &P::unshot, "", "stop when the unshot power is at most this fraction of the emitted power",
+           0.0, 0.999);
+    t.integer("shots", &P::shots, "", "stop after this many shots in all, those before a resume included (0: no limit)",
+              0, 1e15);
+    t.integer("snapshot_every", &P::snapshot_every, "", "write a snapshot of the field every this many shots (0: none)",
+              0, 1e15);
+    return t;
+  }();
+  return table;
+}
+
 Method make_pixmap_method() {
-  using K = OptionSpec::Kind;
-  Method m;
-  m.name = "pixmap";
-  m.help = "progressive refinement onto texel grids (pixmaps) with hemicube item-buffer form factors; "
-           "saves lightmaps and a state that --resume continues";
-  const PixmapOptions d;  // the defaults, in one place
-  m.options = {
-      {"texel_size", K::real, "scene units", "texel edge of the pixmaps (0: scene diagonal / 80)", d.texel_size, 0.0,
-       1e300, {}},
-      {"max_texels", K::integer, "", "most texels one pixmap may have (its texels grow to fit)",
-       static_cast<double>(d.max_texels), 1, 1 << 26, {}},
-      {"hemicube_res", K::integer, "", "hemicube pixels along the top face's side (even)",
-       static_cast<double>(d.hemicube_res), 2, 16384, {}},
-      {"block", K::integer, "", "a shooter is a block of block x block texels", static_cast<double>(d.block), 1, 256, {}},
-      {"unshot", K::real, "", "stop when the unshot power is at most this fraction of the emitted power", d.unshot, 0.0,
-       0.999, {}},
-      {"shots", K::integer, "", "stop after this many shots in all, those before a resume included (0: no limit)",
-       static_cast<double>(d.shots), 0, 1e15, {}},
-      {"snapshot_every", K::integer, "", "write a snapshot of the field every this many shots (0: none)", 0, 0, 1e15,
-       {}},
-  };
-  m.quick = {{"hemicube_res", "64"}};
-  m.resumable = true;
-  // Measured at hemicube 64 (the quick options), the default texel and block
-  // 4: a rho 0.9 furnace's worst texel 10.2% off (31% before the near
-  // field), at rho 0.5 B - E within 3.1% (the bench); their area mean
-  // exact; Howell's plates
-  // +0.14%; rotated scenes 1.4%; the residual (unshot / radiosity) 4.4e-4
-  // on the Cornell box at --unshot 1e-3.
-  m.accuracy = {0.12, 0.02, 1e-3, false, false};
-  m.texel_field = true;
-  // The geometry is never cut finer for the solve: the initial mesh is the
-  // coarsest one with the contact lines, which the solver makes itself
-  // whatever the meshing flags (the display mesh follows the texels).
-  m.meshing = pixmap_meshing_options;
-  m.solve = [](const Scene& scene, const Mesh&, const SolveOptions& so, const MethodOptions& opts,
-               const SolveCallbacks& cb) {
-    PixmapOptions po;
-    po.texel_size = opts.number("texel_size");
-    po.max_texels = static_cast<long long>(opts.number("max_texels"));
-    po.hemicube_res = static_cast<int>(opts.number("hemicube_res"));
-    po.block = static_cast<int>(opts.number("block"));
-    po.unshot = opts.number("unshot");
-    po.shots = static_cast<long long>(opts.number("shots"));
+  Method m = make_method<PixmapOptions>(
+      kName,
+      "progressive refinement onto texel grids (pixmaps) with hemicube item-buffer form factors; saves lightmaps "
+      "and a state that --resume continues",
+      pixmap_option_table(),
+      [](const Scene& scene, const Mesh&, const SolveOptions& so, const PixmapOptions& po, const SolveCallbacks& cb) {
     auto solver = std::make_shared<const PixmapSolver>(scene, po, so);
     const bool convex = Occlusion(scene).convex_enclosure();
     PixmapState start;
     if (cb.resume) {
-      check_resumable(*cb.resume, scene, solver->layout(), po, cb.resume->source);
-      start = *cb.resume;
+      const auto saved = std::dynamic_pointer_cast<const PixmapState>(cb.resume);
+      if (!saved) throw InputError(cb.resume->source + ": cannot resume: not a pixmap method's state", {"resume"});
+      check_resumable(*saved, scene, solver->layout(), po, saved->source);
+      start = *saved;
     } else {
       start = solver->initial_state();
     }
     PixmapCallbacks pc;
     pc.progress = cb.progress;
     pc.cancelled = cb.cancelled;
-    pc.snapshot_every = static_cast<long long>(opts.number("snapshot_every"));
+    pc.snapshot_every = po.snapshot_every;
     if (cb.on_round)
       pc.on_snapshot = [&](const PixmapState& s) {
         cb.on_round(result_of(solver, s, convex), static_cast<int>(s.shots));
@@ -112,6 +107,7 @@ Method make_pixmap_method() {
     MethodResult r = result_of(solver, run.state, convex);
     const double display_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
     r.interrupted = run.interrupted;
+    r.progress = std::to_string(run.state.shots) + " shots";
     SolveStats& st = r.solution.stats;
     for (int c = 0; c < 3; ++c) {
       st.residual[static_cast<size_t>(c)] = run.residual[static_cast<size_t>(c)];
@@ -143,8 +139,27 @@ Method make_pixmap_method() {
                   run.rows_computed, run.unshot_fraction);
     r.report = line;
     return r;
+      });
+  // The geometry is never cut finer for the solve: the solver meshes the
+  // scene itself, the coarsest mesh with the contact lines (what
+  // pixmap_meshing_options gives), and its display mesh follows the texels.
+  // The meshing options, the solve's tolerance and its shadow rays (the
+  // hemicubes see occlusion) are not its.
+  m.meshing = pixmap_meshing_options;
+  m.unused = {"tolerance", "rays", "max_edge", "min_angle", "discontinuity", "max_shadow_lines"};
+  m.read_state = [](const std::string& out_dir) -> std::shared_ptr<const MethodState> {
+    return std::make_shared<const PixmapState>(read_pixmap_state(out_dir));
   };
+  m.own_field = "texels";
+  m.files = {"lightmapped.obj", "lightmapped.mtl"};
   return m;
+}
+
+Result solve(const Scene& scene, const PixmapOptions& options, const SolveOptions& common,
+             const SolveCallbacks& callbacks) {
+  const OptionTable<PixmapOptions>& table = pixmap_option_table();
+  table.check(options);
+  return solve(scene, find_method(kName), MethodOptions(options, table.values(options)), common, callbacks);
 }
 
 }  // namespace radmesh

@@ -246,12 +246,7 @@ int most_covered_around(const Pixmap& pm, int i, int j, double min_coverage) {
 }
 
 void check_options(const PixmapOptions& o) {
-  auto bad = [](const std::string& what) { throw InputError(what); };
-  if (!(o.texel_size >= 0.0) || !std::isfinite(o.texel_size)) bad("--texel-size " + format_number(o.texel_size) + ": must be >= 0 (0: auto)");
-  if (o.max_texels < 1) bad("--max-texels " + std::to_string(o.max_texels) + ": must be >= 1");
-  if (o.block < 1) bad("pixmap block " + std::to_string(o.block) + ": must be >= 1");
-  if (!(o.unshot >= 0.0 && o.unshot < 1.0)) bad("--unshot " + format_number(o.unshot) + ": must be in [0, 1)");
-  if (o.shots < 0) bad("--shots " + std::to_string(o.shots) + ": must be >= 0");
+  pixmap_option_table().check(o);
   Hemicube::check_resolution(o.hemicube_res);
 }
 
@@ -401,8 +396,8 @@ PixmapLayout layout_of(const Scene& scene, const Mesh& coarse, const PixmapOptio
       m.precision(3);
       m << scene.source << ": the texels (their grids, display mesh and files) need more than the "
         << memory_bytes / (1024.0 * 1024.0 * 1024.0)
-        << " GiB allowed; use a larger --texel-size (the texel count falls with its square) or raise --max-memory";
-      throw NumericalError(m.str());
+        << " GiB allowed; use a larger texel_size (the texel count falls with its square) or raise max_memory";
+      throw NumericalError(m.str(), {"texel_size", "max_memory"});
     }
     pm.coverage.assign(static_cast<size_t>(pm.texels()), 0.0);
     pm.centroid.assign(static_cast<size_t>(pm.texels()), Vec3(0.0));
@@ -783,19 +778,21 @@ std::string scene_fingerprint(const Scene& scene) {
 
 void check_resumable(const PixmapState& state, const Scene& scene, const PixmapLayout& layout,
                      const PixmapOptions& options, const std::string& where) {
-  auto refuse = [&](const std::string& why) { throw InputError(where + ": cannot resume: " + why); };
+  auto refuse = [&](const std::string& why) {
+    throw InputError(where + ": cannot resume: " + why, {"texel_size", "max_texels", "hemicube_res", "block"});
+  };
   if (state.scene_fingerprint != scene_fingerprint(scene))
     refuse("it was made from another scene (or this one edited): fingerprint " + state.scene_fingerprint +
            ", this scene " + scene_fingerprint(scene));
-  auto same = [&](const char* flag, double saved, double now) {
+  auto same = [&](const char* option, double saved, double now) {
     if (saved != now)
-      refuse(std::string("it was made with ") + flag + " " + format_number(saved) + ", this run has " + flag + " " +
-             format_number(now));
+      refuse(std::string("it was made with ") + option + " " + format_number(saved) + ", this run has " + option +
+             " " + format_number(now));
   };
-  same("--texel-size", state.texel_size, layout.texel_size);
-  same("--max-texels", static_cast<double>(state.max_texels), static_cast<double>(options.max_texels));
-  same("--hemicube-res", state.hemicube_res, options.hemicube_res);
-  same("--block", state.block, options.block);
+  same("texel_size", state.texel_size, layout.texel_size);
+  same("max_texels", static_cast<double>(state.max_texels), static_cast<double>(options.max_texels));
+  same("hemicube_res", state.hemicube_res, options.hemicube_res);
+  same("block", state.block, options.block);
   if (state.sizes.size() != layout.pixmaps.size())
     refuse(std::to_string(state.sizes.size()) + " pixmaps saved, this layout has " +
            std::to_string(layout.pixmaps.size()));
@@ -818,7 +815,7 @@ void check_resumable(const PixmapState& state, const Scene& scene, const PixmapL
 // ---- the solver ------------------------------------------------------------
 
 struct PixmapSolver::Impl {
-  const Scene& scene;
+  const Scene scene;  // a copy: results that hold the solver may outlive the caller's scene
   PixmapOptions options;
   SolveOptions solve;
   Mesh coarse;
@@ -1555,15 +1552,16 @@ void PixmapSolver::Impl::receive_narrow(int k, const Shooter& sh, double reach, 
   }
 }
 
-PixmapSolver::PixmapSolver(const Scene& scene, const PixmapOptions& options, const SolveOptions& solve)
-    : impl_(std::make_unique<Impl>(scene, options, solve)) {
+PixmapSolver::PixmapSolver(const Scene& input, const PixmapOptions& options, const SolveOptions& solve)
+    : impl_(std::make_unique<Impl>(input, options, solve)) {
   Impl& m = *impl_;
+  const Scene& scene = m.scene;
   check_options(options);
   m.coarse = outline_triangulation(scene);
   const double memory = memory_limit_bytes(solve);
   m.vis = std::make_unique<Visibility>(scene);
   m.layout = layout_of(scene, m.coarse, options, memory, m.vis.get());
-  if (m.layout.texels >= (1LL << 32)) throw NumericalError(scene.source + ": more than 2^32 texels; use a larger --texel-size");
+  if (m.layout.texels >= (1LL << 32)) throw NumericalError(scene.source + ": more than 2^32 texels; use a larger texel_size", {"texel_size"});
   // The hemicube renders whole polygons (their coarsest triangulation): the
   // contact lines would only add triangles.
   const Mesh polygons = triangulate_patches(scene);
@@ -1597,6 +1595,7 @@ PixmapSolver::PixmapSolver(const Scene& scene, const PixmapOptions& options, con
 
 PixmapSolver::~PixmapSolver() = default;
 
+const Scene& PixmapSolver::scene() const { return impl_->scene; }
 const PixmapLayout& PixmapSolver::layout() const { return impl_->layout; }
 
 Rgb PixmapSolver::power_emitted() const { return impl_->power_emitted; }
