@@ -212,101 +212,113 @@ MeshingOptions meshing_for(const Params& p, const Scene& scene, const Method* me
   return mo;
 }
 
-int run(Params& p, bool solving) {
-  check_params(p, solving);
-  Reporter rep(p.quiet);
-  const Method* method = solving ? &find_method(p.method) : nullptr;
+// What a run computes before it writes anything.
+struct Computed {
   RunInfo info;
-  info.command = solving ? "run" : "mesh";
-  info.scene_path = p.scene;
-  info.solve = p.solve;
-
-  rep.begin("read");
-  const Scene scene = read_scene(p.scene);
-  info.seconds.push_back({"read", rep.end()});
-  for (const std::string& w : scene.report.warnings) rep.note("warning: " + w);
+  Scene scene;
+  Mesh mesh;                          // the initial mesh
+  std::optional<MethodResult> result;  // the method's (its own mesh); none for mesh only
+  std::vector<MethodResult> rounds;   // one snapshot per refinement round, for the .pvd series
   std::vector<Probe> probes;
-  if (!p.probe_file.empty()) probes = read_probes(p.probe_file);
-
-  info.meshing = resolve_meshing_options(scene, meshing_for(p, scene, method));
-  info.method = method ? method->name : "none";
-  info.method_options = p.method_options.values();
-  rep.begin("mesh");
-  const Mesh mesh = mesh_scene(scene, info.meshing, &info.mesh_report);
-  info.seconds.push_back({"mesh", rep.end()});
-  for (const std::string& w : info.mesh_report.warnings) rep.note("warning: " + w);
-  rep.note(std::to_string(scene.patches.size()) + " patches, " + std::to_string(mesh.triangle_count()) +
-           " elements (max edge " + std::to_string(info.meshing.max_edge) + ")");
-
-  // The method's result (its own mesh), and one snapshot per refinement
-  // round for the .pvd series when the method has rounds.
-  std::optional<MethodResult> result;
-  std::vector<MethodResult> rounds;
   std::vector<ProbeResult> probe_results;
-  if (method) {
-    rep.begin(method->name);
-    SolveCallbacks cb;
-    cb.progress = [&](const std::string& phase, double f) { rep.update(phase, f); };
-    cb.on_round = [&](const MethodResult& r, int) { rounds.push_back(r); };
-    if (!p.resume.empty()) cb.resume = read_method_state(*method, p.resume);
-    if (method->resumable()) {
-      struct sigaction sa {};
-      sa.sa_handler = on_interrupt;
-      sigemptyset(&sa.sa_mask);
-      sigaction(SIGINT, &sa, nullptr);
-      cb.cancelled = [] { return g_interrupted.load(); };
-    }
-    result = run_method(*method, scene, mesh, p.solve, p.method_options, cb);
-    if (method->resumable()) std::signal(SIGINT, SIG_DFL);
-    rep.end();
-    for (const auto& phase : result->seconds) info.seconds.push_back(phase);
-    if (!result->report.empty()) rep.note(result->report);
-    for (const std::string& w : result->warnings) rep.note("warning: " + w);
-    const FieldReport& f = result->field;
-    if (!f.why.empty()) rep.note(f.why);
-    if (f.mode == FieldMode::gather)
-      rep.note("field: gather at " + std::to_string(f.display_vertices) + " vertices; direct light " +
-               std::to_string(f.direct.unoccluded) + " unoccluded, " + std::to_string(f.direct.hidden) +
-               " hidden, " + std::to_string(f.direct.clipped) + " clipped exactly; " +
-               std::to_string(f.rays_cast) + " gather rays");
-  }
-  const Mesh& out_mesh = result ? result->mesh : mesh;
-  const TriangleQuality out_quality = compute_quality(out_mesh);
-  if (result && !probes.empty()) {
-    rep.begin("probes");
-    probe_results = evaluate_probes(scene, out_mesh, result->solution.element, probes, p.solve);
-    info.seconds.push_back({"probes", rep.end()});
-  }
+  const Mesh& out_mesh() const { return result ? result->mesh : mesh; }
+};
 
-  // Everything is computed: only now is the output directory touched.
+// The method's solve, with progress, Ctrl-C for a method that can stop
+// early and resume, and what it says on stderr.
+void solve_with(const Params& p, const Method& method, Reporter& rep, Computed& c) {
+  rep.begin(method.name);
+  SolveCallbacks cb;
+  cb.progress = [&](const std::string& phase, double f) { rep.update(phase, f); };
+  cb.on_round = [&](const MethodResult& r, int) { c.rounds.push_back(r); };
+  if (!p.resume.empty()) cb.resume = read_method_state(method, p.resume);
+  if (method.resumable()) {
+    struct sigaction sa {};
+    sa.sa_handler = on_interrupt;
+    sigemptyset(&sa.sa_mask);
+    sigaction(SIGINT, &sa, nullptr);
+    cb.cancelled = [] { return g_interrupted.load(); };
+  }
+  c.result = run_method(method, c.scene, c.mesh, p.solve, p.method_options, cb);
+  if (method.resumable()) std::signal(SIGINT, SIG_DFL);
+  rep.end();
+  for (const auto& phase : c.result->seconds) c.info.seconds.push_back(phase);
+  if (!c.result->report.empty()) rep.note(c.result->report);
+  for (const std::string& w : c.result->warnings) rep.note("warning: " + w);
+  const FieldReport& f = c.result->field;
+  if (!f.why.empty()) rep.note(f.why);
+  if (f.mode == FieldMode::gather)
+    rep.note("field: gather at " + std::to_string(f.display_vertices) + " vertices; direct light " +
+             std::to_string(f.direct.unoccluded) + " unoccluded, " + std::to_string(f.direct.hidden) + " hidden, " +
+             std::to_string(f.direct.clipped) + " clipped exactly; " + std::to_string(f.rays_cast) + " gather rays");
+}
+
+// Reads, meshes, solves (method may be null: mesh only) and evaluates the probes.
+Computed compute(const Params& p, const Method* method, Reporter& rep) {
+  Computed c;
+  c.info.command = method ? "run" : "mesh";
+  c.info.scene_path = p.scene;
+  c.info.solve = p.solve;
+  rep.begin("read");
+  c.scene = read_scene(p.scene);
+  c.info.seconds.push_back({"read", rep.end()});
+  for (const std::string& w : c.scene.report.warnings) rep.note("warning: " + w);
+  if (!p.probe_file.empty()) c.probes = read_probes(p.probe_file);
+
+  c.info.meshing = resolve_meshing_options(c.scene, meshing_for(p, c.scene, method));
+  c.info.method = method ? method->name : "none";
+  c.info.method_options = p.method_options.values();
+  rep.begin("mesh");
+  c.mesh = mesh_scene(c.scene, c.info.meshing, &c.info.mesh_report);
+  c.info.seconds.push_back({"mesh", rep.end()});
+  for (const std::string& w : c.info.mesh_report.warnings) rep.note("warning: " + w);
+  rep.note(std::to_string(c.scene.patches.size()) + " patches, " + std::to_string(c.mesh.triangle_count()) +
+           " elements (max edge " + std::to_string(c.info.meshing.max_edge) + ")");
+  if (!method) return c;
+  solve_with(p, *method, rep, c);
+  if (!c.probes.empty()) {
+    rep.begin("probes");
+    c.probe_results = evaluate_probes(c.scene, c.out_mesh(), c.result->solution.element, c.probes, p.solve);
+    c.info.seconds.push_back({"probes", rep.end()});
+  }
+  return c;
+}
+
+// The files of a run, once everything is computed: only now is the output
+// directory touched. Returns the paths written, in order.
+std::vector<std::string> write_outputs(const Params& p, Computed& c, Reporter& rep) {
+  const MethodResult* result = c.result ? &*c.result : nullptr;
+  const Mesh& out_mesh = c.out_mesh();
+  const TriangleQuality out_quality = compute_quality(out_mesh);
   std::vector<std::string> outputs = {result ? "radiosity.vtu" : "mesh.vtu", "summary.json"};
-  if (!patches_in_summary(scene)) outputs.push_back("patches.csv");
-  if (!rounds.empty()) outputs.push_back("radiosity.pvd");
-  for (size_t r = 0; r < rounds.size(); ++r) outputs.push_back("radiosity_round_" + std::to_string(r) + ".vtu");
+  if (!patches_in_summary(c.scene)) outputs.push_back("patches.csv");
+  if (!c.rounds.empty()) outputs.push_back("radiosity.pvd");
+  for (size_t r = 0; r < c.rounds.size(); ++r) outputs.push_back("radiosity_round_" + std::to_string(r) + ".vtu");
   if (result)
     for (const auto& ls : result->line_sets) outputs.push_back(ls.first + ".vtu");
-  if (!info.mesh_report.discontinuities.empty()) outputs.push_back("discontinuities.vtu");
-  if (!probes.empty()) outputs.push_back("probes.csv");
+  if (!c.info.mesh_report.discontinuities.empty()) outputs.push_back("discontinuities.vtu");
+  if (!c.probes.empty()) outputs.push_back("probes.csv");
   if (result && p.png) outputs.push_back("radiosity.png");
   if (result)
     for (const std::string& name : result->files.names) outputs.push_back(name);
   prepare_output_dir(p.out_dir, run_outputs(), outputs);
+
   rep.begin("write");
   std::vector<std::string> written;
   auto path_in_out = [&](const std::string& name) { return (fs::path(p.out_dir) / name).string(); };
   const std::string vtu = path_in_out(result ? "radiosity.vtu" : "mesh.vtu");
   if (result)
-    write_vtu(vtu, scene, out_mesh, out_quality, result->solution, result->cell_fields);
+    write_vtu(vtu, c.scene, out_mesh, out_quality, result->solution, result->cell_fields);
   else
-    write_mesh_vtu(vtu, scene, mesh, out_quality);
+    write_mesh_vtu(vtu, c.scene, c.mesh, out_quality);
   written.push_back(vtu);
-  if (!rounds.empty()) {
+  if (!c.rounds.empty()) {
     // One file per refinement round and a .pvd collection to step through them.
     std::vector<std::string> names;
-    for (size_t r = 0; r < rounds.size(); ++r) {
+    for (size_t r = 0; r < c.rounds.size(); ++r) {
       const std::string name = "radiosity_round_" + std::to_string(r) + ".vtu";
-      const MethodResult& snap = rounds[r];
-      write_vtu(path_in_out(name), scene, snap.mesh, compute_quality(snap.mesh), snap.solution, snap.cell_fields);
+      const MethodResult& snap = c.rounds[r];
+      write_vtu(path_in_out(name), c.scene, snap.mesh, compute_quality(snap.mesh), snap.solution, snap.cell_fields);
       names.push_back(name);
     }
     const std::string pvd = path_in_out("radiosity.pvd");
@@ -319,54 +331,63 @@ int run(Params& p, bool solving) {
       write_lines_vtu(path, lines);
       written.push_back(path);
     }
-  if (!info.mesh_report.discontinuities.empty()) {
+  if (!c.info.mesh_report.discontinuities.empty()) {
     const std::string lines = path_in_out("discontinuities.vtu");
-    write_discontinuities_vtu(lines, info.mesh_report.discontinuities);
+    write_discontinuities_vtu(lines, c.info.mesh_report.discontinuities);
     written.push_back(lines);
   }
   if (result && result->files.write)
     for (const std::string& f : result->files.write(p.out_dir, out_mesh)) written.push_back(f);
-  if (!probes.empty()) {
+  if (!c.probes.empty()) {
     const std::string csv = path_in_out("probes.csv");
-    write_probe_csv(csv, scene, probes, probe_results);
+    write_probe_csv(csv, c.scene, c.probes, c.probe_results);
     written.push_back(csv);
   }
   if (result && p.png) {
     const std::string png = path_in_out("radiosity.png");
     std::string why;
-    if (render_png(png, scene, out_mesh, result->solution, RenderOptions{}, &why))
+    if (render_png(png, c.scene, out_mesh, result->solution, RenderOptions{}, &why))
       written.push_back(png);
     else
       rep.note("PNG skipped: " + why);
   }
-  info.seconds.push_back({"write", rep.end()});
+  c.info.seconds.push_back({"write", rep.end()});
   const std::string summary = path_in_out("summary.json");
-  write_summary(summary, info, scene, out_mesh, out_quality, result ? &*result : nullptr);
+  write_summary(summary, c.info, c.scene, out_mesh, out_quality, result);
   written.push_back(summary);
-  if (!patches_in_summary(scene)) {
+  if (!patches_in_summary(c.scene)) {
     const std::string csv = path_in_out("patches.csv");
-    write_patches_csv(csv, scene, out_mesh, result ? &result->solution : nullptr);
+    write_patches_csv(csv, c.scene, out_mesh, result ? &result->solution : nullptr);
     written.push_back(csv);
   }
+  return written;
+}
 
-  if (result && !p.quiet) {
-    const SolveStats& st = result->solution.stats;
-    const double bound = std::max({st.error_bound[0], st.error_bound[1], st.error_bound[2]});
-    const bool unbounded = std::min({st.error_bound[0], st.error_bound[1], st.error_bound[2]}) < 0.0;
-    std::fprintf(stderr,
-                 "[radmesh] %lld form factors, %lld rays cast, %lld skipped; residual %.2g (error at most %s); "
-                 "energy imbalance %.2g\n",
-                 st.form_factors, st.rays_cast, st.rays_skipped,
-                 std::max({st.residual[0], st.residual[1], st.residual[2]}),
-                 unbounded ? "unbounded: rho x row sum reaches 1" : format_number(bound).c_str(),
-                 st.power_emitted.x > 0 ? (st.power_emitted.x - st.power_absorbed.x - st.power_escaped.x) / st.power_emitted.x : 0.0);
-  }
+// One line on stderr: the solve's counts, residual and energy balance.
+void print_solve_line(const SolveStats& st) {
+  const double bound = std::max({st.error_bound[0], st.error_bound[1], st.error_bound[2]});
+  const bool unbounded = std::min({st.error_bound[0], st.error_bound[1], st.error_bound[2]}) < 0.0;
+  std::fprintf(stderr,
+               "[radmesh] %lld form factors, %lld rays cast, %lld skipped; residual %.2g (error at most %s); "
+               "energy imbalance %.2g\n",
+               st.form_factors, st.rays_cast, st.rays_skipped, std::max({st.residual[0], st.residual[1], st.residual[2]}),
+               unbounded ? "unbounded: rho x row sum reaches 1" : format_number(bound).c_str(),
+               st.power_emitted.x > 0 ? (st.power_emitted.x - st.power_absorbed.x - st.power_escaped.x) / st.power_emitted.x
+                                      : 0.0);
+}
+
+int run(Params& p, bool solving) {
+  check_params(p, solving);
+  Reporter rep(p.quiet);
+  Computed c = compute(p, solving ? &find_method(p.method) : nullptr, rep);
+  const std::vector<std::string> written = write_outputs(p, c, rep);
+  if (c.result && !p.quiet) print_solve_line(c.result->solution.stats);
   for (const std::string& w : written) std::printf("%s\n", w.c_str());
-  if (result && result->interrupted) {
+  if (c.result && c.result->interrupted) {
     std::fprintf(stderr,
                  "[radmesh] interrupted after %s; the state is saved in %s. Continue with the same options and: "
                  "--resume %s\n",
-                 result->progress.c_str(), p.out_dir.c_str(), p.out_dir.c_str());
+                 c.result->progress.c_str(), p.out_dir.c_str(), p.out_dir.c_str());
     return 130;
   }
   return 0;

@@ -5,9 +5,8 @@ Run from the repository root:
 
     python3 data/make_scenes.py [MEASUREMENTS]
 
-MEASUREMENTS defaults to ../shared/data/cornell-box-measurements.txt, resolved
-relative to the repository root whatever the working directory. When that file is absent, the copy of the same numbers
-embedded below (EMBEDDED_MEASUREMENTS) is used; when it is present, it is read and
+The Cornell box measurements are embedded below (EMBEDDED_MEASUREMENTS). Given a
+MEASUREMENTS file (the same format: "Cornell Box Data"), it is read instead and
 checked against the embedded copy, and a difference is reported.
 
 Standard library only. Output is deterministic (no timestamps), and the generated
@@ -20,10 +19,8 @@ import os
 import re
 import sys
 
-DEFAULT_MEASUREMENTS = "../shared/data/cornell-box-measurements.txt"
-
-# The same facts as the shared measurements file (Cornell University Program of
-# Computer Graphics, 'Cornell Box Data'; units mm; y up; open side at z = 0).
+# The Cornell box as measured (Cornell University Program of Computer Graphics,
+# 'Cornell Box Data'; units mm; y up; open side at z = 0).
 EMBEDDED_MEASUREMENTS = """\
 floor (552.8 0 0) (0 0 0) (0 0 559.2) (549.6 0 559.2)
 ceiling (556 548.8 0) (556 548.8 559.2) (0 548.8 559.2) (0 548.8 0)
@@ -375,15 +372,14 @@ def floating_occluder():
 
 def main(argv):
     root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-    # An explicit path is taken as given; the default is relative to the repo root.
-    path = argv[1] if len(argv) > 1 else os.path.normpath(os.path.join(root, DEFAULT_MEASUREMENTS))
-    if os.path.exists(path):
+    path = argv[1] if len(argv) > 1 else None
+    if path is not None:
         with open(path) as f:
             text = f.read()
         source = path
     else:
         text = EMBEDDED_MEASUREMENTS
-        source = "embedded copy (file not found: " + path + ")"
+        source = "embedded copy"
     quads, wavelengths, spectra = parse_measurements(text)
     if source == path:
         emb = parse_measurements(EMBEDDED_MEASUREMENTS)

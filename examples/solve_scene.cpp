@@ -1,5 +1,5 @@
-// Reads a scene, meshes it, solves it with the default method, writes the
-// result for ParaView and prints every patch's mean radiosity.
+// Reads a scene, solves it with hierarchical radiosity, writes the result
+// for ParaView with its summary, and prints every patch's mean radiosity.
 //   solve_scene SCENE OUT_DIR
 #include <radmesh/radmesh.h>
 
@@ -13,15 +13,14 @@ int main(int argc, char** argv) {
   }
   try {
     const radmesh::Scene scene = radmesh::read_scene(argv[1]);
-    const radmesh::Method& method = radmesh::methods().front();  // the default: hierarchical
-    const radmesh::Mesh mesh = radmesh::mesh_scene(scene, method.meshing(scene));
-    radmesh::SolveOptions options;
-    const radmesh::MethodResult result =
-        radmesh::run_method(method, scene, mesh, options, {{"epsilon", "0.01"}});
-    std::filesystem::create_directories(argv[2]);
-    radmesh::write_vtu(std::string(argv[2]) + "/radiosity.vtu", scene, result.mesh,
-                       radmesh::compute_quality(result.mesh), result.solution, result.cell_fields);
-    const auto means = radmesh::patch_mean_radiosity(scene, result.mesh, result.solution.nodal);
+    radmesh::HierarchicalOptions options;
+    options.epsilon = 0.01;
+    const radmesh::Result result = radmesh::solve(scene, options);
+    const std::filesystem::path out = argv[2];
+    std::filesystem::create_directories(out);
+    radmesh::write_vtu((out / "radiosity.vtu").string(), result);
+    radmesh::write_summary((out / "summary.json").string(), result);
+    const std::vector<radmesh::Rgb> means = result.patch_means();
     for (size_t p = 0; p < scene.patches.size(); ++p)
       std::printf("%-20s %.6g %.6g %.6g\n", scene.patches[p].name.c_str(), means[p].x, means[p].y, means[p].z);
     return 0;

@@ -140,7 +140,7 @@ def main():
             n = first + 4 * (2 * i + k)
             rug += b"f %d %d %d %d\n" % (n, n + 1, n + 2, n + 3)
     write("fuzz_mesh", "cornell_tiled_rug", obj.rstrip(b"\n") + rug + MARK + mtl)
-    # Narrow gaps (session 30): a panel standing 1e-5 from the floor's edge
+    # Narrow gaps: a panel standing 1e-5 from the floor's edge
     # (meshed for minutes), and a panel standing 1e-10 from the edge of a
     # thin strip lying in the floor (crashed CGAL's mesher).
     lamp = b"newmtl lamp\nKd 0.5 0.5 0.5\nKe 1 1 1\n"

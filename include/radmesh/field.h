@@ -46,8 +46,8 @@ struct FieldReport {
 // axis) decides how finely the patch is taken: a node is taken whole when
 // its bounding sphere (radius r, centre at distance d) subtends
 // r / d <= kOpening (then it is integrated by its moments, the point form
-// factor's kernel expanded about its centroid: detail::node_term in
-// gather_node.h, error O((r/d)^3)), otherwise its children are; at most two
+// factor's kernel expanded about its centroid: node_term in
+// radiosity/transport/gather_node.h, error O((r/d)^3)), otherwise its children are; at most two
 // triangles are taken one by one with Lambert's exact formula. The node
 // form factors are only weights
 // within the patch: their sum is scaled to the exact form factor to the
@@ -60,9 +60,8 @@ struct FieldReport {
 // the kernel is 0 is drawn again, up to 8 times), cast only where the
 // shaft from x to the node's rectangle (or the triangle) may hold another
 // patch, of those that the shaft from x to the whole source may hold (found
-// once per point and source whose cut has 8 parts or more: on the Cornell
-// box 3.6 M rays where testing each part's shaft alone cast 6.1 M); each
-// ray also samples
+// once per point and source whose cut has 8 parts or more, which casts far
+// fewer rays than testing each part's shaft alone); each ray also samples
 // the source's radiosity where it lands, weighted by the point form
 // factor's kernel there (visibility and radiosity are correlated: the part
 // of a source hidden from x is often its dark part). One random stream per
@@ -129,9 +128,8 @@ private:
 
 // The automatic field's budget: (display vertices) x (patches) at most this
 // many pairs for the gather. Both of its passes visit every patch per
-// vertex (the direct pass every occluder in the light's shaft); the Cornell
-// box has 3e5 pairs, a 1,280-triangle sphere in a room 2e7 (33 s of field
-// for 10 s of solve on this machine).
+// vertex (the direct pass every occluder in the light's shaft): past this
+// the field would take several times the solve's time (docs/decisions.md).
 inline constexpr double kGatherBudget = 2e7;
 // Past that budget the gather goes by clusters of patches (FieldEvaluator):
 // a vertex visits 80-300 clusters and patches on the scaling benchmark's

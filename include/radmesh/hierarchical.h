@@ -56,7 +56,7 @@ struct HierarchicalOptions {
   // off (a radiosity error, the same threshold at every size), 1 = the
   // transported power's error below the mean root's size. Small receivers
   // are then linked more coarsely: object means move little, single small
-  // faces more (docs/hierarchical.md, "Area-weighted oracle").
+  // faces more (docs/decisions.md).
   double area_weight = 0.0;
   // Elements are not split below this area; 0 = (scene diagonal / 150)^2 / 2.
   // An input triangle (or a cluster of them) smaller than it weighs its
@@ -70,13 +70,13 @@ struct HierarchicalOptions {
   // After the first refinement round, a round is made for the links the
   // oracle would refine only where one of them is over its threshold by
   // more than this factor; otherwise they stay as they are, and the
-  // solution's skips say how many (docs/clusters.md: on the box fields
-  // the last rounds refined under 1% of the links, all within 2x, for up to
-  // a fifth of the run). 1 = refine every link over the threshold.
+  // solution's skips say how many: a late round refines few links, each by
+  // little, at the cost of a pass over all of them (docs/decisions.md).
+  // 1 = refine every link over the threshold.
   double marginal_refinement = 2.0;
-  // free by default: on the Cornell box benchmark (epsilon 0.003) the vertex
-  // field's L2 error is 2.67% free against 3.36% anchored, and the largest
-  // jump free leaves is a few 1e-4 of the largest radiosity.
+  // free by default: the vertex field is closer to the reference than
+  // anchored, and the jump it leaves is far below the field's error
+  // (docs/decisions.md).
   TVertexMode tvertex = TVertexMode::free;
   // Baum's a-posteriori criterion, after each solve: split a leaf whose
   // vertex values differ by more than baum x the largest reflected
@@ -84,18 +84,16 @@ struct HierarchicalOptions {
   // (its children gather over its links: no new links). 0 = off. On by
   // default: the gather field is exact at every vertex, so what is left of
   // its error is mostly the linear interpolation between vertices, and
-  // these splits put vertices where the field bends (docs/hierarchical.md, "Baum's
-  // criterion").
+  // these splits put vertices where the field bends (docs/decisions.md).
   double baum = 0.02;
   double baum_absolute = 0.0;
-  // volume by default: on the Cornell box at equal time it is as accurate
-  // as off, and on scenes of thousands of input triangles it is many times
-  // faster (docs/clusters.md).
+  // volume by default: as accurate as off at equal time on small scenes,
+  // and many times faster on scenes of thousands of input triangles
+  // (docs/decisions.md).
   ClusterMode clusters = ClusterMode::volume;
   // Copy the links into the solution at the end (links, cluster_links;
-  // the radmesh program writes them to links.vtu). Off by default: on a
-  // sphere room of 81,927 faces the copy of 5.8 M links takes about 4% of
-  // the run.
+  // the radmesh program writes them to links.vtu). Off by default: the
+  // copy costs time and memory in proportion to the links.
   bool export_links = false;
 };
 

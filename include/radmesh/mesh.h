@@ -55,8 +55,8 @@ struct MeshingOptions {
   // guaranteed to terminate up to about 20.7 degrees; we accept up to 30.
   double min_angle = 20.0;
   // Discontinuity lines made mesh edges before refinement (see discontinuity.h).
-  // Full (contacts and shadow boundaries) had the best time to error on the
-  // Cornell box benchmark.
+  // Full (contacts and shadow boundaries) gives the best time to error for
+  // a method that does not refine by itself (docs/accuracy.md).
   DiscontinuityMode discontinuity = DiscontinuityMode::full;
   ShadowOptions shadow;  // used with DiscontinuityMode::full
   // ShadowOptions::min_separation = this x max_edge (when min_separation is

@@ -42,9 +42,8 @@ struct SolveOptions {
   // Shadow rays per element pair; rounded up to a perfect square (stratified).
   int rays = 16;
   // Receiver quadrature of the point-to-polygon formula. Level 1 by default:
-  // on the Cornell box benchmark levels 0, 1, 2 and 3 give the same field
-  // error (mesh discretization dominates), level 1 in 0.70x the time of level
-  // 2 while still giving adjacent elements more points (12 instead of 3).
+  // finer levels do not lower the field's error (the mesh's discretization
+  // dominates), and level 1 still gives adjacent elements more points.
   QuadratureOptions quadrature{1.0, 1};
   // Memory limit, GiB (0 = half the physical memory): the form-factor matrix
   // (matrix method) or the whole process while it solves (hierarchical
@@ -57,8 +56,8 @@ struct SolveOptions {
   // How vertex values are made (see FieldMode). run_method applies it to the
   // method's result; a solver's own field (compute_nodal) uses
   // nodal_method(field). automatic by default, which is gather on every
-  // scene of up to a few thousand patches: on the Cornell box benchmark it
-  // gives a fraction of the error of the fit (docs/field.md).
+  // scene of up to a few thousand patches: it gives a fraction of the
+  // fit's error (docs/decisions.md).
   FieldMode field = FieldMode::automatic;
 };
 

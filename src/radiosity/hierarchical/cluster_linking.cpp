@@ -30,10 +30,9 @@ double Hierarchical::code_radius(int code) const {
 // (min_area_: refinement makes no receiver smaller, so only input
 // triangles and clusters of them are) a receiver's error counts by its
 // share of the floor's area: the pieces of a floor-sized area answer
-// together for what one receiver of that size would, and an input mesh
-// finer than the floor multiplies the links far less (the bunny room
-// with its bunny cut into 4 x its 3,674 triangles: 10.2 M -> 6.6 M links;
-// into 16 x: 32 M -> 15 M). Then HierarchicalOptions::area_weight.
+// together for what one receiver of that size would, so that an input mesh
+// finer than the floor does not multiply the links (docs/decisions.md).
+// Then HierarchicalOptions::area_weight.
 double Hierarchical::pw(int code) const {
   const double a = code_area(code);
   double w = a < min_area_ ? a / min_area_ : 1.0;
@@ -71,8 +70,7 @@ uint64_t Hierarchical::code_key(int code) const {
 // and root.
 // A cluster's roots come from root_samples_, in cluster order: the roots
 // a pair's draws fall in then lie together in memory, where their
-// triangles and patches, read by root number, cost cache misses (on the
-// 32 x 32 box field the draws took a quarter of the run).
+// triangles and patches, read by root number, would cost cache misses.
 void Hierarchical::sample_node(int code, SplitMix& rng, Vec3& x, Vec3& n, int& patch, int& root) const {
   const std::array<Vec3, 3>* v = nullptr;
   if (code >= 0) {
@@ -103,10 +101,9 @@ void Hierarchical::sample_node(int code, SplitMix& rng, Vec3& x, Vec3& n, int& p
 // a light alike.
 // -1 when none of the first `rays` point pairs drawn face each other
 // (kernel 0 at every one): the sampled transport is zero and the pair is
-// dropped, neither linked nor split. Parts of one convex object never
-// see each other: in the 20,487-face sphere room 79% of the pairs tried
-// were such, and each drew 4 x `rays` point pairs for nothing, then was
-// linked as fully visible (0.8 M of its 2.1 M links, carrying nothing).
+// dropped, neither linked nor split: parts of one convex object never
+// see each other, and linked as fully visible such pairs would be many
+// links carrying nothing.
 double Hierarchical::cluster_visible(int p, int q, RayCount& count, std::array<float, ClusterTree::kGroups>& per_group) const {
   const int rays = opt_.rays;
   per_group.fill(1.0f);
@@ -234,9 +231,8 @@ bool Hierarchical::wants_cluster_refinement(int p, const Link& l) const {
 // wholly behind the other's plane) are dropped here, as the element
 // linking would drop them, instead of waiting in the pair lists: the
 // clusters of one convex object, too near one another for the gap rule,
-// are split down to their triangles, and in the 327,687-face sphere room
-// that made 112 M pairs of sphere triangles (0.9 GB of lists, 1.1 GB
-// with their growth), nearly all facing away.
+// are split down to their triangles, and on a finely tessellated sphere
+// their pairs, nearly all facing away, would fill the lists.
 void Hierarchical::queue_pair(int a, int b, std::vector<std::pair<int, int>>& next) {
   if (a >= 0 && b >= 0 && facing_away(tri_[static_cast<size_t>(a)], tri_[static_cast<size_t>(b)])) {
     ++out_.stats.links_examined;

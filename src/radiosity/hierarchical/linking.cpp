@@ -112,8 +112,8 @@ double Hierarchical::spread(const std::array<double, 4>& corner_f, double f) {
 // over it leaves F - min > F / 2, each by a margin of about max / 12); the
 // threshold is taken 1e-6 high so that rounding cannot tip either. The
 // decision is split_whatever_visible's but where F's points would all see
-// nothing of q (a source cutting p's plane near a corner): that pair,
-// dropped before, is now split.
+// nothing of q (a source cutting p's plane near a corner): that pair is
+// split.
 bool Hierarchical::split_by_corners(int p, int q, const std::array<double, 4>& corner_f) const {
   if (!(splittable(p) || splittable(q))) return false;
   double lo = corner_f[0], hi = corner_f[0];
@@ -129,8 +129,7 @@ bool Hierarchical::split_by_corners(int p, int q, const std::array<double, 4>& c
 // the receiver is split first, is split whatever its shadow rays say
 // (wants_refinement and spread_dominates hold for every visible fraction,
 // and with l.visible left at 1 they see the same): its rays are not cast.
-// On the Cornell box 8% of the pairs the linking examined (62 k of 744 k);
-// split_by_corners finds most of them before their F.
+// split_by_corners finds most such pairs before their F.
 bool Hierarchical::split_whatever_visible(int p, const Link& l) const {
   return element_weight(p, l.source) * l.spread > hopt_.epsilon * scale_ && l.spread > 0.5 * l.f &&
          (splittable(p) || splittable(l.source));

@@ -13,8 +13,8 @@ namespace radmesh::internal {
 // process held when the solver began plus the solver's own count (links,
 // link numbers, leaf terms, clusters: known before the allocator shows
 // them) and the resident memory now (all the rest: the element tree, the
-// mesh, the visibility structure, the allocator's slack). The own count
-// alone let the 128 x 128 box field peak at 14.1 GB under a 12 GiB limit.
+// mesh, the visibility structure, the allocator's slack): the own count
+// alone misses what the rest of the process grows by.
 void Hierarchical::check_memory() {
   const long long links = count_links();
   const double own = static_cast<double>(links) * kLinkBytes + static_cast<double>(next_id_) * kLinkIdBytes +

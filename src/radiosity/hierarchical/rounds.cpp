@@ -152,8 +152,8 @@ void Hierarchical::finish() {
 // Solve, publish, and the change of the node field since the last round
 // (a node made since is compared with its deepest ancestor that existed then).
 // The solve phase's time includes the publish (the conforming mesh and its
-// vertex values, every round): left out, it showed as the method's
-// "setup" (at 1,310,727 input faces 37.6 s of it).
+// vertex values, every round), which would otherwise show as the method's
+// "setup".
 void Hierarchical::solve_round() {
   auto& st = out_.stats;
   const auto t1 = std::chrono::steady_clock::now();
@@ -190,17 +190,15 @@ void Hierarchical::solve_round() {
 // The last round where the field is gathered: Baum's splits alone, whose
 // leaves take their parent's radiosity (grow) and are not solved. The
 // gather evaluates every display vertex anew, exact direct light
-// included, so what the splits buy is vertices where the field bends;
-// as sources of the gather, the leaves' values at their parent's
-// resolution did as well on the Cornell box as solving them, which took
-// a tenth of the run (their terms, their sweeps and a round of their
-// own). With nothing solved after it, the criterion is applied once, on
-// the last solve's values, in depth (split_by_variation's `deep`): the
-// fit over leaves of their parent's value shows steps between them, and
-// splitting on those (10 meshes published) gave 31,802 leaves, L2
-// 0.432% and worst patch mean 0.37% on the Cornell box, once in depth
-// 30,590, 0.444% and 0.38%, in 0.84x the solve time. The balance and the
-// solver's statistics stay the last solve's. False when nothing is split.
+// included, so what the splits buy is vertices where the field bends; as
+// sources of the gather, the leaves' values at their parent's resolution
+// do as well as solving them would, for a fraction of the cost
+// (docs/decisions.md, Baum's criterion). With nothing solved after it, the
+// criterion is applied once, on the last solve's values, in depth
+// (split_by_variation's `deep`): the fit over leaves of their parent's
+// value shows steps between them, which repeated splitting would chase.
+// The balance and the solver's statistics stay the last solve's. False
+// when nothing is split.
 bool Hierarchical::display_round() {
   done_ = true;
   if (split_by_variation(true, true) == 0) return false;
@@ -282,8 +280,7 @@ int Hierarchical::split_by_variation(bool round_made, bool deep) {
   // a time; in depth, its children come back with half its spread while
   // that is over the threshold, so a bound budget goes level by level to
   // the leaves where the field bends most, instead of all the levels of
-  // the first leaves in spread order (on the Cornell box at --epsilon
-  // 0.01, L2 2.44% -> 1.59% for the same leaves).
+  // the first leaves in spread order.
   auto later = [](const std::pair<double, int>& a, const std::pair<double, int>& b) {
     return a.first < b.first || (a.first == b.first && a.second > b.second);
   };

@@ -23,26 +23,19 @@ namespace radmesh::internal {
 // kLeafRaysBound x epsilon x the scene's mean reflected radiosity
 // (rho_leaf F B_source, the most the link's fraction can be off by; see
 // rays_reference_): then the leaf casts its own rays to the source (a
-// quarter of --rays, at least one, stratified; its own random stream:
-// unbiased for the leaf, and its many links average the noise; 16 rays
-// gave the same Cornell errors, and on the 8 x 8 box field 1.6x the run;
-// without the bound, the same errors and 1.2x the run on a sphere room of
-// 5,127 faces; a bound of 1 lost the fix). One
+// quarter of the rays, at least one, stratified; its own random stream:
+// unbiased for the leaf, and its many links average the noise). One
 // fraction for a whole ancestor is the mean over the ancestor, and the
-// leaves next to an occluder see less than the mean: on the Cornell box
-// the floor within 15 mm of a block came out 6% brighter than the field
-// gathered there (39% in the short block's umbra, rows up to 1.04), and
-// the block faces that look at it 1.2-1.4% too bright. With the leaves'
-// own fractions, about 1% (tested) and within 0.5%.
+// leaves next to an occluder see less than the mean: the floor at a
+// block's foot would come out brighter than the light that reaches it
+// (docs/decisions.md).
 //
 // The sending side in pieces (sender_terms): an element link does not
 // carry its source node's mean radiosity but the mean of the source's
 // pieces weighted by how much each sends to the link's receiver
 // (A_y F(y -> receiver)). A wall's top, bright and near the ceiling, thus
-// counts for more toward the ceiling than its dim bottom: with the plain
-// mean, every surface of the Cornell box came out 0.1-1.7% low against
-// the matrix method (the ceiling most) and 0.4% of the emitted power
-// vanished between the links' two ends.
+// counts for more toward the ceiling than its dim bottom; with the plain
+// mean, light would vanish between the links' two ends.
 //
 // Terms are kept between rounds for a leaf whose path has no changed link
 // (receiving) and no changed link from it (sending); the others are
@@ -90,8 +83,8 @@ void Hierarchical::leaf_terms() {
   in_blocks(todo, [&](size_t x) { gather_terms(x); });
   {
     // The element links leaving each node: (receiver, position in its
-    // list), 8 bytes a link (with a pointer, 16: on the 64 x 64 box
-    // field the peak came while this list was held).
+    // list), 8 bytes a link: the run's peak memory can come while this
+    // list is held.
     std::vector<int> out_begin(n + 1, 0);
     std::vector<std::pair<int, int>> out;
     for (size_t p = 0; p < n; ++p)
@@ -179,12 +172,11 @@ void Hierarchical::gather_terms(size_t x) {
   // points its own distance asks for (receiver_points' rule, which takes
   // the whole leaf to one level when the distance bound is one constant:
   // the distance from the centroid to the source less the leaf's radius),
-  // the sources of each level in one pass. It was the nearest source's
-  // level for all of them: a leaf next to one surface took the fine
-  // points for every source (on the Cornell box 76% of the points were
-  // such). A row summed over several point sets is exact to the
-  // quadrature only (kRowTolerance), which scale_rows allows for. The
-  // lists are kept per thread: this runs once per leaf.
+  // the sources of each level in one pass, so that a leaf next to one
+  // surface does not take the fine points for every source. A row summed
+  // over several point sets is exact to the quadrature only
+  // (kRowTolerance), which scale_rows allows for. The lists are kept per
+  // thread: this runs once per leaf.
   thread_local std::vector<double> unoccluded;
   thread_local std::array<std::vector<const Triangle*>, kMaxQuadratureLevel + 1> by_level;
   thread_local std::array<std::vector<size_t>, kMaxQuadratureLevel + 1> slot_of;
@@ -223,9 +215,9 @@ void Hierarchical::gather_terms(size_t x) {
     // own visible fraction.
     const bool own_rays =
         k >= own && l->visible < 1.0 && own_rays_matter(rho * f0 * max3(B_[static_cast<size_t>(l->source)]));
-    // No shaft test: the ancestor's shaft holds an occluder, and on the
-    // Cornell box 97% of the leaves' shafts did too (573 k pairs, 15 k
-    // cleared); the tests cost more than the rays they saved.
+    // No shaft test: the ancestor's shaft holds an occluder, and nearly
+    // every leaf's does too; the tests would cost more than the rays they
+    // save.
     const double v = own_rays ? own_visible_fraction(static_cast<int>(x), l->source, leaf_rays_[x]) : l->visible;
     const double f = f0 * v;
     // The variance of the visible fraction the rays gave (binomial:
@@ -247,8 +239,8 @@ void Hierarchical::gather_terms(size_t x) {
   F_noise_[x] = static_cast<float>(noise);
   F_doubt_[x] = static_cast<float>(doubt);
   double exact = 0.0;
-  // Exactly the room they take: built by push_back, the lists held up to
-  // twice that (0.8 GB more on the 64 x 64 box field's 214 M terms).
+  // Exactly the room they take: built by push_back, the lists would hold
+  // up to twice that.
   terms_[x].shrink_to_fit();
   for (const Term& k : terms_[x]) exact += k.f;
   if (exact > 0.0) fix_exact_[x] = F_sum_[x] / exact;
@@ -258,11 +250,8 @@ void Hierarchical::gather_terms(size_t x) {
 // group of the source, F at x's centroid, gathered once per sweep for all
 // the leaves below (node_H_). The oracle bounds the kernel's spread over
 // x for these links as for any other, so evaluating it at every leaf's
-// centroid instead bought nothing: on the 32 x 32 box field per-patch
-// errors against a fine solve were the same (median 0.605% against
-// 0.603%, 95th percentile 2.25% against 2.24%), the Cornell box's bench
-// figures equal to four digits, but each leaf held a term per group of
-// each of its ancestors' cluster links, half of all the terms there.
+// centroid instead buys no accuracy, and each leaf would hold a term per
+// group of each of its ancestors' cluster links (docs/decisions.md).
 void Hierarchical::node_cluster_terms(size_t x) {
   auto& terms = node_terms_[x];
   terms.clear();
@@ -299,8 +288,7 @@ std::vector<double> Hierarchical::received_sums() const {
 // down (or its leaves above that): at most 16 pieces, enough to tell its
 // bright side from its dim one at a bounded cost per link. The weights
 // only share a link's transport out among its pieces (link_values), so
-// one point each does: on the Cornell box, full quadrature there gave the
-// same means to 0.01% and took 1.3x the solve time.
+// one point each does as well as a full quadrature.
 void Hierarchical::sender_terms(size_t y, const std::vector<int>& out_begin, const std::vector<std::pair<int, int>>& out) {
   auto& sent = sent_[y];
   sent.clear();
@@ -337,13 +325,11 @@ void Hierarchical::sender_terms(size_t y, const std::vector<int>& out_begin, con
     // receiver where it could move what the link carries by more than
     // kLeafRaysBound x epsilon x rays_reference_ (rho_receiver F x the
     // piece's radiosity's difference from its source node's), with a
-    // quarter of --rays, stratified, as a leaf casts on its ancestors'
+    // quarter of the rays, stratified, as a leaf casts on its ancestors'
     // links: the link's fraction is a mean over the source, and where the
     // bright part of the source is the hidden one (a wall lit by a lamp
-    // 10 cm in front of it, which the lamp's back hides from the room)
-    // weighing the pieces alike sent the room that bright part: every
-    // surface 18-23% too bright against a fine matrix solve, 3.7% of the
-    // emitted power made. The rays add 0.5% to the 8 x 8 box field's.
+    // just in front of it, which the lamp's back hides from the room)
+    // weighing the pieces alike would send the room that bright part.
     const Link& l = *path[k].second;
     const int p = path[k].first;
     const bool own_rays =
