@@ -577,26 +577,40 @@ struct DirectIllumination::Impl {
     if (f == 0.0) ++counts.dark;
     return f;
   }
+
+  // The constructor's parts, in its order: the convex outlines, the
+  // occluders (after find_solids) and each emitter.
+  void find_convex_outlines();
+  void add_occluders();
+  Emitter make_emitter(size_t p) const;
 };
 
-DirectIllumination::DirectIllumination(const Scene& scene) : impl_(std::make_unique<Impl>(scene)) {
-  impl_->convex.resize(scene.patches.size());
+// Per patch without holes whose outline turns one way at every corner
+// (counter-clockwise around its normal), that outline (ConvexOccluder).
+void DirectIllumination::Impl::find_convex_outlines() {
+  convex.resize(scene.patches.size());
   for (size_t p = 0; p < scene.patches.size(); ++p) {
     const Patch& patch = scene.patches[p];
     if (!patch.holes.empty()) continue;
     std::vector<Vec3> outline = scene.loop_points(patch.outer);
     double turn = 0.0;
-    bool convex = outline.size() >= 3;
-    for (size_t i = 0; i < outline.size() && convex; ++i) {
+    bool is_convex = outline.size() >= 3;
+    for (size_t i = 0; i < outline.size() && is_convex; ++i) {
       const Vec3& a = outline[i];
       const Vec3& b = outline[(i + 1) % outline.size()];
       const Vec3& c = outline[(i + 2) % outline.size()];
       const double z = glm::dot(glm::cross(b - a, c - b), patch.normal);
-      convex = z >= 0.0;
+      is_convex = z >= 0.0;
       turn += z;
     }
-    if (convex && turn > 0.0) impl_->convex[p] = {std::move(outline), patch.normal};
+    if (is_convex && turn > 0.0) convex[p] = {std::move(outline), patch.normal};
   }
+}
+
+// The occluders, in patch order: a patch whose outline is convex is one
+// (see `whole` below), any other patch its triangles; and a box tree over
+// them.
+void DirectIllumination::Impl::add_occluders() {
   auto add = [&](int patch, const std::vector<Vec3>& corners) {
     OccluderPolygon o;
     o.patch = patch;
@@ -607,7 +621,7 @@ DirectIllumination::DirectIllumination(const Scene& scene) : impl_(std::make_uni
       o.lo = glm::min(o.lo, c);
       o.hi = glm::max(o.hi, c);
     }
-    impl_->occluders.push_back(std::move(o));
+    occluders.push_back(std::move(o));
   };
   // A convex outline strictly convex at every corner and exactly planar
   // (checked in exact arithmetic) is one occluder; any other patch is its
@@ -622,14 +636,13 @@ DirectIllumination::DirectIllumination(const Scene& scene) : impl_(std::make_uni
       if (!CGAL::coplanar(q[0], q[1], q[2], q[i])) return false;
     return true;
   };
-  impl_->find_solids();
   std::vector<char> one(scene.patches.size(), 0), added(scene.patches.size(), 0);
-  for (size_t p = 0; p < scene.patches.size(); ++p) one[p] = whole(impl_->convex[p].outline);
+  for (size_t p = 0; p < scene.patches.size(); ++p) one[p] = whole(convex[p].outline);
   const Mesh coarse = triangulate_patches(scene);
   for (int t = 0; t < coarse.triangle_count(); ++t) {
     const size_t p = static_cast<size_t>(coarse.patch[static_cast<size_t>(t)]);
     if (one[p]) {
-      if (!added[p]) add(static_cast<int>(p), impl_->convex[p].outline);
+      if (!added[p]) add(static_cast<int>(p), convex[p].outline);
       added[p] = 1;
       continue;
     }
@@ -638,96 +651,110 @@ DirectIllumination::DirectIllumination(const Scene& scene) : impl_(std::make_uni
             coarse.positions[static_cast<size_t>(tri[2])]});
   }
   {
-    std::vector<Box3> boxes(impl_->occluders.size());
+    std::vector<Box3> boxes(occluders.size());
     for (size_t t = 0; t < boxes.size(); ++t) {
-      boxes[t].add(impl_->occluders[t].lo);
-      boxes[t].add(impl_->occluders[t].hi);
+      boxes[t].add(occluders[t].lo);
+      boxes[t].add(occluders[t].hi);
     }
-    impl_->occluder_boxes = BoxTree(boxes);
+    occluder_boxes = BoxTree(boxes);
   }
+}
+
+// The emitter of patch p: its plane and 2-D map, its outline and holes as
+// polygons (plain numbers, and on the clip's integer grid), the base of its
+// shaft's pyramid and which occluders have a corner in front of it.
+Emitter DirectIllumination::Impl::make_emitter(size_t p) const {
+  const Patch& patch = scene.patches[p];
+  const Material& m = scene.material_of(patch);
+  Emitter e;
+  e.patch = static_cast<int>(p);
+  e.normal = patch.normal;
+  e.emission = m.emission;
+  const std::vector<Vec3> outer = scene.loop_points(patch.outer);
+  e.plane = EK::Plane_3(exact(outer[0]), EK::Vector_3(patch.normal.x, patch.normal.y, patch.normal.z));
+  e.origin = outer[0];
+  const Vec3 an = glm::abs(patch.normal);
+  e.drop = an.x >= an.y && an.x >= an.z ? 0 : (an.y >= an.z ? 1 : 2);
+  e.iu = (e.drop + 1) % 3;
+  e.iv = (e.drop + 2) % 3;
+  // Vertices are projected onto the (double) plane, then rounded: the 2-D
+  // map's corners are plain numbers, shared by every thread.
+  auto polygon = [&](const std::vector<int>& loop) {
+    Polygon2 poly;
+    for (int v : loop) {
+      const EK::Point_2 q = e.to2(e.plane.projection(exact(scene.vertices[static_cast<size_t>(v)])));
+      poly.push_back(EK::Point_2(CGAL::to_double(q.x()), CGAL::to_double(q.y())));
+    }
+    if (poly.orientation() == CGAL::CLOCKWISE) poly.reverse_orientation();
+    return poly;
+  };
+  Polygon2 outer2 = polygon(patch.outer);
+  if (!outer2.is_simple()) throw GeometryError(where(patch.file, patch.line) + "emitter '" + patch.name + "' is not a simple polygon");
+  std::vector<Polygon2> holes;
+  for (const auto& h : patch.holes) {
+    Polygon2 hp = polygon(h);
+    hp.reverse_orientation();
+    holes.push_back(hp);
+  }
+  e.shape = PolygonWithHoles2(outer2, holes.begin(), holes.end());
+  const CGAL::Bbox_2 box = outer2.bbox();
+  // A box a little larger than the emitter (the pyramid only bounds the clip).
+  const double pad = 1e-3 * std::max(box.xmax() - box.xmin(), box.ymax() - box.ymin());
+  const EK::Point_2 c2[4] = {{box.xmin() - pad, box.ymin() - pad},
+                             {box.xmax() + pad, box.ymin() - pad},
+                             {box.xmax() + pad, box.ymax() + pad},
+                             {box.xmin() - pad, box.ymax() + pad}};
+  e.umin = box.xmin() - pad;
+  e.umax = box.xmax() + pad;
+  e.vmin = box.ymin() - pad;
+  e.vmax = box.ymax() + pad;
+  e.cu = 0.5 * (e.umin + e.umax);
+  e.cv = 0.5 * (e.vmin + e.vmax);
+  e.grid = std::ldexp(1.0, 51 - std::ilogb(std::max(e.umax - e.umin, e.vmax - e.vmin)) - 1);
+  if (!std::isfinite(e.grid) || !(e.grid > 0.0))
+    throw GeometryError(where(patch.file, patch.line) + "emitter '" + patch.name + "' is too small (" +
+                        format_number(e.umax - e.umin) + " across) for the exact direct light");
+  e.lit.push_back(e.on_grid(outer2));  // counter-clockwise (made so above)
+  for (const Polygon2& h : holes) e.lit.push_back(e.on_grid(h));  // clockwise
+  for (int i = 0; i < 4; ++i) e.corners[static_cast<size_t>(i)] = e.lift(c2[i]);
+  // Evaluated exactly now, while one thread holds them: CGAL tightens an
+  // object's interval when it first evaluates it exactly, so a shared
+  // object evaluated later, by whichever thread first needs it, could
+  // round differently from one run to the next.
+  CGAL::exact(e.plane);
+  for (const Point3& q : e.corners) CGAL::exact(q);
+  for (const Point3& q : e.corners) e.base.push_back(rounded(q));
+  e.lo = e.hi = e.base[0];
+  for (const Vec3& d : e.base) {
+    e.lo = glm::min(e.lo, d);
+    e.hi = glm::max(e.hi, d);
+  }
+  e.loops.push_back(e.lifted(e.shape.outer_boundary()));
+  for (auto h = e.shape.holes_begin(); h != e.shape.holes_end(); ++h) e.loops.push_back(e.lifted(*h));
+  // The pyramid's base: a convex emitter's own outline, unless it has many
+  // corners (a round lamp of 256): every vertex's shaft test costs a pass
+  // over the base's corners per corner, and the box's pyramid only clears
+  // a little less.
+  if (patch.holes.empty() && e.loops[0].size() <= kMostBaseCorners && e.shape.outer_boundary().is_convex())
+    e.base = e.loops[0];
+  for (const Vec3& b : e.base) e.base_centre += b / static_cast<double>(e.base.size());
+  e.in_front.resize(occluders.size());
+  for (size_t t = 0; t < occluders.size(); ++t) {
+    const OccluderPolygon& o = occluders[t];
+    e.in_front[t] = std::any_of(o.v.begin(), o.v.end(),
+                                [&](const Point3& p) { return e.plane.oriented_side(p) == CGAL::ON_POSITIVE_SIDE; });
+  }
+  return e;
+}
+
+DirectIllumination::DirectIllumination(const Scene& scene) : impl_(std::make_unique<Impl>(scene)) {
+  impl_->find_convex_outlines();
+  impl_->find_solids();
+  impl_->add_occluders();
   for (size_t p = 0; p < scene.patches.size(); ++p) {
-    const Patch& patch = scene.patches[p];
-    const Material& m = scene.material_of(patch);
+    const Material& m = scene.material_of(scene.patches[p]);
     if (max3(m.emission) <= 0.0) continue;
-    Emitter e;
-    e.patch = static_cast<int>(p);
-    e.normal = patch.normal;
-    e.emission = m.emission;
-    const std::vector<Vec3> outer = scene.loop_points(patch.outer);
-    e.plane = EK::Plane_3(exact(outer[0]), EK::Vector_3(patch.normal.x, patch.normal.y, patch.normal.z));
-    e.origin = outer[0];
-    const Vec3 an = glm::abs(patch.normal);
-    e.drop = an.x >= an.y && an.x >= an.z ? 0 : (an.y >= an.z ? 1 : 2);
-    e.iu = (e.drop + 1) % 3;
-    e.iv = (e.drop + 2) % 3;
-    // Vertices are projected onto the (double) plane, then rounded: the 2-D
-    // map's corners are plain numbers, shared by every thread.
-    auto polygon = [&](const std::vector<int>& loop) {
-      Polygon2 poly;
-      for (int v : loop) {
-        const EK::Point_2 q = e.to2(e.plane.projection(exact(scene.vertices[static_cast<size_t>(v)])));
-        poly.push_back(EK::Point_2(CGAL::to_double(q.x()), CGAL::to_double(q.y())));
-      }
-      if (poly.orientation() == CGAL::CLOCKWISE) poly.reverse_orientation();
-      return poly;
-    };
-    Polygon2 outer2 = polygon(patch.outer);
-    if (!outer2.is_simple()) throw GeometryError(where(patch.file, patch.line) + "emitter '" + patch.name + "' is not a simple polygon");
-    std::vector<Polygon2> holes;
-    for (const auto& h : patch.holes) {
-      Polygon2 hp = polygon(h);
-      hp.reverse_orientation();
-      holes.push_back(hp);
-    }
-    e.shape = PolygonWithHoles2(outer2, holes.begin(), holes.end());
-    const CGAL::Bbox_2 box = outer2.bbox();
-    // A box a little larger than the emitter (the pyramid only bounds the clip).
-    const double pad = 1e-3 * std::max(box.xmax() - box.xmin(), box.ymax() - box.ymin());
-    const EK::Point_2 c2[4] = {{box.xmin() - pad, box.ymin() - pad},
-                               {box.xmax() + pad, box.ymin() - pad},
-                               {box.xmax() + pad, box.ymax() + pad},
-                               {box.xmin() - pad, box.ymax() + pad}};
-    e.umin = box.xmin() - pad;
-    e.umax = box.xmax() + pad;
-    e.vmin = box.ymin() - pad;
-    e.vmax = box.ymax() + pad;
-    e.cu = 0.5 * (e.umin + e.umax);
-    e.cv = 0.5 * (e.vmin + e.vmax);
-    e.grid = std::ldexp(1.0, 51 - std::ilogb(std::max(e.umax - e.umin, e.vmax - e.vmin)) - 1);
-    if (!std::isfinite(e.grid) || !(e.grid > 0.0))
-      throw GeometryError(where(patch.file, patch.line) + "emitter '" + patch.name + "' is too small (" +
-                          format_number(e.umax - e.umin) + " across) for the exact direct light");
-    e.lit.push_back(e.on_grid(outer2));  // counter-clockwise (made so above)
-    for (const Polygon2& h : holes) e.lit.push_back(e.on_grid(h));  // clockwise
-    for (int i = 0; i < 4; ++i) e.corners[static_cast<size_t>(i)] = e.lift(c2[i]);
-    // Evaluated exactly now, while one thread holds them: CGAL tightens an
-    // object's interval when it first evaluates it exactly, so a shared
-    // object evaluated later, by whichever thread first needs it, could
-    // round differently from one run to the next.
-    CGAL::exact(e.plane);
-    for (const Point3& q : e.corners) CGAL::exact(q);
-    for (const Point3& q : e.corners) e.base.push_back(rounded(q));
-    e.lo = e.hi = e.base[0];
-    for (const Vec3& d : e.base) {
-      e.lo = glm::min(e.lo, d);
-      e.hi = glm::max(e.hi, d);
-    }
-    e.loops.push_back(e.lifted(e.shape.outer_boundary()));
-    for (auto h = e.shape.holes_begin(); h != e.shape.holes_end(); ++h) e.loops.push_back(e.lifted(*h));
-    // The pyramid's base: a convex emitter's own outline, unless it has many
-    // corners (a round lamp of 256): every vertex's shaft test costs a pass
-    // over the base's corners per corner, and the box's pyramid only clears
-    // a little less.
-    if (patch.holes.empty() && e.loops[0].size() <= Impl::kMostBaseCorners && e.shape.outer_boundary().is_convex())
-      e.base = e.loops[0];
-    for (const Vec3& b : e.base) e.base_centre += b / static_cast<double>(e.base.size());
-    e.in_front.resize(impl_->occluders.size());
-    for (size_t t = 0; t < impl_->occluders.size(); ++t) {
-      const OccluderPolygon& o = impl_->occluders[t];
-      e.in_front[t] = std::any_of(o.v.begin(), o.v.end(),
-                                  [&](const Point3& p) { return e.plane.oriented_side(p) == CGAL::ON_POSITIVE_SIDE; });
-    }
-    impl_->emitters.push_back(std::move(e));
+    impl_->emitters.push_back(impl_->make_emitter(p));
   }
 }
 

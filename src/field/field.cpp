@@ -1,16 +1,11 @@
 // The display field: exact direct light and a final gather at every vertex.
+// The evaluator's state and the source trees are field_impl.h, the
+// clustered gather field_clusters.cpp.
 
 #include "radmesh/field.h"
 
+#include "field/field_impl.h"
 #include "radmesh/errors.h"
-#include "core/box_tree.h"
-#include "radiosity/transport/clusters.h"
-#include "radmesh/form_factor.h"
-#include "radiosity/transport/gather_node.h"
-#include "radiosity/transport/occlusion.h"
-#include "radiosity/transport/sampling.h"
-#include "radiosity/transport/transport.h"
-#include "radiosity/transport/visibility.h"
 
 #include <glm/matrix.hpp>
 #include <tbb/parallel_for.h>
@@ -22,6 +17,8 @@
 
 namespace radmesh {
 
+using internal::SourceTree;
+
 namespace {
 
 // A point's gather lists what may lie between it and a source (once) where
@@ -31,27 +28,13 @@ constexpr size_t kListedParts = 8;
 // The share of what the solve says a point gathers for which a part of a
 // source gets the rays_per_node shadow rays, its rays in proportion to what
 // it sends (FieldEvaluator::Impl::rays_for; a cluster taken whole keeps at
-// least rays_per_node). Against the same solve's field with 64 rays for
-// every part, per-vertex noise (95th percentile of the relative difference)
-// fell on the Cornell box from 1.76% to 1.17% with 9% fewer rays, and on the
-// 16 x 16 box field from 1.88% to 1.46% with 14% fewer (0.003: 1.11% for 12%
-// more rays, 1.37% for 3% fewer). Scaled by the patch's mean instead of the
-// point's own value, the dark vertices under a rug took too few rays
+// least rays_per_node): against the same solve's field with 64 rays for
+// every part, this share cuts per-vertex noise (95th percentile of the
+// relative difference) with fewer rays than a fixed number per part. It is
+// taken of the point's own value, not its patch's mean, so that dark
+// vertices (under a rug) get their rays too
 // (Field.BesideARugAMillimetreAboveTheFloor...).
 constexpr double kRayShare = 0.005;
-
-// How many times a point of a source is drawn before it is given up, where
-// every draw so far fell where the kernel is 0 (facing away from the point,
-// or behind its tangent plane).
-constexpr int kDrawTries = 8;
-
-// Calls try_at(u), then try_at with a fresh uniform from `rng` while it
-// returns false (its point fell where the kernel is 0), kDrawTries calls
-// at most.
-template <class TryAt>
-void draw_facing(SplitMix& rng, double u, TryAt&& try_at) {
-  for (int tries = 1; !try_at(u) && tries < kDrawTries; ++tries) u = rng.uniform();
-}
 
 // Lambert's formula for a whole patch (outline less holes), front side only.
 double patch_form_factor(const Vec3& x, const Vec3& n, const std::vector<std::vector<Vec3>>& loops,
@@ -61,64 +44,6 @@ double patch_form_factor(const Vec3& x, const Vec3& n, const std::vector<std::ve
   for (size_t h = 1; h < loops.size(); ++h) f -= std::abs(lambert_contour_sum(x, n, loops[h].data(), loops[h].size()));
   return std::max(0.0, f) / (2.0 * std::numbers::pi);
 }
-
-// A source patch's tree over its triangles.
-struct SourceTree {
-  struct Node : detail::GatherNode {
-    int begin = 0, end = 0;  // range of triangles (in node order once built)
-    int left = -1, right = -1;
-  };
-  Vec3 normal{0.0};
-  std::vector<std::vector<Vec3>> loops;  // outline, then holes
-  std::vector<Triangle> triangle;        // the patch's triangles of positive area, in node order once built
-  std::vector<Rgb> reflected;            // per triangle: B - E
-  std::vector<int> order;                // while building: triangle indices, in node order
-  std::vector<double> cumulative;        // area of triangles [0 .. i), size + 1
-  std::vector<Node> nodes;               // nodes[0] is the root
-
-  int build(int begin, int end) {
-    std::vector<const Triangle*> t;
-    std::vector<Rgb> refl;
-    Vec3 lo(INFINITY), hi(-INFINITY);
-    for (int i = begin; i < end; ++i) {
-      const size_t k = static_cast<size_t>(order[static_cast<size_t>(i)]);
-      t.push_back(&triangle[k]);
-      refl.push_back(reflected[k]);
-      lo = glm::min(lo, triangle[k].centroid());
-      hi = glm::max(hi, triangle[k].centroid());
-    }
-    Node n;
-    static_cast<detail::GatherNode&>(n) = detail::gather_node(t, refl, normal);
-    n.begin = begin;
-    n.end = end;
-    const int id = static_cast<int>(nodes.size());
-    nodes.push_back(n);
-    if (end - begin > 2) {
-      const Vec3 ext = hi - lo;
-      const int axis = ext.x >= ext.y && ext.x >= ext.z ? 0 : (ext.y >= ext.z ? 1 : 2);
-      const int mid = (begin + end) / 2;
-      std::nth_element(order.begin() + begin, order.begin() + mid, order.begin() + end, [&](int a, int b) {
-        return triangle[static_cast<size_t>(a)].centroid()[axis] < triangle[static_cast<size_t>(b)].centroid()[axis];
-      });
-      const int l = build(begin, mid);
-      const int r = build(mid, end);
-      nodes[static_cast<size_t>(id)].left = l;
-      nodes[static_cast<size_t>(id)].right = r;
-    }
-    return id;
-  }
-
-  // A point of triangles [begin .. end), area-uniform for u in [0, 1), and
-  // its triangle.
-  Vec3 sample(int begin, int end, double u, double a, double b, int& triangle_index) const {
-    const double target = cumulative[static_cast<size_t>(begin)] +
-                          u * (cumulative[static_cast<size_t>(end)] - cumulative[static_cast<size_t>(begin)]);
-    const size_t i = static_cast<size_t>(area_index(cumulative.data(), begin, end, target, u));
-    triangle_index = static_cast<int>(i);
-    const Triangle& t = triangle[i];
-    return triangle_point(t.v[0], t.v[1], t.v[2], a, b);
-  }
-};
 
 }  // namespace
 
@@ -176,99 +101,6 @@ FieldMode resolve_field_mode(FieldMode requested, const Scene& scene, const Mesh
   return FieldMode::fit;
 }
 
-struct FieldEvaluator::Impl {
-  const Scene& scene;
-  double diagonal = 0.0;  // the scene's, once (Scene::diagonal visits every vertex)
-  int rays_per_node = 1;  // options.rays / 4, at least 1
-  DirectIllumination direct;
-  Occlusion occlusion;
-  std::unique_ptr<Visibility> visibility;
-  std::vector<SourceTree> sources;  // per patch (empty tree: reflects nothing)
-  // The clustered gather (see FieldEvaluator): a cluster tree whose roots
-  // stand for the reflecting patches (empty: every patch is visited).
-  ClusterTree clusters;
-  std::vector<int> cluster_patch;       // per root: its patch
-  std::vector<glm::dvec4> cluster_plane;  // per root: its patch's plane (unit normal, offset)
-  std::vector<double> cluster_reach;    // per cluster: a sphere about its centre holding its patches
-  std::vector<Box3> cluster_box;        // per cluster: the box of its patches
-  std::vector<Rgb> group_reflected;     // per group: the area mean of B - E
-
-  Impl(const Scene& s, const SolveOptions& o)
-      : scene(s), diagonal(s.diagonal()), rays_per_node(std::max(1, o.rays / 4)), direct(s), occlusion(s) {}
-
-  // Sample points of a source seen from one point: where each lies, its
-  // weight (the point form factor's kernel there) and the reflected
-  // radiosity of its triangle.
-  struct Samples {
-    std::vector<Vec3> to;
-    std::vector<double> w;
-    std::vector<Rgb> reflected;
-    void clear() {
-      to.clear();
-      w.clear();
-      reflected.clear();
-    }
-    void add(const Vec3& y, double weight, const Rgb& r) {
-      to.push_back(y);
-      w.push_back(weight);
-      reflected.push_back(r);
-    }
-  };
-  // Area-uniform stratified points y of triangles [begin .. end) of a
-  // source, for the mean of V(x, y) R(y) seen from x (normal n): appended
-  // to `batch`; returns the sum of their weights. Visibility and the
-  // reflected radiosity are sampled together: where the hidden part of a
-  // source is also its dark part (the floor at a block's foot seen from the
-  // ceiling), the mean visibility times the mean radiosity would come out
-  // low. A point where the kernel is 0 (behind x's tangent plane) is drawn
-  // again, at most kDrawTries times in all (see gather_clustered).
-  double draw(const Vec3& x, const Vec3& n, const SourceTree& tree, int begin, int end, uint64_t seed, int k,
-              Samples& batch) const {
-    SplitMix rng(seed);
-    double weight = 0.0;
-    for (int s = 0; s < k; ++s)
-      draw_facing(rng, (s + rng.uniform()) / k, [&](double u) {
-        const double a = rng.uniform(), b = rng.uniform();
-        int t = -1;
-        const Vec3 y = tree.sample(begin, end, u, a, b, t);
-        const double ws = point_kernel(x, n, y, tree.normal);  // a sample's weight
-        if (!(ws > 0.0)) return false;
-        weight += ws;
-        batch.add(y, ws, tree.reflected[static_cast<size_t>(t)]);
-        return true;
-      });
-    return weight;
-  }
-  // The weighted mean of R over samples [begin .. end) of `batch` whose
-  // segment from x got through (seen; null: all of them).
-  static Rgb sampled_mean(const Samples& batch, size_t begin, size_t end, const unsigned char* seen, double weight) {
-    Rgb sum(0.0);
-    for (size_t i = begin; i < end; ++i)
-      if (!seen || seen[i]) sum += batch.w[i] * batch.reflected[i];
-    return weight > 0.0 ? sum / weight : Rgb(0.0);
-  }
-
-  // The shadow rays for a part of a source that sends x about `light`
-  // (its form factor x its brightest channel): in proportion to it, the
-  // split of a point's rays that makes the variance of its sum least
-  // (a part's variance grows as its light squared over its rays), with
-  // rays_per_node for each `full` of light (kRayShare of what the solve
-  // says the point gathers), at least one and at most twice
-  // rays_per_node. Where nothing says how much the point gathers (full 0),
-  // rays_per_node. A part that sends nothing casts none: what it adds is 0
-  // whatever its rays say (its form factor still counts in the patch's sum).
-  int rays_for(double light, double full) const {
-    if (!(light > 0.0)) return 0;
-    if (!(full > 0.0)) return rays_per_node;
-    const double k = std::ceil(rays_per_node * light / full);
-    return k >= 2 * rays_per_node ? 2 * rays_per_node : std::max(1, static_cast<int>(k));
-  }
-  Rgb gather_patch(size_t q, const Vec3& x, const Vec3& n, int patch, uint64_t id, double full,
-                   FieldReport& report) const;
-  Rgb gather_clustered(const Vec3& x, const Vec3& n, int patch, uint64_t id, double full, FieldReport& report) const;
-  void build_clusters();
-};
-
 FieldEvaluator::FieldEvaluator(const Scene& scene, const Mesh& mesh, const std::vector<Rgb>& element,
                                const SolveOptions& options, GatherSources how)
     : impl_(std::make_unique<Impl>(scene, options)) {
@@ -320,66 +152,6 @@ FieldEvaluator::FieldEvaluator(const Scene& scene, const Mesh& mesh, const std::
       (how == GatherSources::automatic && !gather_every_patch(static_cast<double>(mesh.positions.size()),
                                                                   static_cast<double>(scene.patches.size()))))
     m.build_clusters();
-}
-
-void FieldEvaluator::Impl::build_clusters() {
-  // One root per reflecting patch: a stand-in triangle in its plane with
-  // its area, normal and area centroid, its corners as far from that
-  // centroid as the patch's furthest vertex (the cluster tree takes that
-  // for the root's radius).
-  std::vector<Triangle> roots;
-  std::vector<Box3> root_box;
-  for (size_t p = 0; p < sources.size(); ++p) {
-    const SourceTree& s = sources[p];
-    if (s.nodes.empty()) continue;
-    const Vec3 c = s.nodes[0].centre;
-    double r = 0.0;
-    Box3 box;
-    for (const Triangle& t : s.triangle)
-      for (const Vec3& v : t.v) {
-        r = std::max(r, glm::length(v - c));
-        box.add(v);
-      }
-    root_box.push_back(box);
-    const Vec3 u = glm::normalize(glm::cross(s.normal, std::abs(s.normal.x) < 0.9 ? Vec3(1, 0, 0) : Vec3(0, 1, 0)));
-    const Vec3 w = glm::cross(s.normal, u);
-    const double h = 0.5 * std::sqrt(3.0);
-    Triangle t;
-    t.v = {c + r * u, c + r * (-0.5 * u + h * w), c + r * (-0.5 * u - h * w)};
-    t.normal = s.normal;
-    t.area = s.nodes[0].area;
-    t.radius = r;
-    roots.push_back(t);
-    cluster_patch.push_back(static_cast<int>(p));
-    cluster_plane.emplace_back(s.normal, -glm::dot(s.normal, s.triangle[0].v[0]));
-  }
-  if (roots.size() < 2) {
-    cluster_patch.clear();
-    cluster_plane.clear();
-    return;
-  }
-  clusters = ClusterTree::volume(roots, std::vector<double>(roots.size(), 1.0));
-  cluster_reach.assign(clusters.size(), 0.0);
-  cluster_box.assign(clusters.size(), Box3{});
-  for (int c = static_cast<int>(clusters.size()) - 1; c >= 0; --c) {
-    const Vec3& centre = clusters.cluster(c).centre;
-    double& reach = cluster_reach[static_cast<size_t>(c)];
-    Box3& box = cluster_box[static_cast<size_t>(c)];
-    for (const int child : clusters.children(c)) {
-      if (child >= 0) {
-        const Triangle& t = roots[static_cast<size_t>(child)];
-        reach = std::max(reach, glm::length(t.centroid() - centre) + t.radius);
-        box.add(root_box[static_cast<size_t>(child)]);
-      } else {
-        const int k = ClusterTree::index(child);
-        reach = std::max(reach, glm::length(clusters.cluster(k).centre - centre) + cluster_reach[static_cast<size_t>(k)]);
-        box.add(cluster_box[static_cast<size_t>(k)]);
-      }
-    }
-  }
-  std::vector<Rgb> root_reflected;
-  for (const int p : cluster_patch) root_reflected.push_back(sources[static_cast<size_t>(p)].nodes[0].reflected);
-  clusters.radiosity(root_reflected, group_reflected);
 }
 
 FieldEvaluator::~FieldEvaluator() = default;
@@ -649,128 +421,6 @@ Rgb FieldEvaluator::Impl::gather_patch(size_t q, const Vec3& x, const Vec3& n, i
     sum += t.sampled ? t.f * sampled_mean(samples, t.begin, t.end, seen.data(), t.weight) : t.send;
   }
   return weight > 0.0 ? (fq / weight) * sum : Rgb(0.0);
-}
-
-// What x gathers from every source patch by the cluster tree over them: a
-// cluster far enough (its patches within a sphere of radius at most
-// kClusterOpening x its distance), wholly in front of x's tangent plane and
-// with groups whose normals do not straddle the direction to x by more than
-// kClusterStraddle of its area, is taken whole: its groups' form factors
-// (ClusterTree::form_factors) times the kernel-weighted mean of V R over
-// area-stratified points of its patches (rays_for, at least rays_per_node),
-// one random stream per (point, cluster). A cluster wholly behind the plane
-// gives nothing; any other is opened, down to the patches, which
-// gather_patch takes.
-Rgb FieldEvaluator::Impl::gather_clustered(const Vec3& x, const Vec3& n, int patch, uint64_t id, double full,
-                                           FieldReport& report) const {
-  struct Far {
-    double f = 0.0;   // the cluster's form factor
-    Rgb send{0.0};    // f x its groups' radiosity, where no rays are cast
-    size_t begin = 0, end = 0;  // its samples
-    double weight = 0.0;        // of the samples
-  };
-  thread_local std::vector<int> stack;
-  thread_local std::vector<Far> far;
-  thread_local std::vector<std::pair<int, double>> found;
-  thread_local Samples samples;
-  thread_local std::vector<int> sample_patch;
-  thread_local std::vector<Vec3> from;
-  thread_local std::vector<unsigned char> seen;
-  far.clear();
-  samples.clear();
-  sample_patch.clear();
-  Rgb h(0.0);
-  const double flat = 1e-9 * diagonal;  // heights within this of x's plane count as on it
-  stack.assign(1, 0);
-  while (!stack.empty()) {
-    const int c = stack.back();
-    stack.pop_back();
-    const ClusterTree::Cluster& cl = clusters.cluster(c);
-    const double reach = cluster_reach[static_cast<size_t>(c)];
-    const double d = glm::length(cl.centre - x);
-    // The heights of its box's corners over x's tangent plane (points on
-    // the plane send x nothing: a box standing on the floor under x is
-    // wholly in front of it).
-    const Box3& box = cluster_box[static_cast<size_t>(c)];
-    double low = INFINITY, high = -INFINITY;
-    for (int k = 0; k < 8; ++k) {
-      const Vec3 corner((k & 1) ? box.hi.x : box.lo.x, (k & 2) ? box.hi.y : box.lo.y, (k & 4) ? box.hi.z : box.lo.z);
-      const double hk = glm::dot(corner - x, n);
-      low = std::min(low, hk);
-      high = std::max(high, hk);
-    }
-    if (high <= flat) continue;  // wholly behind x's tangent plane, or in it
-    if (low >= -flat && reach <= kClusterOpening * d && clusters.straddle(c, x, 0.0) <= kClusterStraddle * cl.area) {
-      ++report.gather_clusters;
-      found.clear();
-      clusters.form_factors(c, x, n, 1.0, found);
-      Far t;
-      for (const auto& [g, f] : found) {
-        t.f += f;
-        t.send += f * group_reflected[static_cast<size_t>(-2 - g)];
-      }
-      if (!(t.f > 0.0)) continue;
-      if (visibility) {
-        // Area-stratified points of the cluster's patches, each weighed by
-        // the point form factor's kernel there, their rays cast below. A
-        // point where the kernel is 0 (on a patch facing away from x: the
-        // far sides of boxes) is drawn again, up to kDrawTries times: a
-        // cluster whose points all fell there gave nothing, though its
-        // groups facing x send light (with 4 points the 16 x 16 box field's
-        // ceiling came out 0.54% below the field with 64). As many points as
-        // rays_for gives, and at least rays_per_node: a cluster's groups
-        // differ in radiosity and kernel (a box's lit top, its dim sides),
-        // and the few points of a small share, taken by area, then stand for
-        // the groups by area instead of by kernel (with 1 or 2 points for the
-        // small shares the 16 x 16 box field's walls came out 0.2-0.65% above
-        // the field with 64 points, 0.08% with 4).
-        SplitMix rng(pair_seed(pair_seed(id, uint64_t{1} << 40), static_cast<uint64_t>(c)));
-        const int k = std::max(rays_per_node, rays_for(max3(t.send), full));
-        t.begin = samples.to.size();
-        for (int j = 0; j < k; ++j)
-          draw_facing(rng, (j + rng.uniform()) / k, [&](double at) {
-            const int root = clusters.root_at(clusters.position_at_area(c, at));
-            // A patch facing away is told by its plane alone, before its
-            // triangles are read.
-            const glm::dvec4& plane = cluster_plane[static_cast<size_t>(root)];
-            if (!(glm::dot(Vec3(plane), x) + plane.w > 0.0)) return false;
-            const size_t q = static_cast<size_t>(cluster_patch[static_cast<size_t>(root)]);
-            const SourceTree& s = sources[q];
-            const double u = rng.uniform(), a = rng.uniform(), b = rng.uniform();
-            int tri = -1;
-            const Vec3 y = s.sample(0, static_cast<int>(s.triangle.size()), u, a, b, tri);
-            const double w = point_kernel(x, n, y, s.normal);
-            if (!(w > 0.0)) return false;
-            t.weight += w;
-            samples.add(y, w, s.reflected[static_cast<size_t>(tri)]);
-            sample_patch.push_back(static_cast<int>(q));
-            return true;
-          });
-        t.end = samples.to.size();
-        report.rays_cast += k;
-      }
-      far.push_back(t);
-      continue;
-    }
-    for (const int child : clusters.children(c)) {
-      if (child <= -2)
-        stack.push_back(ClusterTree::index(child));
-      else
-        h += gather_patch(static_cast<size_t>(cluster_patch[static_cast<size_t>(child)]), x, n, patch, id, full,
-                          report);
-    }
-  }
-  if (!visibility) {
-    for (const Far& t : far) h += t.send;
-    return h;
-  }
-  seen.assign(samples.to.size(), 1);
-  if (!samples.to.empty()) {
-    from.assign(samples.to.size(), x);
-    visibility->visible_each(from.data(), samples.to.data(), samples.to.size(), patch, sample_patch.data(), seen.data());
-  }
-  for (const Far& t : far) h += t.f * sampled_mean(samples, t.begin, t.end, seen.data(), t.weight);
-  return h;
 }
 
 Rgb FieldEvaluator::indirect(const Vec3& x, int patch, uint64_t id, FieldReport& report, double solved) const {

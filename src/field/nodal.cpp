@@ -11,6 +11,78 @@
 
 namespace radmesh {
 
+namespace {
+
+// Least-squares plane through the element values at the centroids of
+// `tris`, evaluated at vertex v; empty when the centroids (nearly) line up.
+std::optional<Rgb> fit_plane_at(const Scene& scene, const Mesh& mesh, const std::vector<Rgb>& element, int v,
+                                const std::vector<int>& tris) {
+  const Vec3 n = scene.patches[static_cast<size_t>(mesh.patch[static_cast<size_t>(tris[0])])].normal;
+  const Vec3 u = glm::normalize(std::abs(n.x) < 0.6 ? glm::cross(Vec3(1, 0, 0), n) : glm::cross(Vec3(0, 1, 0), n));
+  const Vec3 w = glm::cross(n, u);
+  double m[3][3] = {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}};
+  Rgb rhs[3] = {Rgb(0.0), Rgb(0.0), Rgb(0.0)};
+  double scale = 0.0;
+  for (int t : tris) {
+    const Vec3 d = mesh.centroid(t) - mesh.positions[static_cast<size_t>(v)];
+    const double row[3] = {1.0, glm::dot(d, u), glm::dot(d, w)};
+    const double a = mesh.area(t);
+    scale = std::max(scale, glm::length(d));
+    for (int r = 0; r < 3; ++r) {
+      for (int c = 0; c < 3; ++c) m[r][c] += a * row[r] * row[c];
+      rhs[r] += a * row[r] * element[static_cast<size_t>(t)];
+    }
+  }
+  // Cramer's rule for the constant term, with a conditioning check.
+  const double det = m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) -
+                     m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0]) +
+                     m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
+  if (!(std::abs(det) > 1e-6 * m[0][0] * m[0][0] * m[0][0] * std::pow(scale, 4))) return std::nullopt;
+  Rgb c0(0.0);
+  for (int ch = 0; ch < 3; ++ch) {
+    const double r0 = rhs[0][ch], r1 = rhs[1][ch], r2 = rhs[2][ch];
+    c0[ch] = (r0 * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) - m[0][1] * (r1 * m[2][2] - m[1][2] * r2) +
+              m[0][2] * (r1 * m[2][1] - m[1][1] * r2)) /
+             det;
+  }
+  return c0;
+}
+
+// Triangles across each edge, as sorted (edge key, triangle): made on first
+// use (widening a degenerate fit, rare).
+struct EdgeNeighbours {
+  const Mesh& mesh;
+  const FeatureEdges& features;
+  std::vector<std::pair<uint64_t, int>> edge_tris;
+
+  // The triangles across t's edges that are not feature edges.
+  std::vector<int> operator()(int t) {
+    const size_t nt = mesh.triangles.size();
+    if (edge_tris.empty()) {
+      edge_tris.reserve(3 * nt);
+      for (size_t u = 0; u < nt; ++u) {
+        const auto& tri = mesh.triangles[u];
+        for (size_t c = 0; c < 3; ++c)
+          edge_tris.push_back({undirected_edge_key(tri[c], tri[(c + 1) % 3]), static_cast<int>(u)});
+      }
+      std::sort(edge_tris.begin(), edge_tris.end());
+    }
+    std::vector<int> out;
+    for (int c = 0; c < 3; ++c) {
+      const int x = mesh.triangles[static_cast<size_t>(t)][static_cast<size_t>(c)];
+      const int y = mesh.triangles[static_cast<size_t>(t)][static_cast<size_t>((c + 1) % 3)];
+      if (features.contains(x, y)) continue;
+      const uint64_t k = undirected_edge_key(x, y);
+      for (auto it = std::lower_bound(edge_tris.begin(), edge_tris.end(), std::pair<uint64_t, int>{k, -1});
+           it != edge_tris.end() && it->first == k; ++it)
+        if (it->second != t) out.push_back(it->second);
+    }
+    return out;
+  }
+};
+
+}  // namespace
+
 NodalField compute_nodal(const Scene& scene, const Mesh& mesh, const std::vector<Rgb>& element,
                          double crease_angle_degrees, NodalMethod method) {
   const bool fit = method == NodalMethod::linear_fit;
@@ -44,64 +116,7 @@ NodalField compute_nodal(const Scene& scene, const Mesh& mesh, const std::vector
     return false;
   };
 
-  // Triangles across each edge, as sorted (edge key, triangle): made on first
-  // use (widening a degenerate fit, rare).
-  std::vector<std::pair<uint64_t, int>> edge_tris;
-  auto edge_neighbours = [&](int t) {
-    if (edge_tris.empty()) {
-      edge_tris.reserve(3 * nt);
-      for (size_t u = 0; u < nt; ++u) {
-        const auto& tri = mesh.triangles[u];
-        for (size_t c = 0; c < 3; ++c)
-          edge_tris.push_back({undirected_edge_key(tri[c], tri[(c + 1) % 3]), static_cast<int>(u)});
-      }
-      std::sort(edge_tris.begin(), edge_tris.end());
-    }
-    std::vector<int> out;
-    for (int c = 0; c < 3; ++c) {
-      const int x = mesh.triangles[static_cast<size_t>(t)][static_cast<size_t>(c)];
-      const int y = mesh.triangles[static_cast<size_t>(t)][static_cast<size_t>((c + 1) % 3)];
-      if (features.contains(x, y)) continue;
-      const uint64_t k = undirected_edge_key(x, y);
-      for (auto it = std::lower_bound(edge_tris.begin(), edge_tris.end(), std::pair<uint64_t, int>{k, -1});
-           it != edge_tris.end() && it->first == k; ++it)
-        if (it->second != t) out.push_back(it->second);
-    }
-    return out;
-  };
-  // Least-squares plane through the values at the centroids of `tris`,
-  // evaluated at vertex v; empty when the centroids (nearly) line up.
-  auto fit_at = [&](int v, const std::vector<int>& tris) -> std::optional<Rgb> {
-    const Vec3 n = scene.patches[static_cast<size_t>(mesh.patch[static_cast<size_t>(tris[0])])].normal;
-    const Vec3 u = glm::normalize(std::abs(n.x) < 0.6 ? glm::cross(Vec3(1, 0, 0), n) : glm::cross(Vec3(0, 1, 0), n));
-    const Vec3 w = glm::cross(n, u);
-    double m[3][3] = {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}};
-    Rgb rhs[3] = {Rgb(0.0), Rgb(0.0), Rgb(0.0)};
-    double scale = 0.0;
-    for (int t : tris) {
-      const Vec3 d = mesh.centroid(t) - mesh.positions[static_cast<size_t>(v)];
-      const double row[3] = {1.0, glm::dot(d, u), glm::dot(d, w)};
-      const double a = mesh.area(t);
-      scale = std::max(scale, glm::length(d));
-      for (int r = 0; r < 3; ++r) {
-        for (int c = 0; c < 3; ++c) m[r][c] += a * row[r] * row[c];
-        rhs[r] += a * row[r] * element[static_cast<size_t>(t)];
-      }
-    }
-    // Cramer's rule for the constant term, with a conditioning check.
-    const double det = m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) -
-                       m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0]) +
-                       m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
-    if (!(std::abs(det) > 1e-6 * m[0][0] * m[0][0] * m[0][0] * std::pow(scale, 4))) return std::nullopt;
-    Rgb c0(0.0);
-    for (int ch = 0; ch < 3; ++ch) {
-      const double r0 = rhs[0][ch], r1 = rhs[1][ch], r2 = rhs[2][ch];
-      c0[ch] = (r0 * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) - m[0][1] * (r1 * m[2][2] - m[1][2] * r2) +
-                m[0][2] * (r1 * m[2][1] - m[1][1] * r2)) /
-               det;
-    }
-    return c0;
-  };
+  EdgeNeighbours edge_neighbours{mesh, features, {}};
 
   NodalField field;
   field.corners.assign(nt, {-1, -1, -1});
@@ -161,14 +176,14 @@ NodalField compute_nodal(const Scene& scene, const Mesh& mesh, const std::vector
       std::vector<int> tris;
       for (int j = 0; j < k; ++j)
         if (find(j) == i) tris.push_back(around[static_cast<size_t>(b + j)]);
-      std::optional<Rgb> value = fit_at(static_cast<int>(v), tris);
+      std::optional<Rgb> value = fit_plane_at(scene, mesh, element, static_cast<int>(v), tris);
       for (int grow = 0; !value && grow < 3; ++grow) {
         const std::vector<int> ring = tris;
         for (int t : ring)
           for (int nb : edge_neighbours(t))
             if (compatible(t, nb) && std::find(tris.begin(), tris.end(), nb) == tris.end()) tris.push_back(nb);
         if (tris.size() == ring.size()) break;
-        value = fit_at(static_cast<int>(v), tris);
+        value = fit_plane_at(scene, mesh, element, static_cast<int>(v), tris);
       }
       if (!value) continue;  // keep the mean
       // Radiosity is never below the surface's own emission.

@@ -1,6 +1,10 @@
 #include "radmesh/mesh.h"
 
+#include "radmesh/errors.h"
+
 #include <algorithm>
+#include <cmath>
+#include <string>
 
 namespace radmesh {
 
@@ -50,6 +54,30 @@ const OptionTable<MeshingOptions>& meshing_option_table() {
     return t;
   }();
   return table;
+}
+
+MeshingOptions resolve_meshing_options(const Scene& scene, MeshingOptions options) {
+  meshing_option_table().check(options);
+  if (options.max_edge == 0.0) options.max_edge = scene.diagonal() / 12.0;
+  // Equilateral triangles of side max_edge: the fewest the mesher can make.
+  double area = 0.0;
+  for (size_t p = 0; p < scene.patches.size(); ++p) area += scene.patch_area(static_cast<int>(p));
+  const double per_element = std::sqrt(3.0) / 4.0 * options.max_edge * options.max_edge;
+  const double estimate = area / per_element;
+  // Past double range (--max-edge 1e-300) the count is written as a power
+  // of ten, not "inf".
+  const std::string count =
+      std::isfinite(estimate)
+          ? format_number(std::round(estimate))
+          : "10^" + format_number(std::floor(std::log10(area) - 2.0 * std::log10(options.max_edge) -
+                                             std::log10(std::sqrt(3.0) / 4.0)));
+  if (estimate > options.max_elements)
+    throw InputError("max_edge " + format_number(options.max_edge) + " would make at least " + count +
+                         " elements (total area " + format_number(area) + "), more than the " +
+                         format_number(options.max_elements) + " allowed; use max_edge " +
+                         format_number(std::sqrt(area / (options.max_elements * std::sqrt(3.0) / 4.0))) + " or more",
+                     {"max_edge"});
+  return options;
 }
 
 }  // namespace radmesh

@@ -1,6 +1,7 @@
 // Initial mesh of every patch: CGAL constrained Delaunay triangulation in the
-// patch's plane, refined by CGAL's Delaunay mesher. The only CGAL translation
-// unit of the meshing module.
+// patch's plane, refined by CGAL's Delaunay mesher. Its bookkeeping that needs
+// no CGAL (boundary segments and the points on them, line end ids, messages)
+// is boundary_points.cpp, so that this stays one CGAL translation unit.
 //
 // Conformity between patches: every boundary segment of every patch is split
 // at the same global points on both sides. Points on a segment are (1) scene
@@ -13,6 +14,7 @@
 // is always conforming.
 
 #include "core/box_tree.h"
+#include "meshing/boundary_points.h"
 #include "radmesh/errors.h"
 #include "radmesh/mesh.h"
 #include "scene/overlap.h"
@@ -99,12 +101,6 @@ constexpr int kMaxRounds = 5;
 // A face this many times its size from the origin has lost 6 of double's
 // 16 digits to its position (the hint of a failed triangulation).
 constexpr double kFarForItsSize = 1e6;
-
-// One directed boundary segment of a patch loop, between global vertex ids.
-struct Segment {
-  int patch;
-  int a, b;
-};
 
 // Orthonormal frame of a patch's plane: (u, v, n) right-handed.
 struct Frame {
@@ -197,21 +193,32 @@ void mark_domain(CDT& cdt, OnBoundary on_boundary) {
   for (auto f = cdt.all_faces_begin(); f != cdt.all_faces_end(); ++f) f->set_in_domain(f->info() % 2 == 1);
 }
 
-// Shared state of one mesh_scene call.
-class SceneMesher {
+// The end points of a triangulation edge.
+std::pair<Point2, Point2> edge_points(const CDT::Edge& e) {
+  return std::pair<Point2, Point2>(e.first->vertex(CDT::cw(e.second))->point(),
+                                   e.first->vertex(CDT::ccw(e.second))->point());
+}
+
+// Marks the faces inside the patch whose outline and holes are the segments
+// of `outline` (mark_domain: only the constrained edges on them count).
+void mark_inside(CDT& cdt, const SegmentsHolding& outline) {
+  mark_domain(cdt, [&](const CDT::Edge& e) {
+    const auto [p0, p1] = edge_points(e);
+    return outline.first_holding(p0, p1) >= 0;
+  });
+}
+
+// Shared state of one mesh_scene call; the boundary segments and the points
+// on them are its base's (boundary_points.h).
+class SceneMesher : private internal::BoundaryPoints {
 public:
   // refine = false: each patch's constrained triangulation as it is.
   SceneMesher(const Scene& scene, const MeshingOptions& opt, bool refine)
-      : scene_(scene), opt_(opt), refine_(refine) {
-    positions_ = scene.vertices;
-    diagonal_ = std::max(scene.diagonal(), std::numeric_limits<double>::min());
-    eps_ = 1e-9 * diagonal_;
-    near_ = 100.0 * eps_;
-    collect_segments();
+      : internal::BoundaryPoints(scene), opt_(opt), refine_(refine) {
     if (refine_) {
       find_overlaps();
       if (opt.discontinuity != DiscontinuityMode::off) setup_constraints();
-      seed_points();
+      seed_points(opt_.max_edge);
     }
   }
 
@@ -273,7 +280,7 @@ public:
           if (auto it = alias_.find(v); it != alias_.end()) v = it->second;
         mesh.feature_edges.push_back({std::min(e[0], e[1]), std::max(e[0], e[1])});
       }
-    compact(mesh);
+    internal::compact(mesh);
     if (report) {
       report->boundary_rounds = rounds;
       report->contact_segments = contact_count_;
@@ -291,130 +298,9 @@ public:
   }
 
 private:
-  void collect_segments() {
-    patch_segments_.assign(1, 0);
-    for (int p = 0; p < static_cast<int>(scene_.patches.size()); ++p) {
-      const Patch& patch = scene_.patches[static_cast<size_t>(p)];
-      auto add_loop = [&](const std::vector<int>& loop) {
-        for (size_t i = 0; i < loop.size(); ++i) segments_.push_back({p, loop[i], loop[(i + 1) % loop.size()]});
-      };
-      add_loop(patch.outer);
-      for (const auto& h : patch.holes) add_loop(h);
-      patch_segments_.push_back(static_cast<int>(segments_.size()));
-    }
-    seg_points_.resize(segments_.size());
-    overlaps_.resize(segments_.size());
-  }
-
-  // Parameter of p along segment s, and whether p lies on its line.
-  bool on_line(size_t s, const Vec3& p, double* t) const {
-    const Vec3 A = positions_[static_cast<size_t>(segments_[s].a)];
-    const Vec3 B = positions_[static_cast<size_t>(segments_[s].b)];
-    const Vec3 d = B - A;
-    const double len2 = glm::dot(d, d);
-    *t = glm::dot(p - A, d) / len2;
-    const Vec3 foot = A + *t * d;
-    return glm::length(p - foot) <= eps_;
-  }
-  bool strictly_inside(size_t s, const Vec3& p, double* t) const {
-    if (!on_line(s, p, t)) return false;
-    const double len = glm::length(positions_[static_cast<size_t>(segments_[s].b)] -
-                                   positions_[static_cast<size_t>(segments_[s].a)]);
-    const double tol = eps_ / len;
-    return *t > tol && *t < 1.0 - tol;
-  }
-
-  // Segments on a common line whose parameter ranges overlap (positive length).
-  void find_overlaps() {
-    const size_t n = segments_.size();
-    std::vector<Vec3> lo(n), hi(n);
-    for (size_t s = 0; s < n; ++s) {
-      const Vec3 A = positions_[static_cast<size_t>(segments_[s].a)];
-      const Vec3 B = positions_[static_cast<size_t>(segments_[s].b)];
-      lo[s] = glm::min(A, B) - Vec3(eps_);
-      hi[s] = glm::max(A, B) + Vec3(eps_);
-    }
-    std::vector<Box3> boxes(n);
-    for (size_t s = 0; s < n; ++s) {
-      boxes[s].lo = lo[s];
-      boxes[s].hi = hi[s];
-    }
-    const BoxTree tree(boxes);
-    std::vector<int> near;
-    for (size_t s = 0; s < n; ++s) {
-      near.clear();
-      tree.overlapping(boxes[s], 0.0, [&](int r) {
-        if (static_cast<size_t>(r) > s) near.push_back(r);
-        return true;
-      });
-      std::sort(near.begin(), near.end());
-      for (int ri : near) {
-        const size_t r = static_cast<size_t>(ri);
-        double ta, tb;
-        if (!on_line(s, positions_[static_cast<size_t>(segments_[r].a)], &ta) ||
-            !on_line(s, positions_[static_cast<size_t>(segments_[r].b)], &tb))
-          continue;
-        const double len = glm::length(positions_[static_cast<size_t>(segments_[s].b)] -
-                                       positions_[static_cast<size_t>(segments_[s].a)]);
-        const double overlap = std::min(1.0, std::max(ta, tb)) - std::max(0.0, std::min(ta, tb));
-        if (overlap * len <= eps_) continue;
-        overlaps_[s].push_back(static_cast<int>(r));
-        overlaps_[r].push_back(static_cast<int>(s));
-      }
-    }
-  }
-
-  // A point of segment s (endpoints included) within eps of p, or -1.
-  int find_point(size_t s, const Vec3& p) const {
-    auto near = [&](int g) { return glm::length(positions_[static_cast<size_t>(g)] - p) <= eps_; };
-    if (near(segments_[s].a)) return segments_[s].a;
-    if (near(segments_[s].b)) return segments_[s].b;
-    double t;
-    on_line(s, p, &t);
-    const uint64_t c = cell_key(s, t), first = cell_key(s, 0.0);
-    for (uint64_t k = std::max(c, first + 1) - 1; k <= c + 1; ++k) {
-      const auto [from, to] = seg_cells_.equal_range(k);
-      for (auto it = from; it != to; ++it)
-        if (near(it->second)) return it->second;
-    }
-    return -1;
-  }
-  // The points of segment s by cells of 2 eps_ along it (seg_cells_): a
-  // point within eps_ of p lies in p's cell or a neighbour. A scan of the
-  // segment's list for every point added was quadratic in the points on
-  // one edge (10^5 where a narrow gap ran along it, see narrow()).
-  uint64_t cell_key(size_t s, double t) const {
-    const double len = glm::length(positions_[static_cast<size_t>(segments_[s].b)] -
-                                   positions_[static_cast<size_t>(segments_[s].a)]);
-    const double cell = std::clamp(std::floor(t * len / (2.0 * eps_)), 0.0, 4e9);
-    return (static_cast<uint64_t>(s) << 32) + static_cast<uint64_t>(cell);
-  }
-
-  // Adds global point id g to segment s (and to every segment overlapping s
-  // that contains it). Records the patches whose boundary gained the point.
-  void add_point(size_t s, int g, std::vector<int>* touched) {
-    auto put = [&](size_t seg) {
-      double t;
-      if (!strictly_inside(seg, positions_[static_cast<size_t>(g)], &t)) return;
-      const uint64_t key = cell_key(seg, t);
-      const auto [from, to] = seg_cells_.equal_range(key);
-      for (auto it = from; it != to; ++it)
-        if (it->second == g) return;
-      seg_cells_.emplace(key, g);
-      seg_points_[seg].push_back(g);
-      if (touched) touched->push_back(segments_[seg].patch);
-    };
-    put(s);
-    for (int r : overlaps_[s]) put(static_cast<size_t>(r));
-  }
-
-  // Discontinuity segments become constraints of their patch. Where two of
-  // them cross, the crossing is constructed exactly (CGAL Epeck, in the
-  // patch's plane) and rounded once; both are split there, so the CDT gets
-  // constraints that meet only at shared end points. Their end points get
-  // global ids once (shared by every round) and, where they lie on the
-  // patch's boundary, are shared with the neighbours like any boundary point.
-  void setup_constraints() {
+  // The discontinuity lines of the scene: contacts and overhangs, then
+  // (discontinuity full) the shadow boundaries.
+  std::vector<DiscontinuitySegment> discontinuity_lines() {
     std::vector<DiscontinuitySegment> lines = contact_segments(scene_);
     const std::vector<DiscontinuitySegment> overhangs =
         overhang_segments(scene_, opt_.min_separation_fraction * opt_.max_edge);
@@ -425,207 +311,111 @@ private:
       std::vector<DiscontinuitySegment> shadows = shadow_segments(scene_, lines, so, &shadow_report_);
       lines.insert(lines.end(), shadows.begin(), shadows.end());
     }
-    // A line end or crossing is the first scene vertex within eps_ of it,
-    // else the first constraint point made so far within eps_, else a new
-    // one: scene vertices found through a box tree, the points made in
-    // cells of 4 eps_ (a scan over both for every point took 70% of the
-    // meshing of a field of 128 x 128 boxes, 65,536 contact lines). A line's
-    // end within near_ of a corner of its own patch is that corner: an
-    // overhang clipped to a tilted face's corner ended 1e-7 of the diagonal
-    // from it, and CGAL's mesher crashed refining towards it. (Not any
-    // point within near_: an end moved onto another patch's boundary point
-    // lies off its own patch's boundary, which crashed the mesher too.)
-    std::vector<Box3> vertex_boxes(scene_.vertices.size());
-    for (size_t v = 0; v < vertex_boxes.size(); ++v) vertex_boxes[v].add(positions_[v]);
-    const BoxTree vertex_tree(vertex_boxes);
-    // Cells counted from the scene's lowest corner (a scene far from the
-    // origin would overflow the cell numbers otherwise), clamped all the same.
-    const double cell = 4.0 * eps_;
-    Box3 bounds;
-    for (const Box3& b : vertex_boxes) bounds.add(b);
-    const Vec3 origin = bounds.empty() ? Vec3(0.0) : bounds.lo;
-    auto cell_of = [cell, origin](const Vec3& p) {
-      auto index = [cell](double x) { return static_cast<long long>(std::clamp(std::floor(x / cell), -1e18, 1e18)); };
-      return std::array<long long, 3>{index(p.x - origin.x), index(p.y - origin.y), index(p.z - origin.z)};
-    };
-    std::map<std::array<long long, 3>, std::vector<int>> extra;  // constraint points made so far, by cell
-    // The nearest of `own` (sorted scene vertex ids) within near_ of p, or -1.
-    auto own_corner = [&](const Vec3& p, const std::vector<int>& own) {
-      Box3 at;
-      at.add(p);
-      int best = -1;
-      double best_d = near_;
-      vertex_tree.overlapping(at, near_, [&](int v) {
-        const double d = glm::length(positions_[static_cast<size_t>(v)] - p);
-        if (std::binary_search(own.begin(), own.end(), v) && (d < best_d || (d == best_d && v < best))) {
-          best = v;
-          best_d = d;
-        }
-        return true;
-      });
-      return best;
-    };
-    auto id_of = [&](const Vec3& p) {
-      Box3 at;
-      at.add(p);
-      int best = -1;
-      vertex_tree.overlapping(at, eps_, [&](int v) {
-        if (glm::length(positions_[static_cast<size_t>(v)] - p) <= eps_ && (best < 0 || v < best)) best = v;
-        return true;
-      });
-      if (best >= 0) return best;
-      const auto c = cell_of(p);
-      for (long long dx = -1; dx <= 1; ++dx)
-        for (long long dy = -1; dy <= 1; ++dy)
-          for (long long dz = -1; dz <= 1; ++dz) {
-            const auto it = extra.find({c[0] + dx, c[1] + dy, c[2] + dz});
-            if (it == extra.end()) continue;
-            for (int g : it->second)
-              if (glm::length(positions_[static_cast<size_t>(g)] - p) <= eps_ && (best < 0 || g < best)) best = g;
-          }
-      if (best >= 0) return best;
-      const int g = static_cast<int>(positions_.size());
-      positions_.push_back(p);
-      extra[c].push_back(g);
-      return g;
-    };
+    return lines;
+  }
+
+  // Discontinuity segments become constraints of their patch. Where two of
+  // them cross, the crossing is constructed exactly (CGAL Epeck, in the
+  // patch's plane) and rounded once; both are split there, so the CDT gets
+  // constraints that meet only at shared end points. Their end points get
+  // global ids once (shared by every round, internal::LinePoints) and, where
+  // they lie on the patch's boundary, are shared with the neighbours like
+  // any boundary point.
+  void setup_constraints() {
+    const std::vector<DiscontinuitySegment> lines = discontinuity_lines();
+    internal::LinePoints points(positions_, scene_.vertices.size(), eps_, near_);
     std::vector<std::vector<size_t>> by_patch(scene_.patches.size());
     for (size_t i = 0; i < lines.size(); ++i) by_patch[static_cast<size_t>(lines[i].patch)].push_back(i);
     std::vector<std::vector<size_t>> segments_of(scene_.patches.size());  // boundary segments per patch
     for (size_t s = 0; s < segments_.size(); ++s) segments_of[static_cast<size_t>(segments_[s].patch)].push_back(s);
     for (size_t p = 0; p < by_patch.size(); ++p) {
       if (by_patch[p].empty()) continue;
-      const Patch& patch = scene_.patches[p];
-      const Frame frame = make_frame(scene_, patch);
-      std::vector<int> own = patch.outer;
-      for (const auto& hole : patch.holes) own.insert(own.end(), hole.begin(), hole.end());
-      std::sort(own.begin(), own.end());
-      // A piece lying on one of the patch's boundary segments (a line whose
-      // end moved onto a corner, along the edge it started on) is that edge
-      // already: inserted again over it, CGAL's mesher crashed.
-      auto along_boundary = [&](int a, int b) {
-        double t;
-        for (size_t s : segments_of[p])
-          if (on_line(s, positions_[static_cast<size_t>(a)], &t) && t >= -1e-9 && t <= 1.0 + 1e-9 &&
-              on_line(s, positions_[static_cast<size_t>(b)], &t) && t >= -1e-9 && t <= 1.0 + 1e-9)
-            return true;
-        return false;
-      };
-      auto end_id = [&](const Vec3& q) {
-        const int corner = own_corner(q, own);
-        return corner >= 0 ? corner : id_of(q);
-      };
-      // Exact crossings of the patch's lines, as parameters along each line.
-      std::vector<std::vector<std::pair<double, Vec3>>> cuts(by_patch[p].size());
-      std::vector<EK::Segment_2> seg2;
-      std::vector<Box3> flat;  // each line's box, for the pairs that may cross
-      for (size_t i : by_patch[p]) {
-        const Point2 a = frame.to2(lines[i].a), b = frame.to2(lines[i].b);
-        seg2.emplace_back(EK::Point_2(a.x(), a.y()), EK::Point_2(b.x(), b.y()));
-        flat.push_back(flat_box(a.bbox() + b.bbox()));
-      }
-      const BoxTree line_tree(flat);
-      std::vector<size_t> partners;
-      for (size_t i = 0; i < seg2.size(); ++i) {
-        partners.clear();
-        line_tree.overlapping(flat[i], 0.0, [&](int j) {
-          if (static_cast<size_t>(j) > i) partners.push_back(static_cast<size_t>(j));
-          return true;
-        });
-        std::sort(partners.begin(), partners.end());  // in the order of the pairwise scan
-        for (size_t j : partners) {
-          const auto hit = CGAL::intersection(seg2[i], seg2[j]);
-          if (!hit) continue;
-          const EK::Point_2* x = boost::get<EK::Point_2>(&*hit);
-          if (!x) continue;  // collinear overlap: the constraint hierarchy handles it
-          const Vec3 q = frame.to3(Point2(CGAL::to_double(x->x()), CGAL::to_double(x->y())));
-          for (size_t k : {i, j}) {
-            const DiscontinuitySegment& d = lines[by_patch[p][k]];
-            const double t = glm::dot(q - d.a, d.b - d.a) / glm::dot(d.b - d.a, d.b - d.a);
-            if (glm::length(q - d.a) > eps_ && glm::length(q - d.b) > eps_) cuts[k].push_back({t, q});
-          }
-          ++crossings_;
-        }
-      }
-      for (size_t k = 0; k < by_patch[p].size(); ++k) {
-        const DiscontinuitySegment& d = lines[by_patch[p][k]];
-        auto& c = cuts[k];
-        c.push_back({0.0, d.a});
-        c.push_back({1.0, d.b});
-        // Crossings lie strictly inside (more than eps from either end), so
-        // the sorted cuts start at d.a and end at d.b.
-        std::sort(c.begin(), c.end(), [](auto& x, auto& y) { return x.first < y.first; });
-        const int first = end_id(c[0].second);
-        int prev = first;
-        for (size_t i = 1; i < c.size(); ++i) {
-          const int cur = i + 1 < c.size() ? id_of(c[i].second) : end_id(c[i].second);
-          if (cur != prev && !along_boundary(prev, cur)) constraints_[p].push_back({prev, cur, d.kind});
-          prev = cur;
-        }
-        for (int g : {first, prev})
-          for (size_t s : segments_of[p]) add_point(s, g, nullptr);
-        discontinuities_.push_back(d);
-        ++(d.kind == 0 ? contact_count_ : shadow_count_);
-      }
+      patch_constraints(p, lines, by_patch, segments_of, points);
     }
   }
 
-  // Scene vertices on segments (T-junctions), then the even pre-split.
-  void seed_points() {
-    for (size_t s = 0; s < segments_.size(); ++s) {
-      for (int r : overlaps_[s]) {
-        add_point(s, segments_[static_cast<size_t>(r)].a, nullptr);
-        add_point(s, segments_[static_cast<size_t>(r)].b, nullptr);
-      }
+  // The constraints of patch p from its lines (by_patch[p]): their exact
+  // crossings, then each line's pieces between its ends and crossings.
+  void patch_constraints(size_t p, const std::vector<DiscontinuitySegment>& lines,
+                         const std::vector<std::vector<size_t>>& by_patch,
+                         const std::vector<std::vector<size_t>>& segments_of, internal::LinePoints& points) {
+    const Patch& patch = scene_.patches[p];
+    const Frame frame = make_frame(scene_, patch);
+    std::vector<int> own = patch.outer;
+    for (const auto& hole : patch.holes) own.insert(own.end(), hole.begin(), hole.end());
+    std::sort(own.begin(), own.end());
+    // A piece lying on one of the patch's boundary segments (a line whose
+    // end moved onto a corner, along the edge it started on) is that edge
+    // already: inserted again over it, CGAL's mesher crashed.
+    auto along_boundary = [&](int a, int b) {
+      double t;
+      for (size_t s : segments_of[p])
+        if (on_line(s, positions_[static_cast<size_t>(a)], &t) && t >= -1e-9 && t <= 1.0 + 1e-9 &&
+            on_line(s, positions_[static_cast<size_t>(b)], &t) && t >= -1e-9 && t <= 1.0 + 1e-9)
+          return true;
+      return false;
+    };
+    // A line's end within near_ of a corner of its own patch is that corner
+    // (an overhang clipped to a tilted face's corner ends 1e-7 of the
+    // diagonal from it, and CGAL's mesher crashed refining towards it); not
+    // any point within near_, since an end moved onto another patch's
+    // boundary point lies off its own patch's boundary, which crashed the
+    // mesher too.
+    auto end_id = [&](const Vec3& q) {
+      const int corner = points.own_corner(q, own);
+      return corner >= 0 ? corner : points.id_of(q);
+    };
+    // Exact crossings of the patch's lines, as parameters along each line.
+    std::vector<std::vector<std::pair<double, Vec3>>> cuts(by_patch[p].size());
+    std::vector<EK::Segment_2> seg2;
+    std::vector<Box3> flat;  // each line's box, for the pairs that may cross
+    for (size_t i : by_patch[p]) {
+      const Point2 a = frame.to2(lines[i].a), b = frame.to2(lines[i].b);
+      seg2.emplace_back(EK::Point_2(a.x(), a.y()), EK::Point_2(b.x(), b.y()));
+      flat.push_back(flat_box(a.bbox() + b.bbox()));
     }
-    // Vertices of non-collinear patches touching a segment's interior.
-    std::vector<Box3> points(scene_.vertices.size());
-    for (size_t v = 0; v < points.size(); ++v) points[v].add(scene_.vertices[v]);
-    const BoxTree vertex_tree(points);
-    std::vector<int> near;
-    for (size_t s = 0; s < segments_.size(); ++s) {
-      const Vec3 A = positions_[static_cast<size_t>(segments_[s].a)];
-      const Vec3 B = positions_[static_cast<size_t>(segments_[s].b)];
-      Box3 box;
-      box.add(A);
-      box.add(B);
-      near.clear();
-      vertex_tree.overlapping(box, eps_, [&](int v) {
-        near.push_back(v);
+    const BoxTree line_tree(flat);
+    std::vector<size_t> partners;
+    for (size_t i = 0; i < seg2.size(); ++i) {
+      partners.clear();
+      line_tree.overlapping(flat[i], 0.0, [&](int j) {
+        if (static_cast<size_t>(j) > i) partners.push_back(static_cast<size_t>(j));
         return true;
       });
-      std::sort(near.begin(), near.end());  // in vertex order, as a scan would find them
-      for (int v : near) add_point(s, v, nullptr);
-    }
-    // Even pre-split of every segment to the maximum edge length; points are
-    // created once per distinct segment (shared by the segments overlapping it
-    // through add_point).
-    std::map<std::pair<int, int>, bool> done;
-    for (size_t s = 0; s < segments_.size(); ++s) {
-      const int a = segments_[s].a, b = segments_[s].b;
-      if (done.count({std::min(a, b), std::max(a, b)})) continue;
-      done[{std::min(a, b), std::max(a, b)}] = true;
-      const Vec3 A = positions_[static_cast<size_t>(std::min(a, b))];
-      const Vec3 B = positions_[static_cast<size_t>(std::max(a, b))];
-      // Existing points on the segment split it already; pre-split each gap.
-      std::vector<double> ts = {0.0, 1.0};
-      for (int g : seg_points_[s]) {
-        double t;
-        on_line(s, positions_[static_cast<size_t>(g)], &t);
-        ts.push_back(a < b ? t : 1.0 - t);
-      }
-      std::sort(ts.begin(), ts.end());
-      const double len = glm::length(B - A);
-      for (size_t i = 0; i + 1 < ts.size(); ++i) {
-        const double gap = (ts[i + 1] - ts[i]) * len;
-        const int parts = static_cast<int>(std::ceil(gap / opt_.max_edge - 1e-9));
-        for (int k = 1; k < parts; ++k) {
-          const double t = ts[i] + (ts[i + 1] - ts[i]) * k / parts;
-          const int g = static_cast<int>(positions_.size());
-          positions_.push_back(A + t * (B - A));
-          add_point(s, g, nullptr);
+      std::sort(partners.begin(), partners.end());  // in the order of the pairwise scan
+      for (size_t j : partners) {
+        const auto hit = CGAL::intersection(seg2[i], seg2[j]);
+        if (!hit) continue;
+        const EK::Point_2* x = boost::get<EK::Point_2>(&*hit);
+        if (!x) continue;  // collinear overlap: the constraint hierarchy handles it
+        const Vec3 q = frame.to3(Point2(CGAL::to_double(x->x()), CGAL::to_double(x->y())));
+        for (size_t k : {i, j}) {
+          const DiscontinuitySegment& d = lines[by_patch[p][k]];
+          const double t = glm::dot(q - d.a, d.b - d.a) / glm::dot(d.b - d.a, d.b - d.a);
+          if (glm::length(q - d.a) > eps_ && glm::length(q - d.b) > eps_) cuts[k].push_back({t, q});
         }
+        ++crossings_;
       }
+    }
+    for (size_t k = 0; k < by_patch[p].size(); ++k) {
+      const DiscontinuitySegment& d = lines[by_patch[p][k]];
+      auto& c = cuts[k];
+      c.push_back({0.0, d.a});
+      c.push_back({1.0, d.b});
+      // Crossings lie strictly inside (more than eps from either end), so
+      // the sorted cuts start at d.a and end at d.b.
+      std::sort(c.begin(), c.end(), [](auto& x, auto& y) { return x.first < y.first; });
+      const int first = end_id(c[0].second);
+      int prev = first;
+      for (size_t i = 1; i < c.size(); ++i) {
+        const int cur = i + 1 < c.size() ? points.id_of(c[i].second) : end_id(c[i].second);
+        if (cur != prev && !along_boundary(prev, cur)) constraints_[p].push_back({prev, cur, d.kind});
+        prev = cur;
+      }
+      for (int g : {first, prev})
+        for (size_t s : segments_of[p]) add_point(s, g, nullptr);
+      discontinuities_.push_back(d);
+      ++(d.kind == 0 ? contact_count_ : shadow_count_);
     }
   }
 
@@ -639,12 +429,56 @@ private:
     for (int s = patch_segments_[static_cast<size_t>(p)]; s < patch_segments_[static_cast<size_t>(p) + 1]; ++s)
       my_segments.push_back(static_cast<size_t>(s));
 
-    // `near`: a face to start locating the point from.
-    auto insert_vertex = [&](int g, CDT::Face_handle near = CDT::Face_handle()) {
-      auto vh = cdt.insert(frame.to2(positions_[static_cast<size_t>(g)]), near);
-      vh->info().id = g;
-      return vh;
-    };
+    const std::vector<CDT::Vertex_handle> boundary_vertices = insert_boundary(cdt, frame, my_segments);
+    const std::vector<std::pair<K::Segment_2, int>> lines2 = insert_lines(cdt, frame, p, refine, boundary_vertices);
+    // The rounded end points must not make lines cross anywhere but at
+    // their shared ends: CGAL would then add a crossing vertex (counted; the
+    // triangulation stays valid, as it uses exact predicates).
+    int& extra_crossings = rounding_crossings_[p];
+    extra_crossings = 0;
+    for (auto v = cdt.finite_vertices_begin(); v != cdt.finite_vertices_end(); ++v)
+      if (v->info().id < 0) ++extra_crossings;
+    if (!cdt.is_valid()) {
+      std::ostringstream m;
+      m << where(patch.file, patch.line) << "face '" << patch.name
+        << "': the triangulation with its discontinuity lines is not valid after rounding";
+      throw GeometryError(m.str());
+    }
+    // The kind of discontinuity line an edge lies on (both ends on one
+    // piece; points the mesher adds on a piece lie on it too).
+    const SegmentsHolding line_pieces(lines2, eps_);
+    // A constrained edge is on the patch boundary when it lies on one of the
+    // outline's (or a hole's) segments, whether or not a line runs along it
+    // too: asking "not on a line" instead loses the sliver between a line
+    // chained through a boundary point near it and that boundary (the
+    // chained piece off the boundary would count as boundary).
+    std::vector<std::pair<K::Segment_2, int>> outline2;
+    for (size_t s : my_segments)
+      outline2.push_back({K::Segment_2(frame.to2(positions_[static_cast<size_t>(segments_[s].a)]),
+                                       frame.to2(positions_[static_cast<size_t>(segments_[s].b)])),
+                          0});
+    const SegmentsHolding outline(outline2, eps_);
+    mark_inside(cdt, outline);
+
+    const double patch_area = scene_.patch_area(p);
+    if (refine) refine = refinable(cdt, p, patch, frame, my_segments, lines2, patch_area);
+    if (refine) refine = refine_patch(cdt, p, patch, patch_area, outline);
+    number_new_vertices(cdt, frame, p, my_segments, refine);
+    collect_features(cdt, p, lines2, line_pieces);
+    return patch_triangles(cdt, patch);
+  }
+
+  // `near`: a face to start locating the point from.
+  CDT::Vertex_handle insert_vertex(CDT& cdt, const Frame& frame, int g, CDT::Face_handle near = CDT::Face_handle()) {
+    auto vh = cdt.insert(frame.to2(positions_[static_cast<size_t>(g)]), near);
+    vh->info().id = g;
+    return vh;
+  }
+
+  // The patch's boundary segments as constraints, each through the points
+  // on it; returns the vertices inserted, in order.
+  std::vector<CDT::Vertex_handle> insert_boundary(CDT& cdt, const Frame& frame,
+                                                  const std::vector<size_t>& my_segments) {
     std::vector<CDT::Vertex_handle> boundary_vertices;
     for (size_t s : my_segments) {
       // Points sorted along the segment.
@@ -655,35 +489,42 @@ private:
         pts.push_back({t, g});
       }
       std::sort(pts.begin(), pts.end());
-      // An edge cut into many points (5 x 10^4 where a narrow gap ran
-      // along it, 4.8 s for its round, now 0.53 s): while the triangulation
-      // is still a line, CGAL locates a point on it by a scan of its edges
-      // (quadratic), so a vertex of the outline off that line goes in
-      // first; and each point is located from the one before it. Only
-      // there: both change the triangulation where points are cocircular
-      // (the Cornell box's mesh, 18,279 points, came out with 18,262).
+      // On an edge cut into many points (5 x 10^4 where a narrow gap runs
+      // along it), CGAL locates a point by a scan of the edges while the
+      // triangulation is still a line (quadratic), so a vertex of the
+      // outline off that line goes in first and each point is located from
+      // the one before it; only there, since both change the triangulation
+      // where points are cocircular.
       const bool many = pts.size() > kCollinearRun;
       if (cdt.dimension() < 2 && many)
         for (size_t o : my_segments) {
           const Vec3 q = positions_[static_cast<size_t>(segments_[o].b)];
           double t;
           if (!on_line(s, q, &t)) {
-            insert_vertex(segments_[o].b);
+            insert_vertex(cdt, frame, segments_[o].b);
             break;
           }
         }
-      CDT::Vertex_handle prev = insert_vertex(pts[0].second);
+      CDT::Vertex_handle prev = insert_vertex(cdt, frame, pts[0].second);
       boundary_vertices.push_back(prev);
       for (size_t i = 1; i < pts.size(); ++i) {
-        CDT::Vertex_handle cur = insert_vertex(pts[i].second, many ? prev->face() : CDT::Face_handle());
+        CDT::Vertex_handle cur = insert_vertex(cdt, frame, pts[i].second, many ? prev->face() : CDT::Face_handle());
         boundary_vertices.push_back(cur);
         if (prev != cur) cdt.insert_constraint(prev, cur);
         prev = cur;
       }
     }
-    // The line pieces as inserted, each with its line's kind: a line chained
-    // through a point that lies near it (within near_) bends there, and the
-    // edges the mesher makes on it lie on its pieces, not on the line.
+    return boundary_vertices;
+  }
+
+  // The patch's discontinuity lines as constraints, each chained through
+  // the points that lie on it; then, in the last round (no refinement), the
+  // interior points of its last refined mesh. Returns the line pieces as
+  // inserted, each with its line's kind: a line chained through a point
+  // that lies near it (within near_) bends there, and the edges the mesher
+  // makes on it lie on its pieces, not on the line.
+  std::vector<std::pair<K::Segment_2, int>> insert_lines(CDT& cdt, const Frame& frame, int p, bool refine,
+                                                         const std::vector<CDT::Vertex_handle>& boundary_vertices) {
     std::vector<std::pair<K::Segment_2, int>> lines2;
     // The last round (no refinement) keeps the patch's interior points from
     // its last refined mesh; those the mesher put on a line are chained into
@@ -703,9 +544,9 @@ private:
       (void)kind;
       for (const int g : {a, b}) ends.push_back({frame.to2(positions_[static_cast<size_t>(g)]), g});
     }
-    // The candidates (kept points on a line, then the ends) in a box tree:
-    // a scan over all of them for every line was quadratic on a floor with
-    // thousands of contact lines.
+    // The candidates (kept points on a line, then the ends) in a box tree,
+    // since a scan over all of them for every line is quadratic on a floor
+    // with thousands of contact lines.
     std::vector<std::pair<Point2, int>> candidates;
     for (const Steiner* sp : on_line) candidates.push_back({sp->q, sp->id});
     candidates.insert(candidates.end(), ends.begin(), ends.end());
@@ -715,7 +556,7 @@ private:
     for (const auto& constraint : constraints_[static_cast<size_t>(p)]) {
       // Named copies: clang 14 cannot capture structured bindings in a lambda.
       const int a = constraint[0], b = constraint[1];
-      CDT::Vertex_handle va = insert_vertex(a), vb = insert_vertex(b);
+      CDT::Vertex_handle va = insert_vertex(cdt, frame, a), vb = insert_vertex(cdt, frame, b);
       const K::Segment_2 seg(va->point(), vb->point());
       const CGAL::Bbox_2 sb = seg.bbox();
       const CGAL::Bbox_2 near(sb.xmin() - near_, sb.ymin() - near_, sb.xmax() + near_, sb.ymax() + near_);
@@ -742,62 +583,28 @@ private:
         lines2.push_back({K::Segment_2(prev->point(), cur->point()), constraint[2]});
         prev = cur;
       };
-      for (const auto& chained : chain) piece(insert_vertex(chained.second));
+      for (const auto& chained : chain) piece(insert_vertex(cdt, frame, chained.second));
       piece(vb);
     }
     if (!refine)
       for (const Steiner& st : steiner_[p])
-        if (!st.on_line) insert_vertex(st.id);
-    // The rounded end points must not make lines cross anywhere but at
-    // their shared ends: CGAL would then add a crossing vertex (counted; the
-    // triangulation stays valid, as it uses exact predicates).
-    int& extra_crossings = rounding_crossings_[p];
-    extra_crossings = 0;
-    for (auto v = cdt.finite_vertices_begin(); v != cdt.finite_vertices_end(); ++v)
-      if (v->info().id < 0) ++extra_crossings;
-    if (!cdt.is_valid()) {
-      std::ostringstream m;
-      m << where(patch.file, patch.line) << "face '" << patch.name
-        << "': the triangulation with its discontinuity lines is not valid after rounding";
-      throw GeometryError(m.str());
-    }
-    // The kind of discontinuity line an edge lies on (both ends on one
-    // piece; points the mesher adds on a piece lie on it too), or -1 for none.
-    const SegmentsHolding line_pieces(lines2, eps_);
-    auto line_kind = [&](const Point2& p0, const Point2& p1) {
-      const int i = line_pieces.first_holding(p0, p1);
-      return i < 0 ? -1 : lines2[static_cast<size_t>(i)].second;
-    };
-    auto edge_points = [](const CDT::Edge& e) {
-      return std::pair<Point2, Point2>(e.first->vertex(CDT::cw(e.second))->point(),
-                                       e.first->vertex(CDT::ccw(e.second))->point());
-    };
-    // A constrained edge is on the patch boundary when it lies on one of the
-    // outline's (or a hole's) segments, whether or not a line runs along it
-    // too. (Asking "not on a line" instead lost the sliver between a line
-    // chained through a boundary point near it and that boundary: the
-    // chained piece off the boundary counted as boundary, found by fuzzing.)
-    std::vector<std::pair<K::Segment_2, int>> outline2;
-    for (size_t s : my_segments)
-      outline2.push_back({K::Segment_2(frame.to2(positions_[static_cast<size_t>(segments_[s].a)]),
-                                       frame.to2(positions_[static_cast<size_t>(segments_[s].b)])),
-                          0});
-    const SegmentsHolding outline(outline2, eps_);
-    auto on_boundary = [&](const CDT::Edge& e) {
-      const auto [p0, p1] = edge_points(e);
-      return outline.first_holding(p0, p1) >= 0;
-    };
-    mark_domain(cdt, on_boundary);
+        if (!st.on_line) insert_vertex(cdt, frame, st.id);
+    return lines2;
+  }
 
-    // A sliver, narrower than the separation floor (its width: twice its
-    // area over its perimeter) and over 100 times longer than wide, is left
-    // as the triangulation of its outline and lines: the mesher would cut
-    // its long edges about a width apart (see the budget below), and light
-    // does not vary across it. The element hierarchy still splits it.
+  // Whether a patch to be refined may be: not a sliver, narrower than the
+  // separation floor (its width: twice its area over its perimeter) and
+  // over 100 times longer than wide, which is left as the triangulation of
+  // its outline and lines since the mesher would cut its long edges about
+  // a width apart (see the budget in refine_patch) and light does not vary
+  // across it (the element hierarchy still splits it); nor a patch with a
+  // tiny line piece or a narrow part (narrow()), said in a warning; nor one
+  // found too dense before (dense_).
+  bool refinable(const CDT& cdt, int p, const Patch& patch, const Frame& frame, const std::vector<size_t>& my_segments,
+                 const std::vector<std::pair<K::Segment_2, int>>& lines2, double patch_area) {
     double perimeter = 0.0;
     for (size_t s : my_segments)
       perimeter += glm::length(positions_[static_cast<size_t>(segments_[s].b)] - positions_[static_cast<size_t>(segments_[s].a)]);
-    const double patch_area = scene_.patch_area(p);
     const double width = 2.0 * patch_area / perimeter;
     const double floor = opt_.min_separation_fraction * opt_.max_edge;
     const bool sliver = width < floor && perimeter > 200.0 * width;
@@ -806,7 +613,7 @@ private:
     // mesher crashed refining around it (inexact constructions at that
     // scale), and no light varies over it.
     std::string gap;
-    if (refine && !sliver) {
+    if (!sliver) {
       for (const auto& [piece, kind] : lines2)
         if (piece.squared_length() < kTinyPiece * kTinyPiece * diagonal_ * diagonal_) {
           gap = "a piece of a discontinuity line on it is " + format_number(std::sqrt(piece.squared_length())) +
@@ -821,17 +628,26 @@ private:
                  " would cut that edge about as finely along its length";
       }
     }
-    if (refine && (sliver || !gap.empty() || dense_.count(p) > 0)) {
-      refine = false;
+    if (sliver || !gap.empty() || dense_.count(p) > 0) {
       if (thin_.insert(p).second && !gap.empty())
         warnings_.push_back(where(patch.file, patch.line) + "face '" + patch.name + "': " + gap +
                             ": left as the triangulation of its outline and lines (the hierarchical method still "
                             "splits it where its links ask)");
+      return false;
     }
+    return true;
+  }
+
+  // Refines the patch's triangulation by CGAL's mesher, step by step within
+  // a point budget. Returns false where the refinement made the patch too
+  // dense (kDense): then it is the triangulation before refinement again,
+  // and stays so in later rounds.
+  bool refine_patch(CDT& cdt, int p, const Patch& patch, double patch_area, const SegmentsHolding& outline) {
+    bool refine = true;
     // The triangulation before refinement, kept while a dense patch may
     // fall back to it (below).
     std::optional<CDT> unrefined;
-    if (refine) {
+    {
       if (!opt_.refine_narrow_strips) unrefined.emplace(cdt);
       const double s = std::sin(opt_.min_angle * std::numbers::pi / 180.0);
       Mesher mesher(cdt, Criteria(s * s, opt_.max_edge, opt_.min_separation_fraction * opt_.max_edge));
@@ -839,8 +655,8 @@ private:
       // edges (outline and lines) cut at --max-edge, the inside filled. The
       // mesher splits a constrained edge while a point lies in its diametral
       // circle, so the two long edges of a sliver w wide are cut about w
-      // apart: a face 0.8 long and 1e-7 wide went on for minutes towards
-      // 16 M points. A thousand times what is asked for stops it.
+      // apart (a face 0.8 long and 1e-7 wide goes on for minutes towards
+      // 16 M points); a thousand times what is asked for stops it.
       double constrained = 0.0;
       for (auto e = cdt.finite_edges_begin(); e != cdt.finite_edges_end(); ++e)
         if (cdt.is_constrained(*e)) {
@@ -861,44 +677,29 @@ private:
       const double dense = kDense * asked + kDenseMin;
       while (mesher.step_by_step_refine_mesh()) {
         if (++points > dense && unrefined) break;
-        if (points > budget) {
-          std::ostringstream m;
-          m << where(patch.file, patch.line) << "face '" << patch.name << "': refining its mesh to --max-edge "
-            << format_number(h) << " takes more than " << format_number(std::max(0.0, std::floor(budget)))
-            << " points"
-            << (budget < point_budget_ ? " (1000 x the " + format_number(std::ceil(asked)) +
-                                             " its size and edges ask for, + 100000)"
-                                       : " (what the other faces leave of " + format_number(opt_.max_elements) +
-                                             " elements in all)")
-            << ": lines, edges or vertices on it lie much closer together than the edge length (a sliver face, "
-               "near-coincident faces or shadow lines); check the geometry near it, or try --discontinuity "
-               "contacts or off";
-          throw GeometryError(m.str());
-        }
+        if (points > budget)
+          throw GeometryError(internal::budget_error(patch, h, budget, point_budget_, asked, opt_.max_elements));
       }
       if (unrefined && points > dense) {
         dense_.insert(p);
         thin_.insert(p);
-        warnings_.push_back(where(patch.file, patch.line) + "face '" + patch.name + "': refining it to --max-edge " +
-                            format_number(h) + " made more than " + format_number(std::floor(dense)) + " points (" +
-                            format_number(kDense) + " x the " + format_number(std::ceil(asked)) +
-                            " its size and edges ask for, + " + format_number(kDenseMin) +
-                            "): edges or lines on it run side by side far closer than --max-edge (a carpet's edge 1 "
-                            "mm up a wall), and it was cut about as finely along them: left as the triangulation of its "
-                            "outline and lines (the hierarchical method still splits it where its links ask)");
+        warnings_.push_back(internal::dense_warning(patch, h, dense, kDense, asked, kDenseMin));
         refine = false;
       } else {
-        mark_domain(cdt, on_boundary);
+        mark_inside(cdt, outline);
       }
     }
     if (unrefined && !refine) {
       cdt = *unrefined;
-      mark_domain(cdt, on_boundary);
+      mark_inside(cdt, outline);
     }
+    return refine;
+  }
 
-    // Global ids for new vertices. Those on a boundary segment get the
-    // segment's exact 3-D point and are shared; the others are remembered
-    // for a last round without refinement.
+  // Global ids for new vertices. Those on a boundary segment get the
+  // segment's exact 3-D point and are shared; the others are remembered
+  // for a last round without refinement.
+  void number_new_vertices(CDT& cdt, const Frame& frame, int p, const std::vector<size_t>& my_segments, bool refine) {
     std::vector<Steiner> steiner;
     for (auto v = cdt.finite_vertices_begin(); v != cdt.finite_vertices_end(); ++v) {
       if (v->info().id >= 0) continue;
@@ -930,9 +731,17 @@ private:
     }
 
     if (refine) steiner_[p] = std::move(steiner);
+  }
 
-    // Constrained edges with the domain on both sides lie on discontinuity
-    // lines; those on contact lines (the value jumps) become feature edges.
+  // Constrained edges with the domain on both sides lie on discontinuity
+  // lines; those on contact lines (the value jumps) become feature edges.
+  void collect_features(const CDT& cdt, int p, const std::vector<std::pair<K::Segment_2, int>>& lines2,
+                        const SegmentsHolding& line_pieces) {
+    // The kind of discontinuity line an edge lies on, or -1 for none.
+    auto line_kind = [&](const Point2& p0, const Point2& p1) {
+      const int i = line_pieces.first_holding(p0, p1);
+      return i < 0 ? -1 : lines2[static_cast<size_t>(i)].second;
+    };
     auto& features = features_[p];
     features.clear();
     for (auto e = cdt.finite_edges_begin(); e != cdt.finite_edges_end(); ++e) {
@@ -944,27 +753,16 @@ private:
       const int a = f->vertex(CDT::cw(e->second))->info().id, b = f->vertex(CDT::ccw(e->second))->info().id;
       features.push_back({std::min(a, b), std::max(a, b)});
     }
+  }
 
+  // The triangles inside the patch, by global ids.
+  std::vector<std::array<int, 3>> patch_triangles(const CDT& cdt, const Patch& patch) const {
     std::vector<std::array<int, 3>> tris;
     for (auto f = cdt.finite_faces_begin(); f != cdt.finite_faces_end(); ++f) {
       if (!f->is_in_domain()) continue;
       tris.push_back({f->vertex(0)->info().id, f->vertex(1)->info().id, f->vertex(2)->info().id});
     }
-    if (tris.empty()) {
-      std::ostringstream m;
-      m << where(patch.file, patch.line) << "face '" << patch.name
-        << "': triangulation produced no triangles (self-intersecting outline?)";
-      // Far from the origin for its size, double precision is the likelier
-      // cause (the Cornell box moved 1e12 away fails here).
-      Box3 box;
-      for (const Vec3& q : scene_.loop_points(patch.outer)) box.add(q);
-      const double size = glm::length(box.hi - box.lo), far = glm::length(0.5 * (box.lo + box.hi));
-      if (far > kFarForItsSize * size)
-        m << "; it lies " << format_number(far) << " from the origin, " << format_number(far / size)
-          << " times its size, where double precision resolves its geometry to only " << format_number(far * 1e-16 / size)
-          << " of its size: move the scene nearer the origin";
-      throw GeometryError(m.str());
-    }
+    if (tris.empty()) throw GeometryError(internal::no_triangles_error(scene_, patch, kFarForItsSize));
     return tris;
   }
 
@@ -978,27 +776,25 @@ private:
   // its footprint line beside the floor's edge; joined ones make small
   // angles, which CGAL's mesher handles). Such a vertex is an apex of a
   // triangle on the edge (one lies in the edge's diametral circle
-  // whenever any visible vertex does). The floor's edge along that box was
-  // cut 1e-5 apart, 10^5 points, and the next round took minutes to
-  // insert them; a vertex 1e-10 from a thin hole's edge crashed CGAL's
-  // mesher. At 1e-3 from the wall the floor is refined as before (10^3
-  // points along the box).
+  // whenever any visible vertex does). Refined, the floor's edge along that
+  // box would be cut 1e-5 apart (10^5 points, minutes to insert in the next
+  // round), and a vertex 1e-10 from a thin hole's edge crashes CGAL's
+  // mesher; at 1e-3 from the wall the floor is refined (10^3 points along
+  // the box).
   static constexpr double kNarrowPoints = 1e4;
-  static constexpr double kTinyPiece = 1e-6;  // of the scene's diagonal (see mesh_patch)
+  static constexpr double kTinyPiece = 1e-6;  // of the scene's diagonal (see refinable)
   // A patch whose refinement makes more than kDense x the points its size
   // and edges ask for, + kDenseMin, is left as the triangulation of its
   // outline and lines (unless MeshingOptions::refine_narrow_strips): CGAL's
   // mesher cuts two constrained edges running side by side about their gap
-  // apart along them, and each element made there takes its own links. A
-  // carpet 1 mm above a floor, touching the walls: its edge, a contact line
-  // 1 mm up each wall joined to the wall's sides, and the wall's foot were
-  // cut about 1 mm apart (at the hierarchical method's edge length 107 x
-  // what each wall asks for, 41,190 elements for 8 faces), and the
-  // hierarchical solve stopped at its memory limit after 83 M links. Ordinary faces make 0.5-9 x (the Cornell box 1.1, a
-  // sphere room 8.2); lines side by side that CGAL leaves alone (a panel
-  // 1 mm from a wall, a partition 1 mm thick) under 1.
+  // apart along them, and each element made there takes its own links (a
+  // carpet 1 mm above a floor, touching the walls, makes 107 x what each
+  // wall asks for, and the hierarchical solve runs out of memory), while
+  // ordinary faces make 0.5-9 x (the Cornell box 1.1, a sphere room 8.2) and
+  // lines side by side that CGAL leaves alone (a panel 1 mm from a wall, a
+  // partition 1 mm thick) under 1.
   static constexpr double kDense = 15.0, kDenseMin = 100.0;
-  static constexpr size_t kCollinearRun = 1000;  // see mesh_patch
+  static constexpr size_t kCollinearRun = 1000;  // see insert_boundary
   // What makes it narrow, or "".
   std::string narrow(const CDT& cdt, const Patch& patch, const Frame& frame, double floor) const {
     for (const auto& h : patch.holes) {
@@ -1040,41 +836,9 @@ private:
     return false;
   }
 
-  // Drops positions no triangle uses (points of a previous round that a
-  // re-meshed patch no longer has) and renumbers.
-  static void compact(Mesh& mesh) {
-    std::vector<int> remap(mesh.positions.size(), -1);
-    std::vector<Vec3> pos;
-    for (auto& t : mesh.triangles)
-      for (int& v : t) {
-        if (remap[static_cast<size_t>(v)] < 0) {
-          remap[static_cast<size_t>(v)] = static_cast<int>(pos.size());
-          pos.push_back(mesh.positions[static_cast<size_t>(v)]);
-        }
-        v = remap[static_cast<size_t>(v)];
-      }
-    for (auto& e : mesh.feature_edges) {
-      for (int& v : e) v = remap[static_cast<size_t>(v)];
-      if (e[0] > e[1]) std::swap(e[0], e[1]);
-    }
-    mesh.positions = std::move(pos);
-  }
-
-  const Scene& scene_;
   MeshingOptions opt_;
   bool refine_ = true;
-  double diagonal_ = 0.0;  // the scene's
-  double eps_ = 0.0;
-  // Closer than this, a line end is the point there, and a point is on a
-  // line: the mesher would otherwise split towards it without end.
-  double near_ = 0.0;
   std::set<int> dense_;  // patches refinement made too dense (kDense): unrefined in later rounds
-  std::vector<Vec3> positions_;
-  std::vector<Segment> segments_;
-  std::vector<int> patch_segments_;  // patch p's segments: [patch_segments_[p], patch_segments_[p + 1])
-  std::vector<std::vector<int>> seg_points_;
-  std::unordered_multimap<uint64_t, int> seg_cells_;  // (segment << 32) + cell of 2 eps_ -> its points (cell_key)
-  std::vector<std::vector<int>> overlaps_;
   struct Pending {
     size_t segment;
     int vertex;
@@ -1087,7 +851,7 @@ private:
   int contact_count_ = 0, shadow_count_ = 0, crossings_ = 0;
   std::map<int, int> rounding_crossings_;
   double point_budget_ = 0.0;  // points the mesher may add to the patch being meshed
-  std::set<int> thin_;         // patches too thin to refine (mesh_patch)
+  std::set<int> thin_;         // patches too thin to refine (refinable, refine_patch)
   std::vector<std::string> warnings_;  // MeshReport::warnings
   struct Steiner {
     int id;
@@ -1100,30 +864,6 @@ private:
 };
 
 }  // namespace
-
-MeshingOptions resolve_meshing_options(const Scene& scene, MeshingOptions options) {
-  meshing_option_table().check(options);
-  if (options.max_edge == 0.0) options.max_edge = scene.diagonal() / 12.0;
-  // Equilateral triangles of side max_edge: the fewest the mesher can make.
-  double area = 0.0;
-  for (size_t p = 0; p < scene.patches.size(); ++p) area += scene.patch_area(static_cast<int>(p));
-  const double per_element = std::sqrt(3.0) / 4.0 * options.max_edge * options.max_edge;
-  const double estimate = area / per_element;
-  // Past double range (--max-edge 1e-300) the count is written as a power
-  // of ten, not "inf".
-  const std::string count =
-      std::isfinite(estimate)
-          ? format_number(std::round(estimate))
-          : "10^" + format_number(std::floor(std::log10(area) - 2.0 * std::log10(options.max_edge) -
-                                             std::log10(std::sqrt(3.0) / 4.0)));
-  if (estimate > options.max_elements)
-    throw InputError("max_edge " + format_number(options.max_edge) + " would make at least " + count +
-                         " elements (total area " + format_number(area) + "), more than the " +
-                         format_number(options.max_elements) + " allowed; use max_edge " +
-                         format_number(std::sqrt(area / (options.max_elements * std::sqrt(3.0) / 4.0))) + " or more",
-                     {"max_edge"});
-  return options;
-}
 
 Mesh mesh_scene(const Scene& scene, const MeshingOptions& options, MeshReport* report) {
   const MeshingOptions opt = resolve_meshing_options(scene, options);

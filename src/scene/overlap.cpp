@@ -302,20 +302,16 @@ void refuse_touching_cut(const Scene& scene, const std::vector<Box3>& boxes, siz
   }
 }
 
-}  // namespace
-
-std::vector<std::pair<int, int>> settle_coplanar_faces(Scene& scene, double planarity_tolerance) {
-  const size_t np = scene.patches.size();
-  const double tol = kCoplanarOverlapTolerance * scene.diagonal();
-  const std::vector<Box3> boxes = outline_boxes(scene);
-  scene.coplanar_pairs.clear();
-
-  // A pair in one plane that is not a cut: two convex faces without holes
-  // are tested whole (convex faces along a shared edge lie on its two
-  // sides); the others are left to the mesh's triangles.
-  std::vector<signed char> direct(np, -1);  // per patch, -1 until known
+// The test of a pair of faces in one plane that is not a cut: two convex
+// faces without holes are tested whole (convex faces along a shared edge lie
+// on its two sides); the others are left to the mesh's triangles.
+struct PairCheck {
+  Scene& scene;
+  double tol;
+  std::vector<signed char> direct;  // per patch, -1 until known
   Polygon2 pa, pb;
-  auto is_direct = [&](size_t p) {
+
+  bool is_direct(size_t p) {
     if (direct[p] < 0) {
       const Patch& patch = scene.patches[p];
       direct[p] = patch.holes.empty() && patch.outer.size() <= kMaxDirectVertices;
@@ -325,8 +321,8 @@ std::vector<std::pair<int, int>> settle_coplanar_faces(Scene& scene, double plan
       }
     }
     return direct[p] == 1;
-  };
-  auto check = [&](size_t p, size_t q) {
+  }
+  void check(size_t p, size_t q) {
     if (!is_direct(p) || !is_direct(q)) {
       scene.coplanar_pairs.emplace_back(static_cast<int>(p), static_cast<int>(q));
       return;
@@ -336,7 +332,98 @@ std::vector<std::pair<int, int>> settle_coplanar_faces(Scene& scene, double plan
     flat_loop(scene, scene.patches[p].outer, axes, pa);
     flat_loop(scene, scene.patches[q].outer, axes, pb);
     if (overlap_more_than(pa, pb, tol)) throw overlap_error(scene, p, q, axes.lift(shared_point(pa, pb)), tol);
+  }
+};
+
+// Patch areas, each computed when first asked for.
+struct PatchAreas {
+  const Scene& scene;
+  std::vector<double> areas;  // -1 until known
+
+  double operator()(size_t p) {
+    if (areas[p] < 0.0) areas[p] = scene.patch_area(static_cast<int>(p));
+    return areas[p];
+  }
+};
+
+// What is cut: a face, or faces of one plane joined along shared edges
+// (a rug of tiles, a grid of lamp panels) as one outline, each with the
+// faces that may hold it (those holding every member).
+struct CutUnit {
+  std::vector<size_t> members;
+  std::vector<int> outline;
+  double area = 0.0;
+  std::vector<size_t> outs;
+};
+
+// The units to cut from `containing` ((in, out): per face without holes,
+// the faces of larger area holding it; sorted), in the order of their
+// groups.
+std::vector<CutUnit> cut_units(const Scene& scene, const std::vector<Box3>& boxes, const BoxTree& tree, double tol,
+                               const std::vector<std::pair<size_t, size_t>>& containing, PatchAreas& area) {
+  const size_t np = scene.patches.size();
+  std::vector<CutUnit> units;
+  std::vector<size_t> first(np, containing.size());  // per face, its first entry in containing
+  for (size_t k = containing.size(); k-- > 0;) first[containing[k].first] = k;
+  auto outs_of = [&](size_t in) {
+    std::vector<size_t> outs;
+    for (size_t k = first[in]; k < containing.size() && containing[k].first == in; ++k)
+      outs.push_back(containing[k].second);
+    return outs;
   };
+  // Faces that may be cut, joined where they share an edge.
+  std::vector<size_t> cuttable;
+  for (size_t k = 0; k < containing.size(); ++k)
+    if (k == 0 || containing[k - 1].first != containing[k].first) cuttable.push_back(containing[k].first);
+  std::vector<size_t> group(np);
+  std::iota(group.begin(), group.end(), size_t{0});
+  auto find = [&](size_t x) {
+    while (group[x] != x) x = group[x] = group[group[x]];
+    return x;
+  };
+  for (const size_t p : cuttable) {
+    const std::vector<int>& a = scene.patches[p].outer;
+    tree.overlapping(boxes[p], tol, [&](int qi) {
+      const size_t q = static_cast<size_t>(qi);
+      const std::vector<int>& b = scene.patches[q].outer;
+      if (q != p && first[q] < containing.size() && a.size() * b.size() <= kMaxContainmentPairs &&
+          coplanar(scene, boxes, p, q, tol) && share_an_edge(a, b))
+        group[find(p)] = find(q);
+      return true;
+    });
+  }
+  std::vector<std::pair<size_t, size_t>> joined;  // (group, face), faces of a group together
+  for (const size_t f : cuttable) joined.emplace_back(find(f), f);
+  std::sort(joined.begin(), joined.end());
+  for (size_t k = 0, end; k < joined.size(); k = end) {
+    std::vector<size_t> faces;
+    for (end = k; end < joined.size() && joined[end].first == joined[k].first; ++end)
+      faces.push_back(joined[end].second);
+    std::vector<int> outline = faces.size() > 1 ? joined_outline(scene, faces) : std::vector<int>();
+    if (outline.empty()) {  // one face, or faces that do not join into one outline: each alone
+      for (const size_t f : faces) units.push_back({{f}, scene.patches[f].outer, area(f), outs_of(f)});
+      continue;
+    }
+    CutUnit u{faces, std::move(outline), 0.0, outs_of(faces[0])};
+    for (const size_t f : faces) {
+      u.area += area(f);
+      const std::vector<size_t> outs = outs_of(f);  // sorted, as containing is
+      std::erase_if(u.outs, [&](size_t o) { return !std::binary_search(outs.begin(), outs.end(), o); });
+    }
+    units.push_back(std::move(u));
+  }
+  return units;
+}
+
+}  // namespace
+
+std::vector<std::pair<int, int>> settle_coplanar_faces(Scene& scene, double planarity_tolerance) {
+  const size_t np = scene.patches.size();
+  const double tol = kCoplanarOverlapTolerance * scene.diagonal();
+  const std::vector<Box3> boxes = outline_boxes(scene);
+  scene.coplanar_pairs.clear();
+
+  PairCheck pairs{scene, tol, std::vector<signed char>(np, -1), {}, {}};
   // Whether out's box, grown by tol, holds in's box: a pair that may be a
   // cut, checked once the cuts are made.
   auto holds = [&](size_t out, size_t in) {
@@ -352,96 +439,33 @@ std::vector<std::pair<int, int>> settle_coplanar_faces(Scene& scene, double plan
       if (holds(p, q) || holds(q, p))
         held.emplace_back(p, q);
       else
-        check(p, q);
+        pairs.check(p, q);
       return true;
     });
 
   // Cuts: per face without holes, the faces of larger area holding it.
-  std::vector<double> areas(np, -1.0);
-  auto area = [&](size_t p) {
-    if (areas[p] < 0.0) areas[p] = scene.patch_area(static_cast<int>(p));
-    return areas[p];
-  };
+  PatchAreas area{scene, std::vector<double>(np, -1.0)};
   std::vector<std::pair<size_t, size_t>> containing;  // (in, out)
   for (const auto& [a, b] : held)
     for (const auto& [in, out] : {std::pair<size_t, size_t>(a, b), std::pair<size_t, size_t>(b, a)})
       if (scene.patches[in].holes.empty() && holds(out, in) && area(out) > area(in)) containing.emplace_back(in, out);
   std::sort(containing.begin(), containing.end());
 
-  // What is cut: a face, or faces of one plane joined along shared edges
-  // (a rug of tiles, a grid of lamp panels) as one outline, each with the
-  // faces that may hold it (those holding every member).
-  struct Unit {
-    std::vector<size_t> members;
-    std::vector<int> outline;
-    double area = 0.0;
-    std::vector<size_t> outs;
-  };
-  std::vector<Unit> units;
-  if (!containing.empty()) {
-    std::vector<size_t> first(np, containing.size());  // per face, its first entry in containing
-    for (size_t k = containing.size(); k-- > 0;) first[containing[k].first] = k;
-    auto outs_of = [&](size_t in) {
-      std::vector<size_t> outs;
-      for (size_t k = first[in]; k < containing.size() && containing[k].first == in; ++k)
-        outs.push_back(containing[k].second);
-      return outs;
-    };
-    // Faces that may be cut, joined where they share an edge.
-    std::vector<size_t> cuttable;
-    for (size_t k = 0; k < containing.size(); ++k)
-      if (k == 0 || containing[k - 1].first != containing[k].first) cuttable.push_back(containing[k].first);
-    std::vector<size_t> group(np);
-    std::iota(group.begin(), group.end(), size_t{0});
-    auto find = [&](size_t x) {
-      while (group[x] != x) x = group[x] = group[group[x]];
-      return x;
-    };
-    for (const size_t p : cuttable) {
-      const std::vector<int>& a = scene.patches[p].outer;
-      tree.overlapping(boxes[p], tol, [&](int qi) {
-        const size_t q = static_cast<size_t>(qi);
-        const std::vector<int>& b = scene.patches[q].outer;
-        if (q != p && first[q] < containing.size() && a.size() * b.size() <= kMaxContainmentPairs &&
-            coplanar(scene, boxes, p, q, tol) && share_an_edge(a, b))
-          group[find(p)] = find(q);
-        return true;
-      });
-    }
-    std::vector<std::pair<size_t, size_t>> joined;  // (group, face), faces of a group together
-    for (const size_t f : cuttable) joined.emplace_back(find(f), f);
-    std::sort(joined.begin(), joined.end());
-    for (size_t k = 0, end; k < joined.size(); k = end) {
-      std::vector<size_t> faces;
-      for (end = k; end < joined.size() && joined[end].first == joined[k].first; ++end)
-        faces.push_back(joined[end].second);
-      std::vector<int> outline = faces.size() > 1 ? joined_outline(scene, faces) : std::vector<int>();
-      if (outline.empty()) {  // one face, or faces that do not join into one outline: each alone
-        for (const size_t f : faces) units.push_back({{f}, scene.patches[f].outer, area(f), outs_of(f)});
-        continue;
-      }
-      Unit u{faces, std::move(outline), 0.0, outs_of(faces[0])};
-      for (const size_t f : faces) {
-        u.area += area(f);
-        const std::vector<size_t> outs = outs_of(f);  // sorted, as containing is
-        std::erase_if(u.outs, [&](size_t o) { return !std::binary_search(outs.begin(), outs.end(), o); });
-      }
-      units.push_back(std::move(u));
-    }
-  }
+  std::vector<CutUnit> units;
+  if (!containing.empty()) units = cut_units(scene, boxes, tree, tol, containing, area);
   // Largest first: nothing is cut out of a face before the face itself has
   // been placed, so the holes it has then are its own (a ring's: the floor
   // shows through, and it is not cut).
-  std::stable_sort(units.begin(), units.end(), [](const Unit& x, const Unit& y) {
+  std::stable_sort(units.begin(), units.end(), [](const CutUnit& x, const CutUnit& y) {
     return x.area > y.area || (x.area == y.area && x.members[0] < y.members[0]);
   });
   std::vector<std::pair<int, int>> cuts;  // (in, out), in the order made
   std::vector<std::pair<size_t, size_t>> cut_pairs;  // the same as (p, q), p < q
   std::vector<std::pair<size_t, size_t>> made;  // (face cut into, first face of the unit cut), in hole order
-  for (const Unit& u : units) {
+  for (const CutUnit& u : units) {
     size_t best = np;
     for (const size_t out : u.outs)  // never a member: no face holds itself
-      if (area(out) > u.area && (best == np || areas[out] < areas[best]) &&
+      if (area(out) > u.area && (best == np || area.areas[out] < area.areas[best]) &&
           fits_as_hole(scene, boxes, out, u.outline, tol, planarity_tolerance))
         best = out;
     if (best == np) {
@@ -452,7 +476,7 @@ std::vector<std::pair<int, int>> settle_coplanar_faces(Scene& scene, double plan
     std::vector<int> hole = u.outline;
     std::reverse(hole.begin(), hole.end());  // clockwise around the normal
     scene.patches[best].holes.push_back(std::move(hole));
-    direct[best] = 0;
+    pairs.direct[best] = 0;
     for (const size_t in : u.members) {
       cuts.emplace_back(static_cast<int>(in), static_cast<int>(best));
       cut_pairs.emplace_back(std::min(in, best), std::max(in, best));
@@ -460,7 +484,7 @@ std::vector<std::pair<int, int>> settle_coplanar_faces(Scene& scene, double plan
   }
   std::sort(cut_pairs.begin(), cut_pairs.end());
   for (const auto& pq : held)
-    if (!std::binary_search(cut_pairs.begin(), cut_pairs.end(), pq)) check(pq.first, pq.second);
+    if (!std::binary_search(cut_pairs.begin(), cut_pairs.end(), pq)) pairs.check(pq.first, pq.second);
   std::sort(scene.coplanar_pairs.begin(), scene.coplanar_pairs.end());
   return cuts;
 }

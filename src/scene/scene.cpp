@@ -53,7 +53,6 @@ bool Scene::has_emitter() const {
 
 namespace {
 
-
 std::string fmt(const Vec3& v) { return format_number(v.x) + " " + format_number(v.y) + " " + format_number(v.z); }
 
 // Coordinates beyond this are refused: distances to the fourth power stay
@@ -62,8 +61,8 @@ constexpr double kMaxCoordinate = 1e50;
 
 // Emission beyond this is refused: radiosity (up to 1000 x the emission
 // where reflectance nears 1), power (times areas up to 1e100) and the sums
-// over the scene stay inside double range. Ke 1e308 used to give null
-// energies in the summary and a radiosity of 1e308 where 2e308 was due.
+// over the scene stay inside double range (Ke 1e308 would give null
+// energies in the summary and a radiosity of 1e308 where 2e308 is due).
 constexpr double kMaxEmission = 1e50;
 
 bool finite(const Vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
@@ -255,16 +254,10 @@ std::vector<int> dedupe_loop(std::vector<int> loop) {
   return out;
 }
 
-}  // namespace
-
-Scene build_scene(const std::vector<RawFace>& faces, std::vector<Material> materials,
-                  const std::string& source, const SceneOptions& options) {
-  Scene scene;
-  scene.source = source;
-  for (const Material& m : materials) check_material(m);
-  scene.materials = std::move(materials);
-
-  // Every coordinate finite, every face with a material; bounding box for tolerances.
+// Every coordinate finite, every face with a material; counts the faces and
+// vertices read. Returns the scene's size (its bounding box's diagonal, for
+// tolerances; 0 without faces).
+double check_faces(const std::vector<RawFace>& faces, Scene& scene) {
   Vec3 lo(std::numeric_limits<double>::infinity()), hi(-std::numeric_limits<double>::infinity());
   for (const RawFace& f : faces) {
     auto at = [&f] { return where(f.file, f.line) + "face '" + f.name + "': "; };
@@ -286,49 +279,53 @@ Scene build_scene(const std::vector<RawFace>& faces, std::vector<Material> mater
     ++scene.report.faces_read;
     scene.report.vertices_read += static_cast<int>(f.points.size());
   }
-  const double diag = faces.empty() ? 0.0 : glm::length(hi - lo);
-  Welder welder(options.weld_tolerance * diag);
-  welder.reserve(static_cast<size_t>(scene.report.vertices_read));
+  return faces.empty() ? 0.0 : glm::length(hi - lo);
+}
 
-  auto weld_loop = [&](const std::vector<Vec3>& pts) {
-    std::vector<int> loop;
-    for (const Vec3& p : pts) {
-      bool welded = false;
-      loop.push_back(welder.add(p, scene.vertices, &welded));
-      if (welded) ++scene.report.vertices_welded;
-    }
-    return dedupe_loop(std::move(loop));
-  };
-  auto distinct_points = [](std::vector<Vec3> points) {
-    const auto less = [](const Vec3& a, const Vec3& b) { return std::tie(a.x, a.y, a.z) < std::tie(b.x, b.y, b.z); };
-    std::sort(points.begin(), points.end(), less);
-    return static_cast<int>(std::unique(points.begin(), points.end()) - points.begin());
-  };
-  auto distinct = [](std::vector<int> loop) {
-    std::sort(loop.begin(), loop.end());
-    return static_cast<int>(std::unique(loop.begin(), loop.end()) - loop.begin());
-  };
+// How many distinct points, and distinct vertex ids, a loop has.
+int distinct_points(std::vector<Vec3> points) {
+  const auto less = [](const Vec3& a, const Vec3& b) { return std::tie(a.x, a.y, a.z) < std::tie(b.x, b.y, b.z); };
+  std::sort(points.begin(), points.end(), less);
+  return static_cast<int>(std::unique(points.begin(), points.end()) - points.begin());
+}
+int distinct(std::vector<int> loop) {
+  std::sort(loop.begin(), loop.end());
+  return static_cast<int>(std::unique(loop.begin(), loop.end()) - loop.begin());
+}
+
+// Makes the scene's patches from its faces: welds their vertices, drops
+// zero-area faces (counted, and said for the first 5), splits non-planar
+// ones into triangles and refuses faces that are not simple polygons.
+// Records per patch the centroid of its face's points as given, before
+// welding (for the check of coincident patches).
+class PatchMaker {
+public:
+  PatchMaker(Scene& scene, const SceneOptions& options, double diag)
+      : scene_(scene), options_(options), welder_(options.weld_tolerance * diag) {
+    welder_.reserve(static_cast<size_t>(scene.report.vertices_read));
+    weld_text_ = "the weld tolerance " + format_number(welder_.tolerance()) + " (of the scene size " +
+                 format_number(diag) + "): dropped as zero-area";
+  }
 
   // Per patch: the centroid of its face's points as given, before welding.
-  std::vector<Vec3> raw_centroid;
-  const std::string weld_text = "the weld tolerance " + format_number(welder.tolerance()) + " (of the scene size " +
-                                format_number(diag) + "): dropped as zero-area";
-  for (const RawFace& f : faces) {
+  const std::vector<Vec3>& raw_centroid() const { return raw_centroid_; }
+
+  void add(const RawFace& f) {
     auto at = [&f] { return where(f.file, f.line) + "face '" + f.name + "': "; };
     Vec3 given(0.0);
     for (const Vec3& p : f.points) given += p / static_cast<double>(f.points.size());
     // Dropped, counted, and said for the first 5.
     auto drop_as_zero_area = [&](const std::string& why) {
-      if (++scene.report.zero_area_faces_dropped <= 5)
-        scene.report.warnings.push_back(where(f.file, f.line) + "face '" + f.name + "' " + why);
+      if (++scene_.report.zero_area_faces_dropped <= 5)
+        scene_.report.warnings.push_back(where(f.file, f.line) + "face '" + f.name + "' " + why);
     };
     std::vector<int> outer = weld_loop(f.points);
     const int kept = distinct(outer);
     if (kept < 3 && distinct_points(f.points) >= 3) {
       // Distinct as given, welded into fewer than 3: thinner than the weld
       // tolerance, a zero-area face at the scene's resolution.
-      drop_as_zero_area("has its vertices welded into " + std::to_string(kept) + " within " + weld_text);
-      continue;
+      drop_as_zero_area("has its vertices welded into " + std::to_string(kept) + " within " + weld_text_);
+      return;
     }
     if (kept < 3) {
       // Far from the origin for its size, its vertices may be distinct in
@@ -343,25 +340,25 @@ Scene build_scene(const std::vector<RawFace>& faces, std::vector<Material> mater
               : "";
       throw InputError(at() + "has " + std::to_string(kept) + " distinct vertices; a face needs at least 3" + hint);
     }
-    std::vector<Vec3> pts = scene.loop_points(outer);
+    std::vector<Vec3> pts = scene_.loop_points(outer);
     const Vec3 newell = newell_normal(pts);
     const double area = 0.5 * glm::length(newell);
     const double diam = diameter(pts);
-    if (!(area > options.area_tolerance * diam * diam)) {
+    if (!(area > options_.area_tolerance * diam * diam)) {
       // Zero area with vertices off one line: the face's lobes cancel (a
       // symmetric bow tie), and it has no inside to drop or keep.
-      if (off_line(pts) > options.planarity_tolerance * diam)
+      if (off_line(pts) > options_.planarity_tolerance * diam)
         throw InputError(at() + "is not a simple polygon: its edges cross so that its signed area is zero, though "
                                 "its vertices do not lie on one line; check the order of the face's vertices");
       drop_as_zero_area("has zero area: dropped");
-      continue;
+      return;
     }
     // Thinner than the weld tolerance (its area over its diameter, a
     // triangle's height over its longest edge): at the scene's resolution
     // it has no inside, and meshing it found no triangle.
-    if (2.0 * area / diam < welder.tolerance()) {
-      drop_as_zero_area("is " + format_number(2.0 * area / diam) + " wide, below " + weld_text);
-      continue;
+    if (2.0 * area / diam < welder_.tolerance()) {
+      drop_as_zero_area("is " + format_number(2.0 * area / diam) + " wide, below " + weld_text_);
+      return;
     }
     const Vec3 n = newell / (2.0 * area);
     Vec3 centroid(0.0);
@@ -376,32 +373,12 @@ Scene build_scene(const std::vector<RawFace>& faces, std::vector<Material> mater
     patch.file = f.file;
     patch.line = f.line;
 
-    if (deviation > options.planarity_tolerance * diam) {
+    if (deviation > options_.planarity_tolerance * diam) {
       if (!f.holes.empty())
         throw InputError(at() + "is not planar (deviation " + format_number(deviation) +
                          ") and has holes; split it into planar faces");
-      // Fan-split into triangles; each keeps the face's name and material.
-      int made = 0;
-      for (size_t i = 1; i + 1 < outer.size(); ++i) {
-        const std::vector<int> tri = {outer[0], outer[i], outer[i + 1]};
-        const std::vector<Vec3> tp = scene.loop_points(tri);
-        const Vec3 tn = newell_normal(tp);
-        const double ta = 0.5 * glm::length(tn);
-        if (!(ta > options.area_tolerance * diam * diam)) continue;
-        Patch t = patch;
-        t.outer = tri;
-        t.normal = tn / (2.0 * ta);
-        scene.patches.push_back(std::move(t));
-        raw_centroid.push_back(given);
-        ++made;
-      }
-      ++scene.report.nonplanar_faces_split;
-      scene.report.warnings.push_back(where(f.file, f.line) + "face '" + f.name +
-                                      "' is not planar (a vertex lies " + format_number(deviation) +
-                                      " from its plane, " + format_number(deviation / diam) +
-                                      " of its size): split into " + std::to_string(made) +
-                                      " triangles");
-      continue;
+      split_into_triangles(f, patch, outer, given, deviation, diam);
+      return;
     }
 
     patch.outer = std::move(outer);
@@ -410,9 +387,9 @@ Scene build_scene(const std::vector<RawFace>& faces, std::vector<Material> mater
       std::vector<int> hole = weld_loop(hp);
       if (distinct(hole) < 3)
         throw InputError(at() + "has a hole with fewer than 3 distinct vertices");
-      const std::vector<Vec3> hpts = scene.loop_points(hole);
+      const std::vector<Vec3> hpts = scene_.loop_points(hole);
       for (const Vec3& p : hpts)
-        if (std::abs(glm::dot(p - centroid, n)) > options.planarity_tolerance * diam)
+        if (std::abs(glm::dot(p - centroid, n)) > options_.planarity_tolerance * diam)
           throw InputError(at() + "hole vertex " + fmt(p) + " is not in the face's plane");
       if (glm::dot(newell_normal(hpts), n) > 0.0) std::reverse(hole.begin(), hole.end());
       patch.holes.push_back(std::move(hole));
@@ -423,19 +400,65 @@ Scene build_scene(const std::vector<RawFace>& faces, std::vector<Material> mater
     // without end.
     std::vector<std::vector<int>> loops = {patch.outer};
     loops.insert(loops.end(), patch.holes.begin(), patch.holes.end());
-    if (const std::string crossing = find_loop_crossing(loops, scene.vertices, n); !crossing.empty())
+    if (const std::string crossing = find_loop_crossing(loops, scene_.vertices, n); !crossing.empty())
       throw InputError(at() + "is not a simple polygon: " + crossing +
                        "; check the order of the face's vertices (radmesh needs faces whose edges do not cross)");
-    scene.patches.push_back(std::move(patch));
-    raw_centroid.push_back(given);
+    scene_.patches.push_back(std::move(patch));
+    raw_centroid_.push_back(given);
   }
 
-  // Two faces on the same vertices facing the same way (a face line written
-  // twice) would be two coincident patches: which one is lit, and which one
-  // meshes, is not defined. Refused, naming both. Facing opposite ways they
-  // are the two sides of a thin panel, and fine, unless as given they faced
-  // each other across a gap that welding closed: then no light would pass
-  // between them, and that is refused too.
+private:
+  std::vector<int> weld_loop(const std::vector<Vec3>& pts) {
+    std::vector<int> loop;
+    for (const Vec3& p : pts) {
+      bool welded = false;
+      loop.push_back(welder_.add(p, scene_.vertices, &welded));
+      if (welded) ++scene_.report.vertices_welded;
+    }
+    return dedupe_loop(std::move(loop));
+  }
+
+  // A non-planar face (`patch` holds its name and material) fan-split into
+  // triangles; each keeps the face's name and material.
+  void split_into_triangles(const RawFace& f, const Patch& patch, const std::vector<int>& outer, const Vec3& given,
+                            double deviation, double diam) {
+    int made = 0;
+    for (size_t i = 1; i + 1 < outer.size(); ++i) {
+      const std::vector<int> tri = {outer[0], outer[i], outer[i + 1]};
+      const std::vector<Vec3> tp = scene_.loop_points(tri);
+      const Vec3 tn = newell_normal(tp);
+      const double ta = 0.5 * glm::length(tn);
+      if (!(ta > options_.area_tolerance * diam * diam)) continue;
+      Patch t = patch;
+      t.outer = tri;
+      t.normal = tn / (2.0 * ta);
+      scene_.patches.push_back(std::move(t));
+      raw_centroid_.push_back(given);
+      ++made;
+    }
+    ++scene_.report.nonplanar_faces_split;
+    scene_.report.warnings.push_back(where(f.file, f.line) + "face '" + f.name +
+                                     "' is not planar (a vertex lies " + format_number(deviation) +
+                                     " from its plane, " + format_number(deviation / diam) +
+                                     " of its size): split into " + std::to_string(made) +
+                                     " triangles");
+  }
+
+  Scene& scene_;
+  const SceneOptions& options_;
+  Welder welder_;
+  std::string weld_text_;
+  std::vector<Vec3> raw_centroid_;
+};
+
+// Two faces on the same vertices facing the same way (a face line written
+// twice) would be two coincident patches: which one is lit, and which one
+// meshes, is not defined. Refused, naming both. Facing opposite ways they
+// are the two sides of a thin panel, and fine, unless as given they faced
+// each other across a gap that welding closed: then no light would pass
+// between them, and that is refused too.
+void refuse_coincident_patches(const Scene& scene, const std::vector<Vec3>& raw_centroid,
+                               const SceneOptions& options, double diag) {
   // The problem with patch p lying on the same vertices as an earlier
   // patch q, or "".
   auto coincident = [&](size_t p, size_t q) -> std::string {
@@ -456,51 +479,51 @@ Scene build_scene(const std::vector<RawFace>& faces, std::vector<Material> mater
     return "";
   };
   // Patches on the same vertices lie side by side once sorted by a hash of
-  // their sorted vertex lists, then by the lists (kept in one flat array: a
-  // hash map keyed by each list took 7% of a million-face load). The
+  // their sorted vertex lists, then by the lists (kept in one flat array,
+  // cheaper than a hash map keyed by each list on a million faces). The
   // problem reported is the first patch's in file order.
-  {
-    const size_t np = scene.patches.size();
-    std::vector<size_t> begin(np + 1, 0);
-    for (size_t p = 0; p < np; ++p) {
-      begin[p + 1] = begin[p] + scene.patches[p].outer.size();
-      for (const auto& h : scene.patches[p].holes) begin[p + 1] += h.size();
-    }
-    std::vector<int> ids(begin[np]);
-    std::vector<std::pair<uint64_t, size_t>> order(np);  // (hash, patch)
-    for (size_t p = 0; p < np; ++p) {
-      const Patch& patch = scene.patches[p];
-      auto at = ids.begin() + static_cast<std::ptrdiff_t>(begin[p]);
-      auto end = std::copy(patch.outer.begin(), patch.outer.end(), at);
-      for (const auto& h : patch.holes) end = std::copy(h.begin(), h.end(), end);
-      std::sort(at, end);
-      uint64_t hash = 1469598103934665603ULL;  // FNV-1a over the sorted list
-      for (auto i = at; i != end; ++i) hash = (hash ^ static_cast<uint32_t>(*i)) * 1099511628211ULL;
-      order[p] = {hash, p};
-    }
-    auto list = [&](size_t p, size_t end) { return ids.begin() + static_cast<std::ptrdiff_t>(begin[p + end]); };
-    auto same_list = [&](size_t a, size_t b) { return std::equal(list(a, 0), list(a, 1), list(b, 0), list(b, 1)); };
-    std::sort(order.begin(), order.end());
-    size_t worst = np;  // the first patch, in file order, with a problem
-    std::string problem;
-    for (size_t k = 0, end; k < np; k = end) {
-      for (end = k + 1; end < np && order[end].first == order[k].first;) ++end;
-      for (size_t i = k + 1; i < end; ++i)  // patches in file order within one hash
-        for (size_t j = k; j < i; ++j) {
-          const size_t p = order[i].second, q = order[j].second;
-          if (p > worst || !same_list(p, q)) continue;
-          std::string why = coincident(p, q);
-          if (!why.empty() && p < worst) {
-            worst = p;
-            problem = std::move(why);
-          }
-        }
-    }
-    if (worst < np) throw InputError(problem);
+  const size_t np = scene.patches.size();
+  std::vector<size_t> begin(np + 1, 0);
+  for (size_t p = 0; p < np; ++p) {
+    begin[p + 1] = begin[p] + scene.patches[p].outer.size();
+    for (const auto& h : scene.patches[p].holes) begin[p + 1] += h.size();
   }
+  std::vector<int> ids(begin[np]);
+  std::vector<std::pair<uint64_t, size_t>> order(np);  // (hash, patch)
+  for (size_t p = 0; p < np; ++p) {
+    const Patch& patch = scene.patches[p];
+    auto at = ids.begin() + static_cast<std::ptrdiff_t>(begin[p]);
+    auto end = std::copy(patch.outer.begin(), patch.outer.end(), at);
+    for (const auto& h : patch.holes) end = std::copy(h.begin(), h.end(), end);
+    std::sort(at, end);
+    uint64_t hash = 1469598103934665603ULL;  // FNV-1a over the sorted list
+    for (auto i = at; i != end; ++i) hash = (hash ^ static_cast<uint32_t>(*i)) * 1099511628211ULL;
+    order[p] = {hash, p};
+  }
+  auto list = [&](size_t p, size_t end) { return ids.begin() + static_cast<std::ptrdiff_t>(begin[p + end]); };
+  auto same_list = [&](size_t a, size_t b) { return std::equal(list(a, 0), list(a, 1), list(b, 0), list(b, 1)); };
+  std::sort(order.begin(), order.end());
+  size_t worst = np;  // the first patch, in file order, with a problem
+  std::string problem;
+  for (size_t k = 0, end; k < np; k = end) {
+    for (end = k + 1; end < np && order[end].first == order[k].first;) ++end;
+    for (size_t i = k + 1; i < end; ++i)  // patches in file order within one hash
+      for (size_t j = k; j < i; ++j) {
+        const size_t p = order[i].second, q = order[j].second;
+        if (p > worst || !same_list(p, q)) continue;
+        std::string why = coincident(p, q);
+        if (!why.empty() && p < worst) {
+          worst = p;
+          problem = std::move(why);
+        }
+      }
+  }
+  if (worst < np) throw InputError(problem);
+}
 
-  // A face lying in a larger one of its plane (a lamp in an uncut ceiling)
-  // is cut out of it, and said; other overlaps in one plane are refused.
+// A face lying in a larger one of its plane (a lamp in an uncut ceiling)
+// is cut out of it, and said; other overlaps in one plane are refused.
+void cut_out_coplanar_faces(Scene& scene, const std::string& source, const SceneOptions& options) {
   const std::vector<std::pair<int, int>> cuts = settle_coplanar_faces(scene, options.planarity_tolerance);
   scene.report.faces_cut_out = static_cast<int>(cuts.size());
   for (size_t k = 0; k < cuts.size() && k < 5; ++k) {
@@ -513,6 +536,22 @@ Scene build_scene(const std::vector<RawFace>& faces, std::vector<Material> mater
   if (cuts.size() > 5)
     scene.report.warnings.push_back(source + ": cut " + std::to_string(cuts.size()) +
                                     " faces in all out of the faces of their plane they lie in");
+}
+
+}  // namespace
+
+Scene build_scene(const std::vector<RawFace>& faces, std::vector<Material> materials,
+                  const std::string& source, const SceneOptions& options) {
+  Scene scene;
+  scene.source = source;
+  for (const Material& m : materials) check_material(m);
+  scene.materials = std::move(materials);
+
+  const double diag = check_faces(faces, scene);
+  PatchMaker maker(scene, options, diag);
+  for (const RawFace& f : faces) maker.add(f);
+  refuse_coincident_patches(scene, maker.raw_centroid(), options, diag);
+  cut_out_coplanar_faces(scene, source, options);
 
   if (scene.report.zero_area_faces_dropped > 5)
     scene.report.warnings.push_back(source + ": dropped " +

@@ -321,13 +321,16 @@ struct Walker {
   }
 };
 
-// Checks a PLY header before assimp sees it: assimp 5.2 loops without end on
-// some malformed headers (an unknown property type, no end_header), and
-// allocates what a header's element counts declare before reading a byte of
-// the body. So: known keywords and types only, end_header within the first
-// 64 KiB, and every element count within what the rest of the file can hold
-// (at least one byte per value in binary, two per value in ASCII: a digit and
-// a separator). Throws InputError naming the header line.
+// One property of a PLY element, as the body is checked against it.
+struct PlyProperty {
+  bool list = false;
+  int bytes = 0;        // binary: a value's (a list's items')
+  int count_bytes = 0;  // binary: a list's count
+};
+
+// Per element: its count and its properties.
+using PlyLayout = std::vector<std::pair<double, std::vector<PlyProperty>>>;
+
 template <class Layout>
 double element_total(const Layout& layout) {
   double n = 0.0;
@@ -351,10 +354,18 @@ std::string shown(const std::string& word) {
   return out;
 }
 
-void check_ply_header(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::error_code ec;
-  const auto file_size = static_cast<double>(fs::file_size(path, ec));
+// What a PLY header declares, and where it ends.
+struct PlyHeader {
+  bool binary = false, big_endian = false;
+  double bytes_needed = 0.0;  // at least, for the declared elements
+  PlyLayout layout;           // the body is checked against it
+  size_t read = 0;            // bytes of the header
+  int ln = 0;                 // lines of the header
+};
+
+// Reads a PLY header: known keywords and types only, end_header within the
+// first 64 KiB. Throws InputError naming the header line.
+PlyHeader read_ply_header(std::istream& in, const std::string& path) {
   static const std::map<std::string, int> kTypeBytes = {
       {"char", 1},   {"uchar", 1},   {"int8", 1},   {"uint8", 1},   {"short", 2},   {"ushort", 2},
       {"int16", 2},  {"uint16", 2},  {"int", 4},    {"uint", 4},    {"int32", 4},   {"uint32", 4},
@@ -362,35 +373,26 @@ void check_ply_header(const std::string& path) {
   auto bad = [&](int line, const std::string& what) {
     throw InputError(path + ": PLY header line " + std::to_string(line) + ": " + what);
   };
-  bool binary = false, big_endian = false, ended = false;
-  double bytes_needed = 0.0, element_count = 0.0, element_bytes = 0.0;
-  // Per element: its count and its properties (the body is checked
-  // against them below).
-  struct Property {
-    bool list = false;
-    int bytes = 0;        // binary: a value's (a list's items')
-    int count_bytes = 0;  // binary: a list's count
-  };
-  std::vector<std::pair<double, std::vector<Property>>> layout;
-  auto close_element = [&] { bytes_needed += element_count * element_bytes; };
+  PlyHeader h;
+  bool ended = false;
+  double element_count = 0.0, element_bytes = 0.0;
+  auto close_element = [&] { h.bytes_needed += element_count * element_bytes; };
   std::string line;
-  size_t read = 0;
-  int ln = 0;
-  while (!ended && read < 65536 && std::getline(in, line)) {
-    read += line.size() + 1;
-    ++ln;
+  while (!ended && h.read < 65536 && std::getline(in, line)) {
+    h.read += line.size() + 1;
+    ++h.ln;
     if (!line.empty() && line.back() == '\r') line.pop_back();
     std::istringstream words(line);
     std::vector<std::string> w;
     for (std::string x; words >> x;) w.push_back(x);
     const std::string head = w.empty() ? "" : w[0];
-    if (ln == 1) {
+    if (h.ln == 1) {
       if (head != "ply" || w.size() != 1) bad(1, "a PLY file starts with the line 'ply'");
     } else if (head == "format") {
       if (w.size() != 3 || (w[1] != "ascii" && w[1] != "binary_little_endian" && w[1] != "binary_big_endian"))
-        bad(ln, "expected 'format ascii|binary_little_endian|binary_big_endian 1.0'");
-      binary = w[1] != "ascii";
-      big_endian = w[1] == "binary_big_endian";
+        bad(h.ln, "expected 'format ascii|binary_little_endian|binary_big_endian 1.0'");
+      h.binary = w[1] != "ascii";
+      h.big_endian = w[1] == "binary_big_endian";
     } else if (head == "comment" || head == "obj_info") {
     } else if (head == "element") {
       double count = -1.0;
@@ -399,80 +401,84 @@ void check_ply_header(const std::string& path) {
         count = std::strtod(w[2].c_str(), &end);
         if (*end != '\0' || !(count >= 0.0) || count != std::floor(count)) count = -1.0;
       }
-      if (count < 0.0) bad(ln, "expected 'element NAME COUNT' with a whole COUNT >= 0");
+      if (count < 0.0) bad(h.ln, "expected 'element NAME COUNT' with a whole COUNT >= 0");
       close_element();
       element_count = count;
       element_bytes = 0.0;
-      layout.push_back({count, {}});
+      h.layout.push_back({count, {}});
     } else if (head == "property") {
       const bool list = w.size() == 5 && w[1] == "list";
-      if (!(list || w.size() == 3)) bad(ln, "expected 'property TYPE NAME' or 'property list TYPE TYPE NAME'");
+      if (!(list || w.size() == 3)) bad(h.ln, "expected 'property TYPE NAME' or 'property list TYPE TYPE NAME'");
       for (size_t i = list ? 2 : 1; i + 1 < w.size(); ++i)
-        if (!kTypeBytes.count(w[i])) bad(ln, "unknown property type '" + shown(w[i]) + "'");
-      element_bytes += binary ? kTypeBytes.at(w[list ? 2 : 1]) : 2.0;
-      if (layout.empty()) bad(ln, "'property' before any 'element'");
-      layout.back().second.push_back({list, kTypeBytes.at(w[list ? 3 : 1]), list ? kTypeBytes.at(w[2]) : 0});
+        if (!kTypeBytes.count(w[i])) bad(h.ln, "unknown property type '" + shown(w[i]) + "'");
+      element_bytes += h.binary ? kTypeBytes.at(w[list ? 2 : 1]) : 2.0;
+      if (h.layout.empty()) bad(h.ln, "'property' before any 'element'");
+      h.layout.back().second.push_back({list, kTypeBytes.at(w[list ? 3 : 1]), list ? kTypeBytes.at(w[2]) : 0});
     } else if (head == "end_header") {
       ended = true;
     } else {
-      bad(ln, "unexpected '" + shown(line) + "'");
+      bad(h.ln, "unexpected '" + shown(line) + "'");
     }
   }
-  if (!ended) bad(ln, "no end_header line in the first 64 KiB");
+  if (!ended) bad(h.ln, "no end_header line in the first 64 KiB");
   close_element();
-  const double body = file_size - static_cast<double>(read);
-  if (bytes_needed > body)
-    throw InputError(path + ": the PLY header declares elements needing at least " +
-                     std::to_string(static_cast<long long>(std::min(bytes_needed, 9e18))) + " bytes, but the file has " +
-                     std::to_string(static_cast<long long>(body)) + " after its header (truncated, or a wrong count)");
-  // Data after the declared elements is a wrong count whose rest assimp
-  // drops without a word (a header declaring 1 face over a file of 2 gave
-  // one triangle, half the square).
-  auto more_than_declared = [&](const std::string& what) {
-    throw InputError(path + ": " + what + " after the " + std::to_string(static_cast<long long>(element_total(layout))) +
-                     " elements its PLY header declares (a wrong count would drop them)");
-  };
-  if (binary) {
-    // The body's length, walking its lists in one pass (a list's count read
-    // in the file's byte order): anything past it is more than declared.
-    double at = static_cast<double>(read);
-    unsigned char count[8] = {};
-    for (const auto& [n, props] : layout) {
-      const bool has_list = std::any_of(props.begin(), props.end(), [](const Property& p) { return p.list; });
-      if (!has_list) {
-        double fixed = 0.0;
-        for (const Property& p : props) fixed += p.bytes;
-        at += n * fixed;
-        if (at > file_size) return;  // short: said above
-        in.seekg(static_cast<std::streamoff>(at));
-        continue;
-      }
-      for (double k = 0.0; k < n; ++k)
-        for (const Property& p : props) {
-          if (!p.list) {
-            in.ignore(p.bytes);
-            at += p.bytes;
-            continue;
-          }
-          if (!in.read(reinterpret_cast<char*>(count), p.count_bytes)) return;  // short: assimp says so
-          uint64_t items = 0;
-          for (int b = 0; b < p.count_bytes; ++b)
-            items |= static_cast<uint64_t>(count[big_endian ? p.count_bytes - 1 - b : b]) << (8 * b);
-          const double skip = static_cast<double>(items) * p.bytes;
-          at += p.count_bytes + skip;
-          if (at > file_size) return;  // short: assimp says so
-          in.ignore(static_cast<std::streamsize>(skip));
-        }
+  return h;
+}
+
+// Data after the declared elements is a wrong count whose rest assimp
+// drops without a word (a header declaring 1 face over a file of 2 gives
+// one triangle, half the square).
+[[noreturn]] void more_than_declared(const std::string& path, const PlyLayout& layout, const std::string& what) {
+  throw InputError(path + ": " + what + " after the " + std::to_string(static_cast<long long>(element_total(layout))) +
+                   " elements its PLY header declares (a wrong count would drop them)");
+}
+
+// A binary body's length, walking its lists in one pass (a list's count
+// read in the file's byte order): anything past it is more than declared.
+void check_binary_ply_body(std::istream& in, const std::string& path, const PlyHeader& header, double file_size) {
+  const bool big_endian = header.big_endian;
+  double at = static_cast<double>(header.read);
+  unsigned char count[8] = {};
+  for (const auto& [n, props] : header.layout) {
+    const bool has_list = std::any_of(props.begin(), props.end(), [](const PlyProperty& p) { return p.list; });
+    if (!has_list) {
+      double fixed = 0.0;
+      for (const PlyProperty& p : props) fixed += p.bytes;
+      at += n * fixed;
+      if (at > file_size) return;  // short: said above
+      in.seekg(static_cast<std::streamoff>(at));
+      continue;
     }
-    if (file_size > at)
-      more_than_declared(std::to_string(static_cast<long long>(file_size - at)) + " bytes");
-    return;
+    for (double k = 0.0; k < n; ++k)
+      for (const PlyProperty& p : props) {
+        if (!p.list) {
+          in.ignore(p.bytes);
+          at += p.bytes;
+          continue;
+        }
+        if (!in.read(reinterpret_cast<char*>(count), p.count_bytes)) return;  // short: assimp says so
+        uint64_t items = 0;
+        for (int b = 0; b < p.count_bytes; ++b)
+          items |= static_cast<uint64_t>(count[big_endian ? p.count_bytes - 1 - b : b]) << (8 * b);
+        const double skip = static_cast<double>(items) * p.bytes;
+        at += p.count_bytes + skip;
+        if (at > file_size) return;  // short: assimp says so
+        in.ignore(static_cast<std::streamsize>(skip));
+      }
   }
-  // An ASCII body has one line per element: fewer lines is a truncated
-  // file (assimp reads what is there and reports something else), and a
-  // list's count cannot exceed the values left on its line (assimp 5.2
-  // allocated 413 M indices for one face whose count was a long run of
-  // digits, 4.9 GB and 20 s, found by fuzzing).
+  if (file_size > at)
+    more_than_declared(path, header.layout, std::to_string(static_cast<long long>(file_size - at)) + " bytes");
+}
+
+// An ASCII body has one line per element: fewer lines is a truncated file
+// (assimp reads what is there and reports something else), and a list's
+// count cannot exceed the values left on its line (assimp 5.2 allocates
+// what a count says: 413 M indices for one face whose count was a long run
+// of digits, 4.9 GB, found by fuzzing).
+void check_ascii_ply_body(std::istream& in, const std::string& path, const PlyHeader& header) {
+  const PlyLayout& layout = header.layout;
+  int ln = header.ln;
+  std::string line;
   const double elements = element_total(layout);
   double lines = 0.0;
   std::vector<std::string_view> tokens;
@@ -493,7 +499,7 @@ void check_ply_header(const std::string& path) {
         b = e;
       }
       size_t at = 0;
-      for (const Property& p : props) {
+      for (const PlyProperty& p : props) {
         if (at >= tokens.size()) break;  // too few values: assimp's own message names them
         if (!p.list) {
           ++at;
@@ -511,8 +517,33 @@ void check_ply_header(const std::string& path) {
   while (std::getline(in, line)) {
     ++ln;
     if (line.find_first_not_of(" \t\r") != std::string::npos)
-      more_than_declared("line " + std::to_string(ln) + " holds data");
+      more_than_declared(path, layout, "line " + std::to_string(ln) + " holds data");
   }
+}
+
+// Checks a PLY file before assimp sees it: assimp 5.2 loops without end on
+// some malformed headers (an unknown property type, no end_header), and
+// allocates what a header's element counts declare before reading a byte of
+// the body. So: known keywords and types only, end_header within the first
+// 64 KiB, every element count within what the rest of the file can hold
+// (at least one byte per value in binary, two per value in ASCII: a digit and
+// a separator), and no data past the declared elements. Throws InputError
+// naming the header line.
+void check_ply_header(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::error_code ec;
+  const auto file_size = static_cast<double>(fs::file_size(path, ec));
+  const PlyHeader header = read_ply_header(in, path);
+  const double body = file_size - static_cast<double>(header.read);
+  if (header.bytes_needed > body)
+    throw InputError(path + ": the PLY header declares elements needing at least " +
+                     std::to_string(static_cast<long long>(std::min(header.bytes_needed, 9e18))) +
+                     " bytes, but the file has " + std::to_string(static_cast<long long>(body)) +
+                     " after its header (truncated, or a wrong count)");
+  if (header.binary)
+    check_binary_ply_body(in, path, header, file_size);
+  else
+    check_ascii_ply_body(in, path, header);
 }
 
 // A binary STL must be as long as its facet count says, and an ASCII STL

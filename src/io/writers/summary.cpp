@@ -15,6 +15,152 @@ namespace {
 
 nlohmann::json rgb(const Rgb& c) { return nlohmann::json::array({c.x, c.y, c.z}); }
 
+// The shadow lines' counts (discontinuity full).
+void add_shadow_lines(nlohmann::json& doc, const RunInfo& info) {
+  const ShadowReport& sh = info.mesh_report.shadow;
+  doc["shadow_lines"] = {{"d1_segments", sh.d1},
+                         {"d2_segments", sh.d2},
+                         {"emitters", sh.emitters},
+                         {"weak_emitters_skipped", sh.weak_emitters_skipped},
+                         {"pairs", sh.pairs},
+                         {"back_facing_pairs_skipped", sh.back_facing_pairs_skipped},
+                         {"no_occluder_pairs_skipped", sh.no_occluder_pairs_skipped},
+                         {"non_silhouette_skipped", sh.non_silhouette_skipped},
+                         {"hidden_pieces_dropped", sh.hidden_pieces_dropped},
+                         {"near_duplicates_dropped", sh.near_duplicates_dropped},
+                         {"budget_receivers", sh.budget_receivers},
+                         {"lines_dropped_by_budget", sh.lines_dropped_by_budget},
+                         {"max_lines_per_receiver", info.meshing.shadow.max_lines_per_receiver},
+                         {"left_out", "EEE events (critical surfaces of three edges) are not computed"}};
+}
+
+// Objects (patches grouped by name) and patches (or the file that lists
+// them), with their mean radiosities where there is a solution.
+void add_objects_and_patches(nlohmann::json& doc, const Scene& scene, const Mesh& mesh, const Solution* solution) {
+  using nlohmann::json;
+  std::vector<Rgb> mean, element_mean;
+  if (solution) {
+    mean = patch_mean_radiosity(scene, mesh, solution->nodal);
+    element_mean = patch_mean_radiosity(scene, mesh, solution->element);
+  }
+  // Objects: patches grouped by name, in order of first appearance.
+  std::vector<std::string> names;
+  std::map<std::string, std::tuple<long long, double, Rgb, Rgb>> objects;  // count, area, sums
+  for (size_t p = 0; p < scene.patches.size(); ++p) {
+    const std::string& name = scene.patches[p].name;
+    auto [it, fresh] = objects.try_emplace(name, 0, 0.0, Rgb(0.0), Rgb(0.0));
+    if (fresh) names.push_back(name);
+    auto& [count, area, m, em] = it->second;
+    const double a = scene.patch_area(static_cast<int>(p));
+    ++count;
+    area += a;
+    if (solution) {
+      m += a * mean[p];
+      em += a * element_mean[p];
+    }
+  }
+  json objs = json::array();
+  for (const std::string& name : names) {
+    const auto& [count, area, m, em] = objects.at(name);
+    json j = {{"name", name}, {"patches", count}, {"area", area}};
+    if (solution && area > 0.0) {
+      j["mean_radiosity"] = rgb(m / area);
+      j["element_mean_radiosity"] = rgb(em / area);
+    }
+    objs.push_back(j);
+  }
+  doc["objects"] = objs;
+  if (!patches_in_summary(scene)) {
+    doc["patches_csv"] = "patches.csv";
+    return;
+  }
+  json patches = json::array();
+  for (size_t p = 0; p < scene.patches.size(); ++p) {
+    const Patch& patch = scene.patches[p];
+    json j = {{"id", p},
+              {"name", patch.name},
+              {"material", scene.material_of(patch).name},
+              {"area", scene.patch_area(static_cast<int>(p))}};
+    if (solution) {
+      j["mean_radiosity"] = rgb(mean[p]);  // of the field users see
+      j["element_mean_radiosity"] = rgb(element_mean[p]);  // of the solver's elements
+    }
+    patches.push_back(j);
+  }
+  doc["patches"] = patches;
+}
+
+// The solution's counts, the solver's figures (its options and counters),
+// the energy balance and the skips.
+void add_solver(nlohmann::json& doc, const RunInfo& info, const MethodResult& result) {
+  using nlohmann::json;
+  const SolveStats& st = result.solution.stats;
+  doc["counts"]["form_factors"] = st.form_factors;
+  doc["counts"]["form_factors_skipped"] = st.form_factors_skipped;
+  doc["counts"]["receiver_points"] = st.receiver_points;
+  doc["counts"]["rays_cast"] = st.rays_cast;
+  doc["counts"]["rays_skipped"] = st.rays_skipped;
+  doc["counts"]["pairs_unoccludable"] = st.pairs_unoccludable;
+  // error_bound: per channel, null where the scene gives no bound (-1).
+  json bound = json::array();
+  for (const double b : st.error_bound) bound.push_back(b >= 0.0 ? json(b) : json(nullptr));
+  doc["solver"] = {{"method", info.method},
+                   {"residual", st.residual},
+                   {"error_bound", bound},
+                   {"extrapolations", st.extrapolations},
+                   {"convex_enclosure", st.convex_enclosure}};
+  // Numbers as numbers, flags as booleans, choices as written.
+  for (const OptionValue& v : info.method_options) {
+    if (v.kind == OptionSpec::Kind::choice)
+      doc["solver"][v.name] = v.text;
+    else if (v.kind == OptionSpec::Kind::flag)
+      doc["solver"][v.name] = v.number != 0.0;
+    else
+      doc["solver"][v.name] = v.number;
+  }
+  json units = json::object();
+  for (const Counter& c : result.counters) {
+    json values = json::array();
+    for (double v : c.values) values.push_back(c.integral ? json(static_cast<long long>(v)) : json(v));
+    doc["solver"][c.name] = c.series ? values : values.at(0);
+    if (!c.unit.empty()) units[c.name] = c.unit;
+  }
+  if (!units.empty()) doc["solver"]["units"] = units;
+  const Rgb imbalance = st.power_emitted - st.power_absorbed - st.power_escaped;
+  Rgb rel(0.0);
+  for (int c = 0; c < 3; ++c)
+    rel[c] = st.power_emitted[c] > 0.0 ? imbalance[c] / st.power_emitted[c] : 0.0;
+  doc["energy"] = {{"emitted", rgb(st.power_emitted)},
+                   {"absorbed", rgb(st.power_absorbed)},
+                   {"escaped", rgb(st.power_escaped)},
+                   {"relative_imbalance", rgb(rel)}};
+  doc["skips"] = st.skips;
+}
+
+// How the display field was made.
+void add_field(nlohmann::json& doc, const FieldReport& f) {
+  doc["field"] = {{"mode", f.mode == FieldMode::own ? f.own_field : to_string(f.mode)}};
+  if (!f.why.empty()) doc["field"]["why"] = f.why;
+  if (f.mode == FieldMode::gather) {
+    doc["field"]["display_vertices"] = f.display_vertices;
+    doc["field"]["on_other_surface"] = f.on_other_surface;
+    doc["field"]["direct"] = {{"unoccluded", f.direct.unoccluded},
+                              {"clipped", f.direct.clipped},
+                              {"dark", f.direct.dark},
+                              {"hidden", f.direct.hidden},
+                              {"behind", f.direct.behind},
+                              {"seconds", f.seconds_direct}};
+    doc["field"]["gather"] = {{"sources", f.gather_sources},
+                              {"nodes", f.gather_nodes},
+                              {"clustered", f.clustered},
+                              {"clusters", f.gather_clusters},
+                              {"triangles", f.gather_triangles},
+                              {"rays_cast", f.rays_cast},
+                              {"opening", FieldEvaluator::kOpening},
+                              {"seconds", f.seconds_gather}};
+  }
+}
+
 }  // namespace
 
 nlohmann::json make_summary(const RunInfo& info, const Scene& scene, const Mesh& mesh,
@@ -69,138 +215,13 @@ nlohmann::json make_summary(const RunInfo& info, const Scene& scene, const Mesh&
   for (const std::string& w : info.mesh_report.warnings) doc["warnings"].push_back(w);
   if (result)
     for (const std::string& w : result->warnings) doc["warnings"].push_back(w);
-  if (info.meshing.discontinuity == DiscontinuityMode::full) {
-    const ShadowReport& sh = info.mesh_report.shadow;
-    doc["shadow_lines"] = {{"d1_segments", sh.d1},
-                           {"d2_segments", sh.d2},
-                           {"emitters", sh.emitters},
-                           {"weak_emitters_skipped", sh.weak_emitters_skipped},
-                           {"pairs", sh.pairs},
-                           {"back_facing_pairs_skipped", sh.back_facing_pairs_skipped},
-                           {"no_occluder_pairs_skipped", sh.no_occluder_pairs_skipped},
-                           {"non_silhouette_skipped", sh.non_silhouette_skipped},
-                           {"hidden_pieces_dropped", sh.hidden_pieces_dropped},
-                           {"near_duplicates_dropped", sh.near_duplicates_dropped},
-                           {"budget_receivers", sh.budget_receivers},
-                           {"lines_dropped_by_budget", sh.lines_dropped_by_budget},
-                           {"max_lines_per_receiver", info.meshing.shadow.max_lines_per_receiver},
-                           {"left_out", "EEE events (critical surfaces of three edges) are not computed"}};
-  }
+  if (info.meshing.discontinuity == DiscontinuityMode::full) add_shadow_lines(doc, info);
 
-  std::vector<Rgb> mean, element_mean;
-  if (solution) {
-    mean = patch_mean_radiosity(scene, mesh, solution->nodal);
-    element_mean = patch_mean_radiosity(scene, mesh, solution->element);
-  }
-  // Objects: patches grouped by name, in order of first appearance.
-  std::vector<std::string> names;
-  std::map<std::string, std::tuple<long long, double, Rgb, Rgb>> objects;  // count, area, sums
-  for (size_t p = 0; p < scene.patches.size(); ++p) {
-    const std::string& name = scene.patches[p].name;
-    auto [it, fresh] = objects.try_emplace(name, 0, 0.0, Rgb(0.0), Rgb(0.0));
-    if (fresh) names.push_back(name);
-    auto& [count, area, m, em] = it->second;
-    const double a = scene.patch_area(static_cast<int>(p));
-    ++count;
-    area += a;
-    if (solution) {
-      m += a * mean[p];
-      em += a * element_mean[p];
-    }
-  }
-  json objs = json::array();
-  for (const std::string& name : names) {
-    const auto& [count, area, m, em] = objects.at(name);
-    json j = {{"name", name}, {"patches", count}, {"area", area}};
-    if (solution && area > 0.0) {
-      j["mean_radiosity"] = rgb(m / area);
-      j["element_mean_radiosity"] = rgb(em / area);
-    }
-    objs.push_back(j);
-  }
-  doc["objects"] = objs;
-  if (!patches_in_summary(scene)) {
-    doc["patches_csv"] = "patches.csv";
-  } else {
-    json patches = json::array();
-    for (size_t p = 0; p < scene.patches.size(); ++p) {
-      const Patch& patch = scene.patches[p];
-      json j = {{"id", p},
-                {"name", patch.name},
-                {"material", scene.material_of(patch).name},
-                {"area", scene.patch_area(static_cast<int>(p))}};
-      if (solution) {
-        j["mean_radiosity"] = rgb(mean[p]);  // of the field users see
-        j["element_mean_radiosity"] = rgb(element_mean[p]);  // of the solver's elements
-      }
-      patches.push_back(j);
-    }
-    doc["patches"] = patches;
-  }
+  add_objects_and_patches(doc, scene, mesh, solution);
 
   if (solution) {
-    const SolveStats& st = solution->stats;
-    doc["counts"]["form_factors"] = st.form_factors;
-    doc["counts"]["form_factors_skipped"] = st.form_factors_skipped;
-    doc["counts"]["receiver_points"] = st.receiver_points;
-    doc["counts"]["rays_cast"] = st.rays_cast;
-    doc["counts"]["rays_skipped"] = st.rays_skipped;
-    doc["counts"]["pairs_unoccludable"] = st.pairs_unoccludable;
-    // error_bound: per channel, null where the scene gives no bound (-1).
-    json bound = json::array();
-    for (const double b : st.error_bound) bound.push_back(b >= 0.0 ? json(b) : json(nullptr));
-    doc["solver"] = {{"method", info.method},
-                     {"residual", st.residual},
-                     {"error_bound", bound},
-                     {"extrapolations", st.extrapolations},
-                     {"convex_enclosure", st.convex_enclosure}};
-    // Numbers as numbers, flags as booleans, choices as written.
-    for (const OptionValue& v : info.method_options) {
-      if (v.kind == OptionSpec::Kind::choice)
-        doc["solver"][v.name] = v.text;
-      else if (v.kind == OptionSpec::Kind::flag)
-        doc["solver"][v.name] = v.number != 0.0;
-      else
-        doc["solver"][v.name] = v.number;
-    }
-    json units = json::object();
-    for (const Counter& c : result->counters) {
-      json values = json::array();
-      for (double v : c.values) values.push_back(c.integral ? json(static_cast<long long>(v)) : json(v));
-      doc["solver"][c.name] = c.series ? values : values.at(0);
-      if (!c.unit.empty()) units[c.name] = c.unit;
-    }
-    if (!units.empty()) doc["solver"]["units"] = units;
-    const Rgb imbalance = st.power_emitted - st.power_absorbed - st.power_escaped;
-    Rgb rel(0.0);
-    for (int c = 0; c < 3; ++c)
-      rel[c] = st.power_emitted[c] > 0.0 ? imbalance[c] / st.power_emitted[c] : 0.0;
-    doc["energy"] = {{"emitted", rgb(st.power_emitted)},
-                     {"absorbed", rgb(st.power_absorbed)},
-                     {"escaped", rgb(st.power_escaped)},
-                     {"relative_imbalance", rgb(rel)}};
-    doc["skips"] = st.skips;
-    const FieldReport& f = result->field;
-    doc["field"] = {{"mode", f.mode == FieldMode::own ? f.own_field : to_string(f.mode)}};
-    if (!f.why.empty()) doc["field"]["why"] = f.why;
-    if (f.mode == FieldMode::gather) {
-      doc["field"]["display_vertices"] = f.display_vertices;
-      doc["field"]["on_other_surface"] = f.on_other_surface;
-      doc["field"]["direct"] = {{"unoccluded", f.direct.unoccluded},
-                                {"clipped", f.direct.clipped},
-                                {"dark", f.direct.dark},
-                                {"hidden", f.direct.hidden},
-                                {"behind", f.direct.behind},
-                                {"seconds", f.seconds_direct}};
-      doc["field"]["gather"] = {{"sources", f.gather_sources},
-                                {"nodes", f.gather_nodes},
-                                {"clustered", f.clustered},
-                                {"clusters", f.gather_clusters},
-                                {"triangles", f.gather_triangles},
-                                {"rays_cast", f.rays_cast},
-                                {"opening", FieldEvaluator::kOpening},
-                                {"seconds", f.seconds_gather}};
-    }
+    add_solver(doc, info, *result);
+    add_field(doc, result->field);
   }
   return doc;
 }
