@@ -179,7 +179,7 @@ void Hemicube::render_face(int f, const std::vector<HemicubeTriangle>& triangles
           const size_t pix = static_cast<size_t>(y) * F.width + x;
           // Nearer wins; at a tie (within rounding) a front side beats a
           // back: the two sides of a panel are one quad written twice, and
-          // whichever came first used to hide the lit side.
+          // whichever came first would otherwise hide the lit side.
           const double held = F.depth[pix];
           const bool tie = std::abs(depth - held) <= kDepthTie * held;
           if (tie ? (id != kBack && F.id[pix] == kBack) : depth > held) {
