@@ -126,9 +126,9 @@ bool plot_error_vs_time(const std::string& path, const std::string& title, const
   }
   // Opened before any VTK rendering object (VTK aborts without a display) and
   // outlives the render window below, which borrows it.
-  const io_detail::XConnection x;
+  const internal::XConnection x;
   if (x.get() == nullptr) {
-    if (why != nullptr) *why = io_detail::kNoDisplayReason;
+    if (why != nullptr) *why = internal::kNoDisplayReason;
     return false;
   }
 
@@ -170,7 +170,7 @@ bool plot_error_vs_time(const std::string& path, const std::string& title, const
   chart->GetLegend()->SetHorizontalAlignment(vtkChartLegend::LEFT);
   chart->GetLegend()->SetVerticalAlignment(vtkChartLegend::BOTTOM);
 
-  io_detail::write_chart_png(chart, x.get(), kWidth, kHeight, path);
+  internal::write_chart_png(chart, x.get(), kWidth, kHeight, path);
   return true;
 }
 

@@ -302,13 +302,13 @@ namespace {
 // +y), as two triangles (split along a diagonal) reflecting r1 and r2.
 struct SquareNode {
   Triangle t1, t2;
-  detail::GatherNode node;
+  internal::GatherNode node;
   SquareNode(double h, double r1, double r2) {
     const Vec3 up(0.0, 1.0, 0.0);
     const Vec3 a(-h / 2, 0, -h / 2), b(h / 2, 0, -h / 2), c(h / 2, 0, h / 2), d(-h / 2, 0, h / 2);
     t1 = make_triangle(a, d, c, up);
     t2 = make_triangle(a, c, b, up);
-    node = detail::gather_node({&t1, &t2}, {Rgb(r1), Rgb(r2)}, up);
+    node = internal::gather_node({&t1, &t2}, {Rgb(r1), Rgb(r2)}, up);
   }
 };
 }  // namespace
@@ -325,7 +325,7 @@ TEST(Field, ANodeTakenWholeIsExactToThirdOrderInItsSize) {
     const SquareNode s(0.4 / (1 << k), 1.0, 1.0);
     const double exact = point_polygon_form_factor(x, n, s.t1.v.data(), 3, up) +
                          point_polygon_form_factor(x, n, s.t2.v.data(), 3, up);
-    const detail::NodeTerm t = detail::node_term(s.node, x, n, up);
+    const internal::NodeTerm t = internal::node_term(s.node, x, n, up);
     ASSERT_TRUE(t.smooth);
     const Vec3 r = s.node.centre - x;
     point[k] = std::abs(glm::dot(n, r) * -glm::dot(up, r) * s.node.area / (std::numbers::pi * std::pow(glm::dot(r, r), 2)) - exact) / exact;
@@ -349,7 +349,7 @@ TEST(Field, ANodesFirstMomentTakesTheRadiosityWhereTheKernelIsLarger) {
     const SquareNode s(0.4 / (1 << k), 1.0, 3.0);
     const double exact = 1.0 * point_polygon_form_factor(x, n, s.t1.v.data(), 3, up) +
                          3.0 * point_polygon_form_factor(x, n, s.t2.v.data(), 3, up);
-    const detail::NodeTerm t = detail::node_term(s.node, x, n, up);
+    const internal::NodeTerm t = internal::node_term(s.node, x, n, up);
     with[k] = std::abs(t.f * s.node.reflected.x + t.first.x - exact) / exact;
     without[k] = std::abs(t.f * s.node.reflected.x - exact) / exact;
   }

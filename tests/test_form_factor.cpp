@@ -175,18 +175,18 @@ TEST(SubtendedAngle, MatchesAtan2AcrossDecadesAndAtTheAxes) {
   for (int i = 0; i < 200000; ++i) {
     const double s = std::exp(14.0 * uniform() - 7.0);
     const double d = (uniform() < 0.5 ? -1.0 : 1.0) * std::exp(14.0 * uniform() - 7.0);
-    worst = std::max(worst, std::abs(radmesh::detail::subtended_angle(s, d) - std::atan2(s, d)) / std::atan2(s, d));
+    worst = std::max(worst, std::abs(radmesh::internal::subtended_angle(s, d) - std::atan2(s, d)) / std::atan2(s, d));
   }
   EXPECT_LT(worst, 5e-16);
-  EXPECT_EQ(radmesh::detail::subtended_angle(0.0, 2.0), 0.0);
-  EXPECT_EQ(radmesh::detail::subtended_angle(0.0, -2.0), std::numbers::pi);
-  EXPECT_EQ(radmesh::detail::subtended_angle(3.0, 0.0), 0.5 * std::numbers::pi);
-  EXPECT_EQ(radmesh::detail::subtended_angle(0.0, 0.0), 0.0);
+  EXPECT_EQ(radmesh::internal::subtended_angle(0.0, 2.0), 0.0);
+  EXPECT_EQ(radmesh::internal::subtended_angle(0.0, -2.0), std::numbers::pi);
+  EXPECT_EQ(radmesh::internal::subtended_angle(3.0, 0.0), 0.5 * std::numbers::pi);
+  EXPECT_EQ(radmesh::internal::subtended_angle(0.0, 0.0), 0.0);
   // The nearest sixteenth-turn boundaries (tan(k pi / 32)) on both sides.
   for (int k = 1; k < 8; k += 2) {
     const double t = std::tan(k * std::numbers::pi / 32.0);
     for (double a : {std::nextafter(t, 0.0), t, std::nextafter(t, 1.0)})
-      EXPECT_NEAR(radmesh::detail::subtended_angle(a, 1.0), std::atan2(a, 1.0), 4e-16 * std::atan2(a, 1.0)) << k;
+      EXPECT_NEAR(radmesh::internal::subtended_angle(a, 1.0), std::atan2(a, 1.0), 4e-16 * std::atan2(a, 1.0)) << k;
   }
 }
 

@@ -230,7 +230,7 @@ Rgb FieldEvaluator::direct(const Vec3& x, int patch, FieldReport& report) const 
   return impl_->direct.reflected(x, patch, &report.direct);
 }
 
-namespace detail {
+namespace internal {
 
 GatherNode gather_node(const std::vector<const Triangle*>& t, const std::vector<Rgb>& r, const Vec3& normal) {
   GatherNode n;
@@ -288,7 +288,7 @@ NodeTerm node_term(const GatherNode& node, const Vec3& x, const Vec3& n, const V
   return t;
 }
 
-}  // namespace detail
+}  // namespace internal
 
 // What x (normal n, on `patch`) gathers from source patch q, before its
 // reflectance: Lambert's form factor to q x the mean over q's tree cut.
@@ -366,12 +366,12 @@ Rgb FieldEvaluator::Impl::gather_patch(size_t q, const Vec3& x, const Vec3& n, i
     const int i = -1 - e;
     const bool is_triangle = e < 0;
     const SourceTree::Node* node = is_triangle ? nullptr : &s.nodes[static_cast<size_t>(e)];
-    detail::NodeTerm nt;
+    internal::NodeTerm nt;
     if (is_triangle) {
       nt.f = tri_f[next++];
       ++report.gather_triangles;
     } else {
-      nt = detail::node_term(*node, x, n, s.normal);
+      nt = internal::node_term(*node, x, n, s.normal);
       ++report.gather_nodes;
     }
     if (!(nt.f > 0.0)) continue;

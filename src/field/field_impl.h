@@ -40,7 +40,7 @@ void draw_facing(SplitMix& rng, double u, TryAt&& try_at) {
 
 // A source patch's tree over its triangles.
 struct SourceTree {
-  struct Node : detail::GatherNode {
+  struct Node : internal::GatherNode {
     int begin = 0, end = 0;  // range of triangles (in node order once built)
     int left = -1, right = -1;
   };
@@ -64,7 +64,7 @@ struct SourceTree {
       hi = glm::max(hi, triangle[k].centroid());
     }
     Node n;
-    static_cast<detail::GatherNode&>(n) = detail::gather_node(t, refl, normal);
+    static_cast<internal::GatherNode&>(n) = internal::gather_node(t, refl, normal);
     n.begin = begin;
     n.end = end;
     const int id = static_cast<int>(nodes.size());

@@ -40,7 +40,7 @@
 #include <string_view>
 #include <map>
 
-namespace radmesh::detail {
+namespace radmesh::internal {
 
 namespace {
 
@@ -726,4 +726,4 @@ SceneSource read_assimp_source(const std::string& path, bool check_materials) {
   return source;
 }
 
-}  // namespace radmesh::detail
+}  // namespace radmesh::internal

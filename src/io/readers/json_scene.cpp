@@ -17,7 +17,7 @@
 #include <fstream>
 #include <map>
 
-namespace radmesh::detail {
+namespace radmesh::internal {
 
 namespace {
 
@@ -291,4 +291,4 @@ Scene read_json_scene(const std::string& path, const SceneOptions& options) {
   return scene;
 }
 
-}  // namespace radmesh::detail
+}  // namespace radmesh::internal

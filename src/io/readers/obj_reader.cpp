@@ -230,7 +230,7 @@ ObjScan scan_obj(const std::string& path) {
           throw InputError(where(path, ln) + "material library '" + tok[k] + "' not found (looked for " +
                            mtl.string() + ")");
         try {
-          detail::check_input_file(mtl.string(), "a material library");
+          internal::check_input_file(mtl.string(), "a material library");
         } catch (const IoError& e) {
           throw InputError(where(path, ln) + "material library '" + tok[k] + "': " + e.what());
         }
@@ -257,7 +257,7 @@ ObjScan scan_obj(const std::string& path) {
 
 }  // namespace
 
-namespace detail {
+namespace internal {
 
 SceneSource read_obj_source(const std::string& path) {
   check_input_file(path, "an OBJ file");
@@ -348,10 +348,10 @@ SceneSource read_obj_source(const std::string& path) {
   return source;
 }
 
-}  // namespace detail
+}  // namespace internal
 
 Scene read_obj_scene(const std::string& path, const SceneOptions& options) {
-  detail::SceneSource source = detail::read_obj_source(path);
+  internal::SceneSource source = internal::read_obj_source(path);
   Scene scene = build_scene(source.faces, std::move(source.materials), path, options);
   scene.report.warnings.insert(scene.report.warnings.begin(), source.warnings.begin(), source.warnings.end());
   return scene;

@@ -14,7 +14,7 @@
 namespace radmesh {
 
 std::vector<Probe> read_probes(const std::string& path) {
-  detail::check_input_file(path, "a probe file");
+  internal::check_input_file(path, "a probe file");
   std::ifstream in(path);
   if (!in) throw IoError(path + ": cannot open probe file");
   std::vector<Probe> probes;

@@ -12,7 +12,7 @@
 
 namespace radmesh {
 
-namespace detail {
+namespace internal {
 
 void check_input_file(const std::string& path, const std::string& what) {
   namespace fs = std::filesystem;
@@ -29,10 +29,10 @@ void check_input_file(const std::string& path, const std::string& what) {
                   std::to_string(static_cast<long long>(kMaxInputBytes)) + " radmesh reads as " + what);
 }
 
-}  // namespace detail
+}  // namespace internal
 
 
-namespace detail {
+namespace internal {
 
 std::string lower_extension(const std::string& path) {
   std::string ext = std::filesystem::path(path).extension().string();
@@ -44,7 +44,7 @@ bool is_assimp_extension(const std::string& ext) {
   return ext == ".ply" || ext == ".stl" || ext == ".off" || ext == ".gltf" || ext == ".glb";
 }
 
-}  // namespace detail
+}  // namespace internal
 
 namespace {
 
@@ -52,7 +52,7 @@ const char* const kAccepted = ".obj, .ply, .stl, .off, .gltf, .glb and .json (a 
 
 // Builds the scene from one file's faces, passing build_scene only the
 // materials some face uses (so that an unused one cannot fail the check).
-Scene build_from_source(detail::SceneSource source, const std::string& path, const SceneOptions& options) {
+Scene build_from_source(internal::SceneSource source, const std::string& path, const SceneOptions& options) {
   std::vector<int> remap(source.materials.size(), -1);
   std::vector<Material> used;
   for (RawFace& f : source.faces) {
@@ -71,11 +71,11 @@ Scene build_from_source(detail::SceneSource source, const std::string& path, con
 }  // namespace
 
 Scene read_scene(const std::string& path, const SceneOptions& options) {
-  const std::string ext = detail::lower_extension(path);
+  const std::string ext = internal::lower_extension(path);
   if (ext == ".obj") return read_obj_scene(path, options);
-  if (ext == ".json") return detail::read_json_scene(path, options);
-  if (detail::is_assimp_extension(ext)) {
-    detail::SceneSource source = detail::read_assimp_source(path, /*check_materials=*/true);
+  if (ext == ".json") return internal::read_json_scene(path, options);
+  if (internal::is_assimp_extension(ext)) {
+    internal::SceneSource source = internal::read_assimp_source(path, /*check_materials=*/true);
     if (!source.missing_material.empty()) {
       const std::string file = std::filesystem::path(path).filename().string();
       throw InputError(path + ": " + source.missing_material +

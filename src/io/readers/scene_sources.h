@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-namespace radmesh::detail {
+namespace radmesh::internal {
 
 struct SceneSource {
   // Material indexes `materials`, or -1 where the file gives the face none.
@@ -44,4 +44,4 @@ std::string lower_extension(const std::string& path);
 // Whether `ext` (as lower_extension returns it) is read through assimp.
 bool is_assimp_extension(const std::string& ext);
 
-}  // namespace radmesh::detail
+}  // namespace radmesh::internal

@@ -23,9 +23,9 @@ namespace radmesh {
 
 bool plot_histogram(const std::string& path, const std::string& title, const std::string& x_label,
                     const std::vector<double>& values, int bins, std::string* why) {
-  const io_detail::XConnection x;  // before any VTK rendering object: VTK aborts without a display
+  const internal::XConnection x;  // before any VTK rendering object: VTK aborts without a display
   if (x.get() == nullptr) {
-    if (why != nullptr) *why = io_detail::kNoDisplayReason;
+    if (why != nullptr) *why = internal::kNoDisplayReason;
     return false;
   }
   double lo = INFINITY, hi = -INFINITY;
@@ -62,7 +62,7 @@ bool plot_histogram(const std::string& path, const std::string& title, const std
   chart->GetAxis(vtkAxis::BOTTOM)->SetTitle(x_label);
   chart->GetAxis(vtkAxis::LEFT)->SetTitle("triangles");
 
-  io_detail::write_chart_png(chart, x.get(), 800, 500, path);
+  internal::write_chart_png(chart, x.get(), 800, 500, path);
   return true;
 }
 

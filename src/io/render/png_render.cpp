@@ -173,9 +173,9 @@ bool render_png(const std::string& path, const Scene& scene, const Mesh& mesh,
   check_inputs(path, scene, mesh, nodal);
   // Opened before any VTK rendering object (VTK aborts without a display) and
   // outlives the render window below, which borrows it.
-  const io_detail::XConnection x;
+  const internal::XConnection x;
   if (x.get() == nullptr) {
-    if (why != nullptr) *why = io_detail::kNoDisplayReason;
+    if (why != nullptr) *why = internal::kNoDisplayReason;
     return false;
   }
 
@@ -205,7 +205,7 @@ bool render_png(const std::string& path, const Scene& scene, const Mesh& mesh,
   window->AddRenderer(renderer);
   window->Render();
 
-  io_detail::write_window_png(window, path);
+  internal::write_window_png(window, path);
   return true;
 }
 

@@ -19,7 +19,7 @@
 #include <ostream>
 #include <string>
 
-namespace radmesh::io_detail {
+namespace radmesh::internal {
 
 // Renders nothing itself: grabs what `window` shows (after its Render()) and
 // writes it as a PNG to `path`, atomically. Throws IoError.
@@ -54,4 +54,4 @@ inline void write_chart_png(vtkContextItem* chart, void* display, int width, int
   write_window_png(window, path);
 }
 
-}  // namespace radmesh::io_detail
+}  // namespace radmesh::internal

@@ -2,7 +2,7 @@
 
 #include <X11/Xlib.h>
 
-namespace radmesh::io_detail {
+namespace radmesh::internal {
 
 XConnection::XConnection() : display_(XOpenDisplay(nullptr)) {}
 
@@ -10,4 +10,4 @@ XConnection::~XConnection() {
   if (display_ != nullptr) XCloseDisplay(static_cast<Display*>(display_));
 }
 
-}  // namespace radmesh::io_detail
+}  // namespace radmesh::internal

@@ -6,7 +6,7 @@
 // (None, Bool, Status, ...) clash with C++ headers.
 #pragma once
 
-namespace radmesh::io_detail {
+namespace radmesh::internal {
 
 // What a function that needs a display reports (through its `why`) without one.
 inline constexpr const char* kNoDisplayReason =
@@ -29,4 +29,4 @@ private:
   void* display_;
 };
 
-}  // namespace radmesh::io_detail
+}  // namespace radmesh::internal

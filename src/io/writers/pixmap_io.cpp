@@ -104,7 +104,7 @@ std::vector<std::string> write_pixmap_state(const std::string& out_dir, const Pi
     writer->SetInputData(image);
     writer->SetDataModeToBinary();
     writer->SetCompressorTypeToZLib();
-    io_detail::write_xml_atomically(writer.Get(), path);
+    internal::write_xml_atomically(writer.Get(), path);
     written.push_back(path);
     nlohmann::json patches = nlohmann::json::array();
     for (int p : pm.patches) patches.push_back({{"index", p}, {"name", scene.patches[p].name}});
@@ -162,7 +162,7 @@ PixmapState read_pixmap_state(const std::string& dir) {
       if (!fs::exists(path)) throw IoError(path + ": missing (listed in " + json_path + ")");
       vtkNew<vtkXMLImageDataReader> reader;
       reader->SetFileName(path.c_str());
-      vtkNew<io_detail::VtkErrorCatcher> errors;
+      vtkNew<internal::VtkErrorCatcher> errors;
       reader->AddObserver(vtkCommand::ErrorEvent, errors);
       reader->GetExecutive()->AddObserver(vtkCommand::ErrorEvent, errors);
       reader->Update();
@@ -262,7 +262,7 @@ std::vector<std::string> write_lightmaps(const std::string& out_dir, const Mesh&
     vtkNew<vtkPNGWriter> writer;
     writer->SetInputData(image);
     writer->WriteToMemoryOn();
-    io_detail::run_vtk_writer(writer.Get(), path);
+    internal::run_vtk_writer(writer.Get(), path);
     vtkUnsignedCharArray* bytes = writer->GetResult();
     write_file_atomically(path, [bytes](std::ostream& o) {
       o.write(reinterpret_cast<const char*>(bytes->GetPointer(0)), static_cast<std::streamsize>(bytes->GetNumberOfValues()));

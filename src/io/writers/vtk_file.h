@@ -18,7 +18,7 @@
 
 #include <string>
 
-namespace radmesh::io_detail {
+namespace radmesh::internal {
 
 // Collects the error messages a VTK object reports. While an object has an
 // ErrorEvent observer, VTK hands its errors to the observer instead of printing
@@ -76,4 +76,4 @@ void write_xml_atomically(Writer* writer, const std::string& path) {
   });
 }
 
-}  // namespace radmesh::io_detail
+}  // namespace radmesh::internal

@@ -152,7 +152,7 @@ void write_grid(const std::string& path, vtkUnstructuredGrid* grid) {
   writer->SetInputData(grid);
   writer->SetDataModeToBinary();
   writer->SetCompressorTypeToLZ4();
-  io_detail::write_xml_atomically(writer.Get(), path);
+  internal::write_xml_atomically(writer.Get(), path);
 }
 
 // Named integer cell arrays, one value per cell (n cells).

@@ -21,7 +21,7 @@ double lambert_contour_sum(const Vec3& x, const Vec3& n, const Vec3* pts, size_t
   Vec3 first{0.0}, prev{0.0};
   auto edge = [&](const Vec3& a, const Vec3& b) {
     const Vec3 r0 = a - x, r1 = b - x;
-    sum += detail::lambert_edge(r0.x, r0.y, r0.z, r1.x, r1.y, r1.z, n.x, n.y, n.z);
+    sum += internal::lambert_edge(r0.x, r0.y, r0.z, r1.x, r1.y, r1.z, n.x, n.y, n.z);
   };
   auto emit = [&](const Vec3& p) {
     if (emitted == 0)
@@ -217,7 +217,7 @@ struct LambertBatch {
   void sum_all(const Vec3& normal) {
     const size_t quads = quad_items.size();
     for (size_t k = 0; k < quads; ++k) put(n + k, quad_loops[k][0], quad_loops[k][2], quad_loops[k][3]);
-    detail::lambert_triangle_sums(n + quads, {d[0].data(), d[1].data(), d[2].data(), d[3].data(), d[4].data(),
+    internal::lambert_triangle_sums(n + quads, {d[0].data(), d[1].data(), d[2].data(), d[3].data(), d[4].data(),
                                               d[5].data(), d[6].data(), d[7].data(), d[8].data()},
                                   normal.x, normal.y, normal.z, sum.data());
     for (size_t k = 0; k < quads; ++k) sum[static_cast<size_t>(quad_items[k])] += sum[n + k];
@@ -265,7 +265,7 @@ void point_source_pairs(const ReceiverPoints& r, const Triangle* const* sources,
       m.s[10][j] = t.normal.y;
       m.s[11][j] = t.normal.z;
     }
-    const detail::LambertSources src{{m.s[0].data(), m.s[1].data(), m.s[2].data(), m.s[3].data(), m.s[4].data(),
+    const internal::LambertSources src{{m.s[0].data(), m.s[1].data(), m.s[2].data(), m.s[3].data(), m.s[4].data(),
                                       m.s[5].data(), m.s[6].data(), m.s[7].data(), m.s[8].data()},
                                      m.s[9].data(),
                                      m.s[10].data(),
@@ -274,9 +274,9 @@ void point_source_pairs(const ReceiverPoints& r, const Triangle* const* sources,
     for (size_t q = 0; q < points; ++q) {
       const Vec3& x = r.x[q];
       double* kind = m.kind.data() + q * count;
-      detail::lambert_point_sums(count, src, x.x, x.y, x.z, r.normal.x, r.normal.y, r.normal.z,
+      internal::lambert_point_sums(count, src, x.x, x.y, x.z, r.normal.x, r.normal.y, r.normal.z,
                                  m.sum.data() + q * count, kind);
-      for (size_t j = 0; j < count; ++j) crossing += kind[j] == detail::kSourceCrosses;
+      for (size_t j = 0; j < count; ++j) crossing += kind[j] == internal::kSourceCrosses;
     }
     if (crossing > 0) {
       batch.start(crossing);
@@ -284,7 +284,7 @@ void point_source_pairs(const ReceiverPoints& r, const Triangle* const* sources,
         for (size_t j = 0; j < count; ++j) {
           const size_t i = q * count + j;
           m.clipped[i] = -1;
-          if (m.kind[i] != detail::kSourceCrosses) continue;
+          if (m.kind[i] != internal::kSourceCrosses) continue;
           const Triangle& t = *sources[j];
           Vec3 e[3];
           double h[3];
@@ -302,9 +302,9 @@ void point_source_pairs(const ReceiverPoints& r, const Triangle* const* sources,
       for (size_t q = 0; q < points; ++q) {
         const size_t i = q * count + j;
         double sum;
-        if (m.kind[i] == detail::kSourceInFront)
+        if (m.kind[i] == internal::kSourceInFront)
           sum = m.sum[i];
-        else if (m.kind[i] == detail::kSourceCrosses && m.clipped[i] >= 0)
+        else if (m.kind[i] == internal::kSourceCrosses && m.clipped[i] >= 0)
           sum = batch.sum[static_cast<size_t>(m.clipped[i])];
         else
           continue;

@@ -10,7 +10,7 @@
 #include <array>
 #include <vector>
 
-namespace radmesh::detail {
+namespace radmesh::internal {
 
 struct GatherNode {
   Vec3 centre{0.0};  // area centroid
@@ -48,4 +48,4 @@ struct NodeTerm {
 };
 NodeTerm node_term(const GatherNode& node, const Vec3& x, const Vec3& n, const Vec3& m);
 
-}  // namespace radmesh::detail
+}  // namespace radmesh::internal

@@ -8,7 +8,7 @@
 
 #include <algorithm>
 
-namespace radmesh::detail {
+namespace radmesh::internal {
 
 __attribute__((target_clones("avx512f", "avx2", "default"))) void lambert_triangle_sums(size_t count,
                                                                                        const LambertItems& items,
@@ -59,4 +59,4 @@ __attribute__((target_clones("avx512f", "avx2", "default"))) void lambert_point_
   }
 }
 
-}  // namespace radmesh::detail
+}  // namespace radmesh::internal

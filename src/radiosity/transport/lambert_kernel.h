@@ -7,7 +7,7 @@
 #include <cstddef>
 #include <numbers>
 
-namespace radmesh::detail {
+namespace radmesh::internal {
 
 // Struct of arrays: item i is the triangle with corners (a, b, c) relative
 // to the point (a = corner - point, ...), all three on or in front of the
@@ -104,4 +104,4 @@ inline double lambert_edge(double px, double py, double pz, double qx, double qy
   return s > 0.0 ? t : 0.0;
 }
 
-}  // namespace radmesh::detail
+}  // namespace radmesh::internal
