@@ -279,7 +279,7 @@ std::string dense_warning(const Patch& patch, double h, double dense, double k_d
 std::string budget_error(const Patch& patch, double h, double budget, double point_budget, double asked,
                          double max_elements) {
   std::ostringstream m;
-  m << where(patch.file, patch.line) << "face '" << patch.name << "': refining its mesh to --max-edge "
+  m << where(patch.file, patch.line) << "face '" << patch.name << "': refining its mesh to max_edge "
     << format_number(h) << " takes more than " << format_number(std::max(0.0, std::floor(budget)))
     << " points"
     << (budget < point_budget ? " (1000 x the " + format_number(std::ceil(asked)) +
@@ -287,7 +287,7 @@ std::string budget_error(const Patch& patch, double h, double budget, double poi
                               : " (what the other faces leave of " + format_number(max_elements) +
                                     " elements in all)")
     << ": lines, edges or vertices on it lie much closer together than the edge length (a sliver face, "
-       "near-coincident faces or shadow lines); check the geometry near it, or try --discontinuity "
+       "near-coincident faces or shadow lines); check the geometry near it, or try discontinuity "
        "contacts or off";
   return m.str();
 }

@@ -21,7 +21,7 @@ DiscontinuityMode parse_discontinuity_mode(const std::string& text) {
   if (text == "off") return DiscontinuityMode::off;
   if (text == "contacts") return DiscontinuityMode::contacts;
   if (text == "full") return DiscontinuityMode::full;
-  throw InputError("--discontinuity '" + text + "': expected off, contacts or full");
+  throw InputError("discontinuity '" + text + "': expected off, contacts or full", {"discontinuity"});
 }
 
 const char* to_string(DiscontinuityMode mode) {

@@ -678,7 +678,8 @@ private:
       while (mesher.step_by_step_refine_mesh()) {
         if (++points > dense && unrefined) break;
         if (points > budget)
-          throw GeometryError(internal::budget_error(patch, h, budget, point_budget_, asked, opt_.max_elements));
+          throw GeometryError(internal::budget_error(patch, h, budget, point_budget_, asked, opt_.max_elements),
+                              {"max_edge", "discontinuity"});
       }
       if (unrefined && points > dense) {
         dense_.insert(p);

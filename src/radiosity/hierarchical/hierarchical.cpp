@@ -14,14 +14,14 @@ TVertexMode parse_tvertex_mode(const std::string& name) {
   if (name == "anchor") return TVertexMode::anchor;
   if (name == "free") return TVertexMode::free;
   if (name == "split") return TVertexMode::split;
-  throw InputError("T-vertex mode '" + name + "': expected anchor, free or split");
+  throw InputError("tvertex '" + name + "': expected anchor, free or split", {"tvertex"});
 }
 
 ClusterMode parse_cluster_mode(const std::string& name) {
   if (name == "off") return ClusterMode::off;
   if (name == "volume") return ClusterMode::volume;
   if (name == "shape") return ClusterMode::shape;
-  throw InputError("cluster mode '" + name + "': expected shape, volume or off");
+  throw InputError("clusters '" + name + "': expected shape, volume or off", {"clusters"});
 }
 
 const char* to_string(ClusterMode mode) {
