@@ -2,7 +2,7 @@
 // output on bad input.
 
 #include "io/writers/pixmap_io.h"
-#include "tests/edited_obj.h"
+#include "tests/test_util.h"
 
 #include <gtest/gtest.h>
 
@@ -27,9 +27,10 @@
 #include <vector>
 
 namespace fs = std::filesystem;
+namespace test = radmesh::test;
 
 namespace {
-const std::string kData = RADMESH_TEST_DATA;
+using radmesh::test::kData;
 const std::string kExe = RADMESH_EXE;
 
 struct Result {
@@ -37,14 +38,14 @@ struct Result {
   std::string err;
 };
 
-// Runs radmesh with `args`; captures stderr.
+// Runs radmesh with `args`; captures stderr (in a folder of its own).
 Result run_cli(const std::string& args) {
-  const fs::path err = fs::temp_directory_path() / ("radmesh_cli_err_" + std::to_string(::getpid()));
+  const test::TempDir tmp("stderr");
+  const fs::path err = tmp / "stderr.txt";
   const std::string cmd = "DISPLAY= " + kExe + " " + args + " >/dev/null 2>" + err.string();
   const int rc = std::system(cmd.c_str());
   std::ifstream in(err);
   std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  fs::remove(err);
   return {WEXITSTATUS(rc), text};
 }
 
@@ -53,16 +54,11 @@ nlohmann::json read_summary(const fs::path& out) {
   std::ifstream in(out / "summary.json");
   return nlohmann::json::parse(in);
 }
-
-fs::path fresh_dir(const std::string& name) {
-  const fs::path d = fs::temp_directory_path() / ("radmesh_cli_" + name + "_" + std::to_string(::getpid()));
-  fs::remove_all(d);
-  return d;
-}
 }  // namespace
 
 TEST(Cli, RunWritesVtuSummaryAndProbes) {
-  const fs::path out = fresh_dir("plates");
+  const test::TempDir tmp;
+  const fs::path out = tmp / "plates";
   const fs::path probes = out.string() + "_probes.txt";
   {
     std::ofstream p(probes);
@@ -99,12 +95,11 @@ TEST(Cli, RunWritesVtuSummaryAndProbes) {
   const double corner = 2 * (a / std::sqrt(1 + a * a) * std::atan(a / std::sqrt(1 + a * a))) / (2 * M_PI);
   EXPECT_NEAR(r_value, 0.5 * 4 * corner, 1e-9) << row;
   EXPECT_NE(r.err.find("PNG skipped"), std::string::npos) << r.err;  // no display here
-  fs::remove_all(out);
-  fs::remove(probes);
 }
 
 TEST(Cli, DefaultMethodIsHierarchicalAndMatchesHowellOnThePlates) {
-  const fs::path out = fresh_dir("plates_default");
+  const test::TempDir tmp;
+  const fs::path out = tmp / "plates_default";
   const Result r = run_cli("run " + kData + "/parallel_plates/parallel_plates.obj --no-png -q -o " + out.string());
   ASSERT_EQ(r.status, 0) << r.err;
   const nlohmann::json s = read_summary(out);
@@ -120,11 +115,11 @@ TEST(Cli, DefaultMethodIsHierarchicalAndMatchesHowellOnThePlates) {
       ++receivers;
     }
   EXPECT_EQ(receivers, 1);
-  fs::remove_all(out);
 }
 
 TEST(Cli, MeshWritesMeshAndSummary) {
-  const fs::path out = fresh_dir("mesh");
+  const test::TempDir tmp;
+  const fs::path out = tmp / "mesh";
   const Result r =
       run_cli("mesh " + kData + "/cornell_box/cornell_box.obj --discontinuity contacts -o " + out.string() + " -q");
   ASSERT_EQ(r.status, 0) << r.err;
@@ -133,11 +128,11 @@ TEST(Cli, MeshWritesMeshAndSummary) {
   const nlohmann::json s = read_summary(out);
   EXPECT_GE(s["mesh_quality"]["min_angle_min"].get<double>(), 20.0 - 1e-6);
   EXPECT_EQ(r.err, "");  // --quiet
-  fs::remove_all(out);
 }
 
 TEST(Cli, QualityOfAHierarchicalResultCountsZeroAreaTrianglesApart) {
-  const fs::path out = fresh_dir("quality_hier");
+  const test::TempDir tmp;
+  const fs::path out = tmp / "quality_hier";
   ASSERT_EQ(run_cli("run " + kData + "/box_on_floor/box_on_floor.obj --no-png -q -o " + out.string()).status, 0);
   const nlohmann::json s = read_summary(out);
   const int zero = s["solver"]["zero_area_triangles"].get<int>();
@@ -170,22 +165,22 @@ TEST(Cli, QualityOfAHierarchicalResultCountsZeroAreaTrianglesApart) {
     EXPECT_TRUE(std::isfinite(aspect->GetTuple1(c)));
     EXPECT_EQ(aspect->GetTuple1(c) == 0.0, flag->GetTuple1(c) != 0.0) << "cell " << c;
   }
-  fs::remove_all(out);
 }
 
 TEST(Cli, MeshDefaultsToFullDiscontinuityLines) {
+  const test::TempDir tmp;
   // mesh has no method: its default is full (shadow lines), as for run --method matrix.
-  const fs::path out = fresh_dir("mesh_default");
+  const fs::path out = tmp / "mesh_default";
   const Result r = run_cli("mesh " + kData + "/box_on_floor/box_on_floor.obj -q -o " + out.string());
   ASSERT_EQ(r.status, 0) << r.err;
   const nlohmann::json s = read_summary(out);
   EXPECT_EQ(s["options"]["discontinuity"], "full");
   EXPECT_GT(s["counts"]["shadow_segments"].get<int>(), 0);
-  fs::remove_all(out);
 }
 
 TEST(Cli, RunWithShadowLinesReportsThemAndWhatWasSkipped) {
-  const fs::path out = fresh_dir("run_full");
+  const test::TempDir tmp;
+  const fs::path out = tmp / "run_full";
   const Result r = run_cli("run " + kData + "/box_on_floor/box_on_floor.obj --discontinuity full --max-edge 0.5 "
                            "--no-png -q -o " + out.string());
   ASSERT_EQ(r.status, 0) << r.err;
@@ -200,13 +195,13 @@ TEST(Cli, RunWithShadowLinesReportsThemAndWhatWasSkipped) {
   EXPECT_EQ(sh["back_facing_pairs_skipped"], 4);  // the box's sides face away from the light
   EXPECT_NE(sh["left_out"].get<std::string>().find("EEE"), std::string::npos);
   EXPECT_TRUE(fs::exists(out / "discontinuities.vtu"));
-  fs::remove_all(out);
 }
 
 TEST(Cli, ManyPatchesGoToPatchesCsvAndObjectsStayInTheSummary) {
+  const test::TempDir tmp;
   // 10082 triangles (over kSummaryPatches): summary.json groups them by
   // object and names patches.csv, which has one row per patch.
-  const fs::path out = fresh_dir("many_patches"), dir = fresh_dir("many_patches_scene");
+  const fs::path out = tmp / "many_patches", dir = tmp / "many_patches_scene";
   fs::create_directories(dir);
   {
     std::ofstream(dir / "grid.mtl") << "newmtl grey\nKd 0.5 0.5 0.5\nKe 1 1 1\n";
@@ -242,12 +237,11 @@ TEST(Cli, ManyPatchesGoToPatchesCsvAndObjectsStayInTheSummary) {
   }
   EXPECT_EQ(rows, 71 * 71 * 2);
   EXPECT_NEAR(area, s["objects"][0]["area"].get<double>(), 1e-9 * area);
-  fs::remove_all(out);
-  fs::remove_all(dir);
 }
 
 TEST(Cli, HierarchicalRunWritesTheRefinementSeriesWithZeroAreaFlags) {
-  const fs::path out = fresh_dir("run_hier");
+  const test::TempDir tmp;
+  const fs::path out = tmp / "run_hier";
   const Result r = run_cli("run " + kData + "/box_on_floor/box_on_floor.obj --method hierarchical --epsilon 0.01 "
                            "--export-links --no-png -q -o " + out.string());
   ASSERT_EQ(r.status, 0) << r.err;
@@ -309,7 +303,6 @@ TEST(Cli, HierarchicalRunWritesTheRefinementSeriesWithZeroAreaFlags) {
   }
   EXPECT_GT(partial, 0);  // the box shadows the floor: some links are partly visible, some hidden
   EXPECT_GT(hidden, 0);
-  fs::remove_all(out);
 }
 
 struct BadRun {
@@ -320,7 +313,8 @@ struct BadRun {
 class CliErrors : public ::testing::TestWithParam<BadRun> {};
 
 TEST_P(CliErrors, OneLineErrorNonZeroExitNoOutput) {
-  const fs::path out = fresh_dir("bad");
+  const test::TempDir tmp;
+  const fs::path out = tmp / "bad";
   std::string args = GetParam().args;
   for (size_t k; (k = args.find("DATA")) != std::string::npos;) args.replace(k, 4, kData);
   const Result r = run_cli(args + " -o " + out.string());
@@ -353,13 +347,13 @@ INSTANTIATE_TEST_SUITE_P(
                       BadRun{"run DATA/cornell_box/cornell_box.obj --method matrix --epsilon 0.01", "--epsilon"},
                       BadRun{"run DATA/cornell_box/cornell_box.obj --max-memory 0.000001", "GiB allowed"},
                       BadRun{"mesh DATA/cornell_box/cornell_box.obj --max-shadow-lines -1", "--max-shadow-lines"},
-                      BadRun{"run DATA/cornell_box/cornell_box.obj --max-edge 0.0001", "would make at least"},
+                      BadRun{"run DATA/cornell_box/cornell_box.obj --max-edge 0.0001", "--max-edge 0.0001"},
                       BadRun{"mesh DATA/cornell_box/cornell_box.obj --max-edge 0.01", "use --max-edge"},
                       BadRun{"run DATA/cornell_box/cornell_box.obj --max-edge 1e-300", "at least 10^606 elements"},
                       // 545 k texels: 0.42 GB at the peak (0.62 GB before radiosity.vtu was
                       // written from views), where only their grids were counted (0.05 GB)
                       BadRun{"run DATA/cornell_box/cornell_box.obj --method pixmap --texel-size 2 --max-memory 0.25",
-                             "need more than the 0.25 GiB allowed"}),
+                             "0.25 GiB"}),
     [](const auto& info) {
       std::string name = std::to_string(info.index) + "_";
       for (char ch : std::string(info.param.must_contain))
@@ -368,7 +362,8 @@ INSTANTIATE_TEST_SUITE_P(
     });
 
 TEST(Cli, QualityWritesOneRowPerPatchAndATotal) {
-  const fs::path out = fresh_dir("quality");
+  const test::TempDir tmp;
+  const fs::path out = tmp / "quality";
   const Result r = run_cli("quality " + kData + "/box_on_floor/box_on_floor.obj -o " + out.string() + " -q");
   ASSERT_EQ(r.status, 0) << r.err;
   std::ifstream csv(out / "quality.csv");
@@ -393,7 +388,6 @@ TEST(Cli, QualityWritesOneRowPerPatchAndATotal) {
   EXPECT_EQ(rows, 7);  // box_on_floor has 7 patches
   EXPECT_EQ(total, sum);
   EXPECT_EQ(floor_contacts, 4);  // the box's footprint
-  fs::remove_all(out);
 }
 
 namespace {
@@ -413,7 +407,8 @@ std::vector<std::string> quality_total(const fs::path& csv_path) {
 }  // namespace
 
 TEST(Cli, QualityOfAWrittenMeshMatchesTheSceneRunWithShadowLines) {
-  const fs::path a = fresh_dir("quality_full"), m = fresh_dir("mesh_full"), b = fresh_dir("quality_vtu");
+  const test::TempDir tmp;
+  const fs::path a = tmp / "quality_full", m = tmp / "mesh_full", b = tmp / "quality_vtu";
   const std::string scene = kData + "/box_on_floor/box_on_floor.obj --discontinuity full --max-edge 0.5 -q";
   ASSERT_EQ(run_cli("quality " + scene + " -o " + a.string()).status, 0);
   ASSERT_EQ(run_cli("mesh " + scene + " -o " + m.string()).status, 0);
@@ -433,13 +428,13 @@ TEST(Cli, QualityOfAWrittenMeshMatchesTheSceneRunWithShadowLines) {
   const Result bad_vtu = run_cli("quality " + (m / "discontinuities.vtu").string() + " -o " + b.string() + " -q");
   EXPECT_NE(bad_vtu.status, 0);
   EXPECT_NE(bad_vtu.err.find("discontinuities.vtu"), std::string::npos) << bad_vtu.err;
-  for (const auto& d : {a, m, b}) fs::remove_all(d);
 }
 
 TEST(Cli, ASecondRunIntoTheSameDirectoryLeavesOnlyItsOwnFiles) {
+  const test::TempDir tmp;
   // The first run writes links.vtu and three refinement rounds; the second
   // (matrix) writes neither: nothing of the first may be left beside it.
-  const fs::path out = fresh_dir("rerun");
+  const fs::path out = tmp / "rerun";
   const std::string scene = kData + "/box_on_floor/box_on_floor.obj";
   ASSERT_EQ(run_cli("run " + scene + " --no-png -q --export-links --epsilon 0.01 -o " + out.string()).status, 0);
   ASSERT_TRUE(fs::exists(out / "links.vtu"));
@@ -453,27 +448,27 @@ TEST(Cli, ASecondRunIntoTheSameDirectoryLeavesOnlyItsOwnFiles) {
   for (const auto& e : fs::directory_iterator(out)) names.push_back(e.path().filename().string());
   std::sort(names.begin(), names.end());
   EXPECT_EQ(names, (std::vector<std::string>{"discontinuities.vtu", "notes.txt", "radiosity.vtu", "summary.json"}));
-  fs::remove_all(out);
 }
 
 // Guards the endless mesher loop of issue 10: one `v` line of the Cornell box
 // written twice shifts every later index, and the ceiling's quads became bow
 // ties that `mesh --max-edge 300` refined without end. Now refused at once.
 TEST(Cli, ADuplicatedVertexLineIsAnErrorNotAnEndlessMesh) {
-  const fs::path dir = fresh_dir("dup_v");
-  const std::string scene = test_files::write_edited_obj(kData + "/cornell_box/cornell_box", dir,
+  const test::TempDir tmp;
+  const fs::path dir = tmp / "dup_v";
+  const std::string scene = test::write_edited_obj(kData + "/cornell_box/cornell_box", dir,
                                                    [](const std::string& line, int n) {
                                                      return n == 7 ? line + '\n' + line : line;  // `sed 7p`
                                                    });
   const Result r = run_cli("mesh " + scene + " --max-edge 300 -q -o " + (dir / "out").string());
   EXPECT_EQ(r.status, 1) << r.err;
   EXPECT_NE(r.err.find("not a simple polygon"), std::string::npos) << r.err;
-  fs::remove_all(dir);
 }
 
 TEST(Cli, NamesThatAreNotUtf8AreWrittenReplacedNotAnInternalError) {
-  const fs::path dir = fresh_dir("latin1");
-  const std::string scene = test_files::write_edited_obj(
+  const test::TempDir tmp;
+  const fs::path dir = tmp / "latin1";
+  const std::string scene = test::write_edited_obj(
       kData + "/parallel_plates/parallel_plates", dir, [](const std::string& line, int) {
         return line.rfind("o receiver", 0) == 0 ? std::string("o r\xE9\x63\x65pteur") : line;  // Latin-1 e-acute
       });
@@ -484,10 +479,10 @@ TEST(Cli, NamesThatAreNotUtf8AreWrittenReplacedNotAnInternalError) {
   for (const auto& p : s["patches"])
     if (p["name"].get<std::string>() == "r\xEF\xBF\xBD" "cepteur") ++replaced;  // U+FFFD in UTF-8
   EXPECT_EQ(replaced, 1);
-  fs::remove_all(dir);
 }
 
 TEST(Cli, ExitCodesAreZeroOneAndTwo) {
+  const test::TempDir tmp;
   // 0 success (and --help), 1 bad input, 2 usage (a flag or argument the
   // program does not know or cannot parse).
   EXPECT_EQ(run_cli("--help").status, 0);
@@ -496,19 +491,19 @@ TEST(Cli, ExitCodesAreZeroOneAndTwo) {
   EXPECT_EQ(run_cli("run " + kData + "/cornell_box/cornell_box.obj --bogus-flag").status, 2);
   EXPECT_EQ(run_cli("run " + kData + "/cornell_box/cornell_box.obj --rays many").status, 2);
   EXPECT_EQ(run_cli("frobnicate").status, 2);
-  const fs::path out = fresh_dir("exit1");
+  const fs::path out = tmp / "exit1";
   EXPECT_EQ(run_cli("run " + kData + "/bad/nan_coordinate.obj -o " + out.string()).status, 1);
   // An output directory that cannot be made is bad input, found before any work.
   const fs::path file = out.string() + "_file";
   std::ofstream(file) << "x";
   const Result r = run_cli("run " + kData + "/parallel_plates/parallel_plates.obj -o " + (file / "sub").string());
   EXPECT_EQ(r.status, 1) << r.err;
-  EXPECT_NE(r.err.find("is not a directory"), std::string::npos) << r.err;
-  fs::remove(file);
+  EXPECT_TRUE(test::mentions(r.err, {(file / "sub").string(), "not a directory"}));
 }
 
 TEST(Cli, MeshReadsTheJsonBunnySceneWithItsMaterials) {
-  const fs::path out = fresh_dir("bunny_mesh");
+  const test::TempDir tmp;
+  const fs::path out = tmp / "bunny_mesh";
   const std::string scene = kData + "/bunny/bunny_room.json";
   const Result r = run_cli("mesh " + scene + " --max-edge 10 --discontinuity contacts -q -o " + out.string());
   ASSERT_EQ(r.status, 0) << r.err;
@@ -531,14 +526,14 @@ TEST(Cli, MeshReadsTheJsonBunnySceneWithItsMaterials) {
   EXPECT_EQ(s["patches"][0]["name"], "floor");
   EXPECT_EQ(s["patches"][0]["material"], "white");
   EXPECT_NEAR(bunny_area, 0.5467231782172347, 1e-12);
-  fs::remove_all(out);
 }
 
 TEST(Cli, APlyFileAloneIsRefusedWithTheWayToGiveItAMaterial) {
-  const fs::path out = fresh_dir("bunny_ply");
+  const test::TempDir tmp;
+  const fs::path out = tmp / "bunny_ply";
   const Result r = run_cli("run " + kData + "/bunny/bunny.ply -o " + out.string());
   EXPECT_NE(r.status, 0);
-  EXPECT_NE(r.err.find("bunny.ply: PLY files carry no materials"), std::string::npos) << r.err;
+  EXPECT_TRUE(test::mentions(r.err, {"bunny.ply: ", "no materials"}));
   EXPECT_NE(r.err.find("{\"file\": \"bunny.ply\", \"material\": \"grey\"}"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(out));
 }
@@ -559,8 +554,9 @@ using radmesh::PixmapState;
 using radmesh::read_pixmap_state;
 
 TEST(Cli, PixmapRunSavesItsStateAndLightmapsAndAResumeIsBitIdentical) {
+  const test::TempDir tmp;
   const std::string scene = kData + "/box_on_floor/box_on_floor.obj";
-  const fs::path a = fresh_dir("pixmap_a"), b = fresh_dir("pixmap_b"), c = fresh_dir("pixmap_c");
+  const fs::path a = tmp / "pixmap_a", b = tmp / "pixmap_b", c = tmp / "pixmap_c";
   const std::string opts = " --method pixmap --hemicube-res 64 --unshot 0 --no-png";
   Result r = run_cli("run " + scene + opts + " --shots 20 --snapshot-every 10 -o " + a.string());
   ASSERT_EQ(r.status, 0) << r.err;
@@ -589,20 +585,18 @@ TEST(Cli, PixmapRunSavesItsStateAndLightmapsAndAResumeIsBitIdentical) {
   // Other options, another method: refused, naming what differs.
   r = run_cli("run " + scene + " --method pixmap --hemicube-res 128 --resume " + a.string() + " -o " + b.string());
   EXPECT_EQ(r.status, 1);
-  EXPECT_NE(r.err.find("cannot resume: it was made with --hemicube-res 64, this run has --hemicube-res 128"),
-            std::string::npos)
-      << r.err;
+  EXPECT_TRUE(test::mentions(r.err, {"cannot resume", "--hemicube-res 64", "--hemicube-res 128"}));
   r = run_cli("run " + scene + " --method matrix --resume " + a.string() + " -o " + b.string());
   EXPECT_EQ(r.status, 1);
-  EXPECT_NE(r.err.find("--resume applies to --method pixmap only"), std::string::npos) << r.err;
+  EXPECT_TRUE(test::mentions(r.err, {"--resume", "--method pixmap"}));
   r = run_cli("run " + scene + " --method pixmap --resume " + c.string() + "/lightmaps -o " + b.string());
   EXPECT_EQ(r.status, 1);
   EXPECT_NE(r.err.find("pixmaps/state.json: cannot open"), std::string::npos) << r.err;
-  for (const fs::path& d : {a, b, c}) fs::remove_all(d);
 }
 
 TEST(Cli, CtrlCStopsAPixmapRunWhichSavesItsStateAndSaysHowToResume) {
-  const fs::path out = fresh_dir("pixmap_interrupt");
+  const test::TempDir tmp;
+  const fs::path out = tmp / "pixmap_interrupt";
   const fs::path err = out.string() + "_err.txt";
   // No stopping rule: only the interrupt ends it.
   const std::string cmd = "DISPLAY= timeout --foreground --preserve-status -s INT 3 " + kExe + " run " + kData +
@@ -617,6 +611,4 @@ TEST(Cli, CtrlCStopsAPixmapRunWhichSavesItsStateAndSaysHowToResume) {
   const PixmapState st = read_pixmap_state(out.string());
   EXPECT_GT(st.shots, 0);
   EXPECT_EQ(read_summary(out)["solver"]["interrupted"], 1);
-  fs::remove_all(out);
-  fs::remove(err);
 }

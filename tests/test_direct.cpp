@@ -6,7 +6,6 @@
 #include "radmesh/direct.h"
 #include "radmesh/error_metric.h"
 
-#include "tests/edited_obj.h"
 #include "tests/test_util.h"
 
 #include <gtest/gtest.h>
@@ -20,7 +19,7 @@ using namespace radmesh;
 using radmesh::test::patch_named;
 
 namespace {
-const std::string kData = RADMESH_TEST_DATA;
+using radmesh::test::kData;
 
 // Form factor from a differential area to a parallel a x b rectangle at
 // distance c, the area lying under one of its corners (Howell's catalogue B-3).
@@ -121,17 +120,16 @@ TEST_F(BoxOnFloor, AQuadOccluderCastsTheShadowOfItsTwoTriangles) {
   // triangle patches (the box's faces here) it is clipped as two. The union of the two triangles'
   // shadows is the quad's shadow, so every visible form factor agrees to
   // rounding: on a grid over the floor's penumbrae and umbra.
-  namespace fs = std::filesystem;
-  const fs::path dir = fs::temp_directory_path() / "radmesh_test_direct_split";
-  const std::string split = test_files::write_edited_obj(kData + "/box_on_floor/box_on_floor", dir,
-                                                         [](const std::string& line, int) -> std::string {
-                                                           int a, b, c, d;
-                                                           if (std::sscanf(line.c_str(), "f %d %d %d %d", &a, &b, &c, &d) != 4 || a < 5 || a > 12)
-                                                             return line;
-                                                           return "f " + std::to_string(a) + " " + std::to_string(b) + " " +
-                                                                  std::to_string(c) + "\nf " + std::to_string(a) + " " +
-                                                                  std::to_string(c) + " " + std::to_string(d);
-                                                         });
+  const test::TempDir dir;
+  const std::string split = test::write_edited_obj(kData + "/box_on_floor/box_on_floor", dir.path(),
+                                                   [](const std::string& line, int) -> std::string {
+                                                     int a, b, c, d;
+                                                     if (std::sscanf(line.c_str(), "f %d %d %d %d", &a, &b, &c, &d) != 4 || a < 5 || a > 12)
+                                                       return line;
+                                                     return "f " + std::to_string(a) + " " + std::to_string(b) + " " +
+                                                            std::to_string(c) + "\nf " + std::to_string(a) + " " +
+                                                            std::to_string(c) + " " + std::to_string(d);
+                                                   });
   const Scene t = read_obj_scene(split);
   ASSERT_EQ(t.patches.size(), s.patches.size() + 5);  // the box's five faces, each two triangles
   const DirectIllumination triangles(t);
@@ -149,7 +147,6 @@ TEST_F(BoxOnFloor, AQuadOccluderCastsTheShadowOfItsTwoTriangles) {
       EXPECT_NEAR(triangles.visible_form_factor(x, up, t_floor, t_light), f, 1e-16 + 1e-13 * f) << px << " " << pz;
     }
   EXPECT_GT(penumbra, 20);  // the grid crosses the penumbrae
-  fs::remove_all(dir);
 }
 
 namespace {

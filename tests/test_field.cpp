@@ -32,7 +32,7 @@ using namespace radmesh;
 using radmesh::test::patch_named;
 
 namespace {
-const std::string kData = RADMESH_TEST_DATA;
+using radmesh::test::kData;
 
 // Form factor from a differential area to a parallel a x b rectangle at
 // distance c, the area lying under one of its corners (Howell B-3).
@@ -253,8 +253,7 @@ TEST(Field, PatchMeansOfAClosedRoomBalanceTheEnergy) {
   // the light emits is absorbed somewhere. A surface of reflectance rho and
   // mean radiosity B absorbs (1 - rho) / rho (B - E) per unit area, so the
   // field's patch means must account for the emitted power.
-  const std::filesystem::path dir = std::filesystem::temp_directory_path() / "radmesh_field_room";
-  std::filesystem::create_directories(dir);
+  const test::TempDir dir;
   {
     std::ofstream mtl(dir / "room.mtl");
     mtl << "newmtl grey\nKd 0.6 0.6 0.6\nnewmtl light\nKd 0.3 0.3 0.3\nKe 10 10 10\n";
@@ -284,7 +283,6 @@ TEST(Field, PatchMeansOfAClosedRoomBalanceTheEnergy) {
   // Measured 0.39% low (the field is linear between vertices, the gather samples
   // visibility): within 1%.
   EXPECT_NEAR(absorbed / emitted, 1.0, 1e-2);
-  std::filesystem::remove_all(dir);
 }
 
 TEST(Field, ModesParseAndAnUnknownOneIsAnInputError) {

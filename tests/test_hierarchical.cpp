@@ -24,7 +24,7 @@
 using namespace radmesh;
 
 namespace {
-const std::string kData = RADMESH_TEST_DATA;
+using radmesh::test::kData;
 
 constexpr double kMiB = 1024.0 * 1024.0, kGiB = 1024.0 * kMiB;
 

@@ -5,6 +5,7 @@
 #include "radmesh/obj_reader.h"
 #include "radmesh/hierarchy.h"
 #include "radmesh/mesh.h"
+#include "tests/test_util.h"
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Surface_mesh.h>
@@ -19,7 +20,7 @@
 using namespace radmesh;
 
 namespace {
-const std::string kData = RADMESH_TEST_DATA;
+using radmesh::test::kData;
 using SurfaceMesh = CGAL::Surface_mesh<CGAL::Exact_predicates_inexact_constructions_kernel::Point_3>;
 
 std::pair<int, int> key(int a, int b) { return {std::min(a, b), std::max(a, b)}; }

@@ -21,7 +21,7 @@ using namespace radmesh;
 using radmesh::test::transformed;
 
 namespace {
-const std::string kData = RADMESH_TEST_DATA;
+using radmesh::test::kData;
 
 // What the conformance tests may expect of a method on their closed forms,
 // and the option values for a quick run (coarser, the same physics). A
@@ -209,10 +209,7 @@ TEST_P(Conformance, AnInsideOutRoomIsSaidToBeUnlit) {
   const Scene inside_out = test::transformed(scene, [](const Vec3& v) { return Vec3(-v.x, v.y, v.z); });
   const MethodResult r = solve(GetParam(), inside_out, 0.25);
   ASSERT_EQ(r.warnings.size(), 1u);
-  EXPECT_NE(r.warnings[0].find("no light reached any of the " + std::to_string(scene.patches.size() - 2) +
-                               " faces that reflect"),
-            std::string::npos)
-      << r.warnings[0];
+  EXPECT_TRUE(test::mentions(r.warnings[0], {"no light reached", std::to_string(scene.patches.size() - 2) + " faces"}));
   for (const Rgb& b : r.solution.element) EXPECT_TRUE(b.x == 0.0 || b.x == 50.0) << b.x;
   EXPECT_TRUE(solve(GetParam(), scene, 0.25).warnings.empty());
 }
@@ -291,8 +288,7 @@ TEST_P(Conformance, ALampPartlyInsideABoxEmitsIntoItAndSaysSo) {
   const MethodResult r = solve(GetParam(), scene, 0.0);
   const SolveStats& st = r.solution.stats;
   ASSERT_EQ(r.warnings.size(), 1u);
-  EXPECT_TRUE(test::contains(r.warnings[0], "emitting face 'lamp': 25% of its area (0.0625 of 0.25) lies inside a closed object"))
-      << r.warnings[0];
+  EXPECT_TRUE(test::mentions(r.warnings[0], {"emitting face 'lamp'", "25%", "(0.0625 of 0.25)", "closed object"}));
   const int lamp = test::patch_named(scene, "lamp");
   double area = 0.0, power = 0.0;
   for (int t = 0; t < r.mesh.triangle_count(); ++t)

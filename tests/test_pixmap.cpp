@@ -20,12 +20,10 @@
 #include <numeric>
 
 using namespace radmesh;
-using radmesh::test::contains;
-using radmesh::test::message_of;
 
 namespace {
 
-const std::string kData = RADMESH_TEST_DATA;
+using radmesh::test::kData;
 
 // Two triangles of the quad a b c d (counter-clockwise around `normal`).
 void add_quad(std::vector<HemicubeTriangle>& out, const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d,
@@ -242,12 +240,12 @@ SolveOptions threads(int n) {
 using NamedQuad = std::pair<std::string, std::array<std::array<double, 3>, 4>>;
 
 // An OBJ scene of quads (counter-clockwise seen from the side they face)
-// written to the test directory `name` and read: the quad named "light"
+// written to a folder of the test's own and read: the quad named "light"
 // emits 1 (reflectance 0), those named "black..." are black, the others
 // white (0.7).
 Scene quad_scene(const std::string& name, const std::vector<NamedQuad>& quads) {
-  const std::string dir = ::testing::TempDir() + "/radmesh_" + name;
-  std::filesystem::create_directories(dir);
+  const test::TempDir tmp(name);
+  const std::string dir = tmp.string();
   std::ofstream mtl(dir + "/room.mtl");
   mtl << "newmtl white\nKd 0.7 0.7 0.7\nnewmtl light\nKd 0 0 0\nKe 1 1 1\nnewmtl black\nKd 0 0 0\n";
   mtl.close();
@@ -262,9 +260,7 @@ Scene quad_scene(const std::string& name, const std::vector<NamedQuad>& quads) {
     v += 4;
   }
   obj.close();
-  Scene scene = read_obj_scene(dir + "/room.obj");
-  std::filesystem::remove_all(dir);
-  return scene;
+  return read_obj_scene(dir + "/room.obj");
 }
 
 // The six walls of the closed box [0, x] x [0, y] x [0, z], facing in, named
@@ -732,7 +728,8 @@ TEST(PixmapSolver, OneAndTwoThreadsAndAResumeGiveIdenticalStates) {
   first.shots = 25;
   const PixmapSolver part(scene, first, threads(0));
   const PixmapRun p = part.run(part.initial_state());
-  const std::string dir = ::testing::TempDir() + "/radmesh_pixmap_resume";
+  const test::TempDir tmp;
+  const std::string dir = (tmp / "state").string();
   PixmapOutput out;
   out.solver = std::shared_ptr<const PixmapSolver>(&part, [](const PixmapSolver*) {});
   out.state = p.state;
@@ -741,7 +738,6 @@ TEST(PixmapSolver, OneAndTwoThreadsAndAResumeGiveIdenticalStates) {
   PixmapState saved = read_pixmap_state(dir);
   expect_same_state(saved, p.state);
   check_resumable(saved, scene, one.layout(), o, saved.source);
-  std::filesystem::remove_all(dir);
   const PixmapRun resumed = one.run(saved);
   EXPECT_EQ(resumed.shots_this_run, 35);
   expect_same_state(resumed.state, a.state);
@@ -755,16 +751,17 @@ TEST(PixmapSolver, AStateFromOtherOptionsOrAnotherSceneIsRefused) {
   const PixmapState st = solver.initial_state();
   PixmapOptions other = o;
   other.hemicube_res = 128;
-  EXPECT_TRUE(contains(message_of<InputError>([&] { check_resumable(st, scene, solver.layout(), other, "S"); }),
-                       "hemicube_res 64, this run has hemicube_res 128"));
+  const test::Thrown options = test::thrown<InputError>([&] { check_resumable(st, scene, solver.layout(), other, "S"); });
+  EXPECT_TRUE(options.names("hemicube_res"));
+  EXPECT_TRUE(options.says({"S: ", "hemicube_res 64", "hemicube_res 128"}));
   Scene edited = scene;
   edited.materials[0].reflectance.x *= 0.5;
-  EXPECT_TRUE(contains(message_of<InputError>([&] { check_resumable(st, edited, solver.layout(), o, "S"); }),
-                       "another scene"));
+  EXPECT_TRUE(test::thrown<InputError>([&] { check_resumable(st, edited, solver.layout(), o, "S"); })
+                  .says({"S: ", "another scene"}));
   PixmapState broken = st;
   broken.radiosity[0][0] = std::nanf("");
-  EXPECT_TRUE(contains(message_of<InputError>([&] { check_resumable(broken, scene, solver.layout(), o, "S"); }),
-                       "non-finite"));
+  EXPECT_TRUE(test::thrown<InputError>([&] { check_resumable(broken, scene, solver.layout(), o, "S"); })
+                  .says({"S: ", "non-finite"}));
 }
 
 TEST(PixmapSolver, DisplayMeshCoversEveryPatchAndEachTriangleLiesInItsTexel) {

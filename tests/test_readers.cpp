@@ -20,7 +20,6 @@
 #include <numbers>
 #include <sstream>
 #include <string>
-#include <unistd.h>
 #include <vector>
 
 using namespace radmesh;
@@ -31,30 +30,7 @@ using radmesh::test::contains;
 using radmesh::test::message_of;
 
 namespace {
-const std::string kData = RADMESH_TEST_DATA;
-
-
-// A fresh directory per test, removed when the test program ends.
-std::vector<fs::path>& made_dirs() {
-  static std::vector<fs::path> dirs;
-  return dirs;
-}
-
-class RemoveMadeDirs : public ::testing::Environment {
-  void TearDown() override {
-    for (const fs::path& d : made_dirs()) fs::remove_all(d);
-  }
-};
-[[maybe_unused]] ::testing::Environment* const remove_made_dirs =
-    ::testing::AddGlobalTestEnvironment(new RemoveMadeDirs);
-
-fs::path fresh_dir(const std::string& name) {
-  const fs::path d = fs::temp_directory_path() / ("radmesh_readers_" + name + "_" + std::to_string(::getpid()));
-  fs::remove_all(d);
-  fs::create_directories(d);
-  made_dirs().push_back(d);
-  return d;
-}
+using radmesh::test::kData;
 
 void write_text(const fs::path& p, const std::string& text) {
   fs::create_directories(p.parent_path());
@@ -151,15 +127,17 @@ void expect_octahedron_face0_mirrored_in_x(const Scene& s) {
 
 TEST(Readers, AGlbHeaderCannotAskForMoreThanTheFileHolds) {
   // The JSON chunk's length is a 4-byte field: 0xFFFFFFF0 must not allocate 4 GiB.
-  const fs::path dir = fresh_dir("glb_length");
+  const test::TempDir tmp;
+  const fs::path& dir = tmp.path();
   const uint32_t words[5] = {0x46546C67u, 2u, 40u, 0xFFFFFFF0u, 0x4E4F534Au};
   std::ofstream(dir / "big.glb", std::ios::binary).write(reinterpret_cast<const char*>(words), sizeof words);
-  const std::string msg = message_of<InputError>([&] { read_scene((dir / "big.glb").string()); });
-  EXPECT_TRUE(contains(msg, "JSON chunk of a stated 4294967280 bytes, longer than the file")) << msg;
+  const test::Thrown t = test::thrown<InputError>([&] { read_scene((dir / "big.glb").string()); });
+  EXPECT_TRUE(t.says({(dir / "big.glb").string(), "4294967280 bytes"}));
 }
 
 TEST(Readers, EveryFormatGivesTheSameSceneOfTriangles) {
-  const fs::path dir = fresh_dir("formats");
+  const test::TempDir tmp;
+  const fs::path& dir = tmp.path();
   const PolyMesh m = octahedron();
   const auto files = test::write_every_format(dir, m, "octa");
   std::vector<Scene> scenes;
@@ -184,7 +162,8 @@ TEST(Readers, EveryFormatGivesTheSameSceneOfTriangles) {
 }
 
 TEST(Readers, PolygonsStayPolygonsInPlyOffAndObj) {
-  const fs::path dir = fresh_dir("quads");
+  const test::TempDir tmp;
+  const fs::path& dir = tmp.path();
   const PolyMesh m = cube_quads();
   test::write_obj(dir / "cube.obj", m, "cube");
   test::write_ply(dir / "cube.ply", m, false);
@@ -205,7 +184,8 @@ TEST(Readers, PolygonsStayPolygonsInPlyOffAndObj) {
 }
 
 TEST(Readers, ObjWithMtlAndGltfCarryTheSameMaterials) {
-  const fs::path dir = fresh_dir("materials");
+  const test::TempDir tmp;
+  const fs::path& dir = tmp.path();
   const PolyMesh m = octahedron();
   test::write_obj(dir / "octa.obj", m, "octa", "octa.mtl", "lamp");
   write_text(dir / "octa.mtl", "newmtl lamp\nKd 0.5 0.25 0.125\nKe 8 4 2\n");
@@ -227,7 +207,8 @@ TEST(Readers, ObjWithMtlAndGltfCarryTheSameMaterials) {
 }
 
 TEST(Readers, GltfNodeTransformIsAppliedAndAMirrorKeepsFacesFacingOut) {
-  const fs::path dir = fresh_dir("gltf_nodes");
+  const test::TempDir tmp;
+  const fs::path& dir = tmp.path();
   const PolyMesh m = octahedron();
   const GltfMaterial grey{.name = "grey", .emissive = {1, 1, 1}};
   test::write_gltf(dir / "moved.gltf", m, "moved", false, &grey, "\"translation\": [10, 0, 0]");
@@ -252,7 +233,8 @@ TEST(Readers, GltfNodeTransformIsAppliedAndAMirrorKeepsFacesFacingOut) {
 }
 
 TEST(Readers, GltfTextureIsNamedInAWarning) {
-  const fs::path dir = fresh_dir("gltf_texture");
+  const test::TempDir tmp;
+  const fs::path& dir = tmp.path();
   const GltfMaterial grey{.name = "grey", .emissive = {1, 1, 1}};
   test::write_gltf(dir / "t.gltf", octahedron(), "t", false, &grey);
   std::ifstream in(dir / "t.gltf");
@@ -265,14 +247,14 @@ TEST(Readers, GltfTextureIsNamedInAWarning) {
   write_text(dir / "t.gltf", text);
   const Scene s = read_scene((dir / "t.gltf").string());
   ASSERT_FALSE(s.report.warnings.empty());
-  EXPECT_TRUE(contains(s.report.warnings[0], "t.gltf: materials[0] 'grey': baseColorTexture is ignored"))
-      << s.report.warnings[0];
+  EXPECT_TRUE(test::mentions(s.report.warnings[0], {"t.gltf: materials[0] 'grey'", "baseColorTexture", "ignored"}));
 }
 
 // ---------------------------------------------------------------- JSON scenes
 
 TEST(JsonScene, ScaleThenRotateXThenYThenZThenTranslate) {
-  const fs::path dir = fresh_dir("transform");
+  const test::TempDir tmp;
+  const fs::path& dir = tmp.path();
   PolyMesh tri;
   tri.positions = {{1, 1, 1}, {2, 1, 1}, {1, 2, 1}};
   tri.faces = {{0, 1, 2}};
@@ -299,7 +281,8 @@ TEST(JsonScene, ScaleThenRotateXThenYThenZThenTranslate) {
 }
 
 TEST(JsonScene, MirroringScaleReversesFacesSoTheyKeepFacingOut) {
-  const fs::path dir = fresh_dir("mirror");
+  const test::TempDir tmp;
+  const fs::path& dir = tmp.path();
   test::write_ply(dir / "octa.ply", octahedron(), false);
   write_text(dir / "s.json",
              "{\"materials\": {\"m\": {\"reflectance\": [0.5, 0.5, 0.5], \"emission\": [1, 1, 1]}},\n"
@@ -311,7 +294,8 @@ TEST(JsonScene, MirroringScaleReversesFacesSoTheyKeepFacingOut) {
 }
 
 TEST(JsonScene, PathsAreRelativeToTheJsonFile) {
-  const fs::path dir = fresh_dir("paths");
+  const test::TempDir tmp;
+  const fs::path& dir = tmp.path();
   fs::create_directories(dir / "scenes" / "meshes");
   test::write_ply(dir / "scenes" / "meshes" / "a.ply", octahedron(), true);
   fs::create_directories(dir / "other");
@@ -323,7 +307,7 @@ TEST(JsonScene, PathsAreRelativeToTheJsonFile) {
              "             {\"file\": \"" + (dir / "other" / "b.off").string() + "\", \"material\": \"m\","
              " \"transform\": {\"translate\": [5, 0, 0]}}]}\n");
   const fs::path cwd = fs::current_path();
-  fs::current_path(fs::temp_directory_path());  // not the JSON file's directory
+  fs::current_path(dir);  // not the JSON file's directory (scenes/)
   const Scene s = read_scene((dir / "scenes" / "s.json").string());
   fs::current_path(cwd);
   EXPECT_EQ(s.patches.size(), 8u + 6u + 6u);
@@ -333,7 +317,8 @@ TEST(JsonScene, PathsAreRelativeToTheJsonFile) {
 }
 
 TEST(JsonScene, ObjectsKeepTheirFilesMaterialsUnlessTheyNameOne) {
-  const fs::path dir = fresh_dir("keep");
+  const test::TempDir tmp;
+  const fs::path& dir = tmp.path();
   const PolyMesh m = octahedron();
   test::write_obj(dir / "room.obj", m, "room", "room.mtl", "white");
   write_text(dir / "room.mtl", "newmtl white\nKd 0.7 0.7 0.7\nnewmtl unused\nKd 0.1 0.1 0.1\n");
@@ -363,16 +348,17 @@ TEST(JsonScene, ObjectsKeepTheirFilesMaterialsUnlessTheyNameOne) {
 }
 
 TEST(JsonScene, OneMaterialNameWithTwoValuesNamesBoth) {
-  const fs::path dir = fresh_dir("clash");
+  const test::TempDir tmp;
+  const fs::path& dir = tmp.path();
   test::write_obj(dir / "room.obj", octahedron(), "room", "room.mtl", "white");
   write_text(dir / "room.mtl", "# room\nnewmtl white\nKd 0.7 0.7 0.7\nKe 1 1 1\n");
   write_text(dir / "s.json",
              "{\"materials\": {\"white\": {\"reflectance\": [0.5, 0.5, 0.5]}},\n"
              " \"objects\": [{\"file\": \"room.obj\"}]}\n");
-  const std::string msg = message_of<InputError>([&] { read_scene((dir / "s.json").string()); });
-  EXPECT_TRUE(contains(msg, "s.json: objects[0]: material 'white' is defined twice")) << msg;
-  EXPECT_TRUE(contains(msg, "s.json: materials.white (reflectance 0.5 0.5 0.5, emission 0 0 0)")) << msg;
-  EXPECT_TRUE(contains(msg, "room.mtl:2: material 'white' (reflectance 0.7 0.7 0.7, emission 1 1 1)")) << msg;
+  const test::Thrown t = test::thrown<InputError>([&] { read_scene((dir / "s.json").string()); });
+  EXPECT_TRUE(t.says({"s.json: objects[0]", "'white'", "twice"}));
+  EXPECT_TRUE(t.says({"s.json: materials.white", "reflectance 0.5 0.5 0.5", "emission 0 0 0"}));
+  EXPECT_TRUE(t.says({"room.mtl:2", "reflectance 0.7 0.7 0.7", "emission 1 1 1"}));
 }
 
 // ---------------------------------------------------------------- errors
@@ -380,20 +366,25 @@ TEST(JsonScene, OneMaterialNameWithTwoValuesNamesBoth) {
 struct JsonErrorCase {
   const char* name;
   const char* json;  // objects refer to octa.ply (no materials), room.obj (+ mtl), lamp.gltf
-  const char* expected;
+  const char* type;  // the error's class
+  const char* key;   // where in the JSON, after "<dir>/scene.json: " ("" for the document)
+  std::vector<std::string> values;  // what it names there: the bad value, the key missing
 };
 
 class JsonErrors : public ::testing::TestWithParam<JsonErrorCase> {};
 
 TEST_P(JsonErrors, MessageNamesTheFileAndTheKey) {
   const JsonErrorCase c = GetParam();
-  const fs::path dir = fresh_dir(std::string("json_") + c.name);
+  const test::TempDir tmp;
+  const fs::path& dir = tmp.path();
   test::write_ply(dir / "octa.ply", octahedron(), false);
   test::write_obj(dir / "room.obj", octahedron(), "room", "room.mtl", "white");
   write_text(dir / "room.mtl", "newmtl white\nKd 0.7 0.7 0.7\nKe 1 1 1\n");
   write_text(dir / "scene.json", c.json);
-  const std::string msg = message_of<Error>([&] { read_scene((dir / "scene.json").string()); });
-  EXPECT_TRUE(contains(msg, (dir / "scene.json").string() + ": " + c.expected)) << msg;
+  const test::Thrown t = test::thrown<Error>([&] { read_scene((dir / "scene.json").string()); });
+  EXPECT_EQ(t.type, c.type) << t.message;
+  EXPECT_TRUE(t.says({(dir / "scene.json").string() + ": " + c.key}));
+  for (const std::string& v : c.values) EXPECT_TRUE(t.says({v}));
 }
 
 #define GREY "\"materials\": {\"grey\": {\"reflectance\": [0.5, 0.5, 0.5]}}"
@@ -404,99 +395,101 @@ INSTANTIATE_TEST_SUITE_P(
         JsonErrorCase{"scale_string",
                       "{" GREY ", \"objects\": [{\"file\": \"room.obj\"}, {\"file\": \"octa.ply\", \"material\": "
                       "\"grey\", \"transform\": {\"scale\": \"big\"}}]}",
-                      "objects[1].transform.scale: expected a number or 3 numbers, got \"big\""},
+                      "InputError", "objects[1].transform.scale", {"got \"big\""}},
         JsonErrorCase{"scale_two",
                       "{" GREY ", \"objects\": [{\"file\": \"room.obj\", \"transform\": {\"scale\": [1, 2]}}]}",
-                      "objects[0].transform.scale: expected a number or 3 numbers, got [1,2]"},
+                      "InputError", "objects[0].transform.scale", {"got [1,2]"}},
         JsonErrorCase{"scale_zero", "{\"objects\": [{\"file\": \"room.obj\", \"transform\": {\"scale\": [1, 0, 1]}}]}",
-                      "objects[0].transform.scale: [1,0,1] would flatten the mesh"},
+                      "InputError", "objects[0].transform.scale", {"[1,0,1]", "flatten"}},
         JsonErrorCase{"rotate_two",
                       "{\"objects\": [{\"file\": \"room.obj\", \"transform\": {\"rotate_deg\": [90, 0]}}]}",
-                      "objects[0].transform.rotate_deg: expected 3 numbers, got [90,0]"},
+                      "InputError", "objects[0].transform.rotate_deg", {"got [90,0]"}},
         JsonErrorCase{"translate_bool",
                       "{\"objects\": [{\"file\": \"room.obj\", \"transform\": {\"translate\": [true, 0, 0]}}]}",
-                      "objects[0].transform.translate: expected 3 numbers, got [true,0,0]"},
+                      "InputError", "objects[0].transform.translate", {"got [true,0,0]"}},
         JsonErrorCase{"transform_key",
                       "{\"objects\": [{\"file\": \"room.obj\", \"transform\": {\"rotate\": [0, 0, 0]}}]}",
-                      "objects[0].transform.rotate: unknown key; expected \"scale\", \"rotate_deg\", \"translate\""},
-        JsonErrorCase{"object_key", "{\"objects\": [{\"file\": \"room.obj\", \"colour\": \"red\"}]}",
-                      "objects[0].colour: unknown key; expected \"file\", \"material\", \"transform\""},
-        JsonErrorCase{"top_key", "{\"objects\": [{\"file\": \"room.obj\"}], \"camera\": {}}",
-                      "\"camera\": unknown key; expected \"materials\", \"objects\""},
-        JsonErrorCase{"file_number", "{\"objects\": [{\"file\": 3}]}", "objects[0].file: expected a file name, got 3"},
-        JsonErrorCase{"no_file", "{\"objects\": [{\"material\": \"grey\"}]}", "objects[0]: missing \"file\""},
-        JsonErrorCase{"no_objects", "{" GREY "}", "missing \"objects\""},
-        JsonErrorCase{"objects_empty", "{\"objects\": []}", "objects: expected a non-empty list"},
+                      "InputError", "objects[0].transform.rotate", {"unknown key", "\"rotate_deg\""}},
+        JsonErrorCase{"object_key", "{\"objects\": [{\"file\": \"room.obj\", \"colour\": \"red\"}]}", "InputError",
+                      "objects[0].colour", {"unknown key", "\"material\""}},
+        JsonErrorCase{"top_key", "{\"objects\": [{\"file\": \"room.obj\"}], \"camera\": {}}", "InputError",
+                      "\"camera\"", {"unknown key", "\"objects\""}},
+        JsonErrorCase{"file_number", "{\"objects\": [{\"file\": 3}]}", "InputError", "objects[0].file", {"got 3"}},
+        JsonErrorCase{"no_file", "{\"objects\": [{\"material\": \"grey\"}]}", "InputError", "objects[0]",
+                      {"missing \"file\""}},
+        JsonErrorCase{"no_objects", "{" GREY "}", "InputError", "", {"missing \"objects\""}},
+        JsonErrorCase{"objects_empty", "{\"objects\": []}", "InputError", "objects", {"non-empty"}},
         JsonErrorCase{"material_number", "{" GREY ", \"objects\": [{\"file\": \"octa.ply\", \"material\": 5}]}",
-                      "objects[0].material: expected a material name, got 5"},
+                      "InputError", "objects[0].material", {"got 5"}},
         JsonErrorCase{"unknown_material", "{" GREY ", \"objects\": [{\"file\": \"octa.ply\", \"material\": \"gold\"}]}",
-                      "objects[0].material: unknown material \"gold\" (\"materials\" defines grey)"},
+                      "InputError", "objects[0].material", {"\"gold\"", "defines grey"}},
         JsonErrorCase{"file_material_not_referable",
                       "{\"objects\": [{\"file\": \"room.obj\"}, {\"file\": \"octa.ply\", \"material\": \"white\"}]}",
-                      "objects[1].material: unknown material \"white\" (\"materials\" defines none)"},
+                      "InputError", "objects[1].material", {"\"white\"", "defines none"}},
         JsonErrorCase{"ply_without_material", "{\"objects\": [{\"file\": \"room.obj\"}, {\"file\": \"octa.ply\"}]}",
-                      "objects[1]: 'octa.ply': PLY files carry no materials; give the object a \"material\""},
+                      "InputError", "objects[1]: 'octa.ply'", {"no materials", "\"material\""}},
         JsonErrorCase{"reflectance_high",
                       "{\"materials\": {\"white\": {\"reflectance\": [1.5, 0.5, 0.5]}}, \"objects\": [{\"file\": "
                       "\"room.obj\"}]}",
-                      "materials.white.reflectance: 1.5 0.5 0.5 is outside [0, 1)"},
+                      "InputError", "materials.white.reflectance", {"1.5 0.5 0.5", "[0, 1)"}},
         JsonErrorCase{"reflectance_string",
                       "{\"materials\": {\"white\": {\"reflectance\": \"white\"}}, \"objects\": [{\"file\": "
                       "\"room.obj\"}]}",
-                      "materials.white.reflectance: expected 3 numbers, got \"white\""},
+                      "InputError", "materials.white.reflectance", {"got \"white\""}},
         JsonErrorCase{"no_reflectance",
                       "{\"materials\": {\"lamp\": {\"emission\": [1, 1, 1]}}, \"objects\": [{\"file\": \"room.obj\"}]}",
-                      "materials.lamp: missing \"reflectance\""},
+                      "InputError", "materials.lamp", {"missing \"reflectance\""}},
         JsonErrorCase{"emission_negative",
                       "{\"materials\": {\"lamp\": {\"reflectance\": [0, 0, 0], \"emission\": [1, -1, 1]}}, "
                       "\"objects\": [{\"file\": \"room.obj\"}]}",
-                      "materials.lamp.emission: 1 -1 1 must be >= 0"},
+                      "InputError", "materials.lamp.emission", {"1 -1 1", ">= 0"}},
         JsonErrorCase{"material_key",
                       "{\"materials\": {\"lamp\": {\"reflectance\": [0, 0, 0], \"Ke\": [1, 1, 1]}}, "
                       "\"objects\": [{\"file\": \"room.obj\"}]}",
-                      "materials.lamp.Ke: unknown key; expected \"reflectance\", \"emission\""},
-        JsonErrorCase{"missing_file", "{\"objects\": [{\"file\": \"meshes/bunny.ply\"}]}",
-                      "objects[0].file: 'meshes/bunny.ply' not found (looked for "},
-        JsonErrorCase{"unknown_extension", "{\"objects\": [{\"file\": \"room.dae\"}]}",
-                      "objects[0].file: 'room.dae': unknown extension '.dae'"},
-        JsonErrorCase{"nested_json", "{\"objects\": [{\"file\": \"scene.json\"}]}",
-                      "objects[0].file: 'scene.json' is a JSON scene; a scene cannot include another"},
-        JsonErrorCase{"syntax", "{\"objects\": [{\"file\": \"room.obj\"},\n  ]}",
-                      "parse error at line 2, column 3"},
-        JsonErrorCase{"not_object", "[1, 2]", "expected an object with \"materials\" and \"objects\", got [1,2]"}),
+                      "InputError", "materials.lamp.Ke", {"unknown key", "\"emission\""}},
+        JsonErrorCase{"missing_file", "{\"objects\": [{\"file\": \"meshes/bunny.ply\"}]}", "IoError",
+                      "objects[0].file", {"'meshes/bunny.ply'", "not found"}},
+        JsonErrorCase{"unknown_extension", "{\"objects\": [{\"file\": \"room.dae\"}]}", "InputError",
+                      "objects[0].file: 'room.dae'", {"'.dae'"}},
+        JsonErrorCase{"nested_json", "{\"objects\": [{\"file\": \"scene.json\"}]}", "InputError",
+                      "objects[0].file: 'scene.json'", {"JSON scene"}},
+        JsonErrorCase{"syntax", "{\"objects\": [{\"file\": \"room.obj\"},\n  ]}", "InputError", "",
+                      {"line 2, column 3"}},
+        JsonErrorCase{"not_object", "[1, 2]", "InputError", "", {"got [1,2]"}}),
     [](const auto& info) { return std::string(info.param.name); });
 
 TEST(JsonScene, NestingPastTheBoundIsAnErrorNotACrash) {
   // 100,000 levels overflowed the stack when the parsed value was printed
   // or destroyed; the parse now stops at kMaxJsonDepth. At the bound
   // itself the file parses and is refused for what it holds.
-  const fs::path dir = fresh_dir("deep");
+  const test::TempDir tmp;
+  const fs::path& dir = tmp.path();
   auto nested = [](int depth) { return std::string(static_cast<size_t>(depth), '[') + std::string(static_cast<size_t>(depth), ']'); };
   write_text(dir / "deep.json", nested(100000));
-  std::string msg = message_of<InputError>([&] { read_scene((dir / "deep.json").string()); });
-  EXPECT_TRUE(contains(msg, (dir / "deep.json").string() + ": JSON nested more than 256 levels deep")) << msg;
+  const test::Thrown deep = test::thrown<InputError>([&] { read_scene((dir / "deep.json").string()); });
+  EXPECT_TRUE(deep.says({(dir / "deep.json").string() + ": ", "256 levels"}));
   write_text(dir / "bound.json", nested(kMaxJsonDepth));
-  msg = message_of<InputError>([&] { read_scene((dir / "bound.json").string()); });
-  EXPECT_TRUE(contains(msg, "expected an object with \"materials\" and \"objects\"")) << msg;
+  const test::Thrown bound = test::thrown<InputError>([&] { read_scene((dir / "bound.json").string()); });
+  EXPECT_TRUE(bound.says({(dir / "bound.json").string() + ": ", "got [["}));  // parsed, and not an object
 }
 
 TEST(JsonScene, AKeyWrittenTwiceInOneObjectIsAnError) {
   // The last value stood silently: two "materials" lost the first list, a
   // material's second "reflectance" replaced its first. Keys of different
   // objects may repeat.
-  const fs::path dir = fresh_dir("duplicate_keys");
+  const test::TempDir tmp;
+  const fs::path& dir = tmp.path();
   write_text(dir / "s.json",
              "{\"materials\": {\"a\": {\"reflectance\": [0.5, 0.5, 0.5]}},\n"
              " \"objects\": [{\"file\": \"x.ply\", \"material\": \"a\"}],\n"
              " \"materials\": {\"b\": {\"reflectance\": [0.2, 0.2, 0.2]}}}");
-  std::string msg = message_of<InputError>([&] { read_scene((dir / "s.json").string()); });
-  EXPECT_TRUE(contains(msg, (dir / "s.json").string() + ": key 'materials' is written twice in one object (at depth 1)"))
-      << msg;
+  const test::Thrown top = test::thrown<InputError>([&] { read_scene((dir / "s.json").string()); });
+  EXPECT_TRUE(top.says({(dir / "s.json").string() + ": key 'materials'", "twice", "depth 1"}));
   write_text(dir / "t.json",
              "{\"materials\": {\"a\": {\"reflectance\": [0.5, 0.5, 0.5], \"reflectance\": [0.2, 0.2, 0.2]}},\n"
              " \"objects\": []}");
-  msg = message_of<InputError>([&] { read_scene((dir / "t.json").string()); });
-  EXPECT_TRUE(contains(msg, "key 'reflectance' is written twice in one object (at depth 3)")) << msg;
+  const test::Thrown inner = test::thrown<InputError>([&] { read_scene((dir / "t.json").string()); });
+  EXPECT_TRUE(inner.says({(dir / "t.json").string() + ": key 'reflectance'", "twice", "depth 3"}));
   // The same key in sibling objects is no repeat: the scene is refused for
   // its missing file, not for its keys.
   write_text(dir / "u.json",
@@ -507,12 +500,12 @@ TEST(JsonScene, AKeyWrittenTwiceInOneObjectIsAnError) {
 }
 
 TEST(JsonScene, MissingFileIsAnIoErrorNamingTheResolvedPath) {
-  const fs::path dir = fresh_dir("missing");
+  const test::TempDir tmp;
+  const fs::path& dir = tmp.path();
   write_text(dir / "s.json", "{\"objects\": [{\"file\": \"sub/none.ply\", \"material\": \"m\"}]}");
-  const std::string msg = message_of<IoError>([&] { read_scene((dir / "s.json").string()); });
-  EXPECT_TRUE(contains(msg, (dir / "s.json").string() + ": objects[0].file: 'sub/none.ply' not found (looked for " +
-                                (dir / "sub" / "none.ply").string() + ")"))
-      << msg;
+  const test::Thrown t = test::thrown<IoError>([&] { read_scene((dir / "s.json").string()); });
+  EXPECT_TRUE(t.says({(dir / "s.json").string() + ": objects[0].file", "'sub/none.ply'", "not found",
+                      (dir / "sub" / "none.ply").string()}));
   const std::string direct = message_of<IoError>([&] { read_scene((dir / "none.json").string()); });
   EXPECT_TRUE(contains(direct, "none.json: no such file")) << direct;
 }
@@ -521,17 +514,20 @@ struct FileErrorCase {
   const char* name;
   const char* file;     // written into a fresh directory
   const char* content;  // text of the file
-  const char* expected; // after "<dir>/<file>"
+  const char* element;  // where in the file: what follows "<dir>/<file>" (": " for the file as a whole)
+  std::vector<std::string> values;  // what it names there
 };
 
 class FileErrors : public ::testing::TestWithParam<FileErrorCase> {};
 
 TEST_P(FileErrors, MessageNamesTheFileAndTheElement) {
   const FileErrorCase c = GetParam();
-  const fs::path dir = fresh_dir(std::string("file_") + c.name);
+  const test::TempDir tmp;
+  const fs::path& dir = tmp.path();
   write_text(dir / c.file, c.content);
-  const std::string msg = message_of<InputError>([&] { read_scene((dir / c.file).string()); });
-  EXPECT_TRUE(contains(msg, (dir / c.file).string() + c.expected)) << msg;
+  const test::Thrown t = test::thrown<InputError>([&] { read_scene((dir / c.file).string()); });
+  EXPECT_TRUE(t.says({(dir / c.file).string() + c.element}));
+  for (const std::string& v : c.values) EXPECT_TRUE(t.says({v}));
 }
 
 #define PLY_HEAD(nv, nf)                                                                                       \
@@ -548,16 +544,14 @@ TEST_P(FileErrors, MessageNamesTheFileAndTheElement) {
   "{\"POSITION\": 0}, \"indices\": 1" material "}]}], \"nodes\": [{\"mesh\": 0}], \"scenes\": [{\"nodes\": [0]}]}"
 
 TEST(FileErrors, BinaryStlShorterThanItsFacetCountIsRefused) {
-  const fs::path dir = fresh_dir("stl_binary_short");
+  const test::TempDir tmp;
+  const fs::path& dir = tmp.path();
   std::string bytes(84 + 50 * 2, '\0');  // a header, 2 facets stated, their 100 bytes...
   bytes[80] = 2;
   bytes.resize(bytes.size() - 30);        // ...of which 30 are missing
   write_text(dir / "mesh.stl", bytes);
-  const std::string msg = message_of<InputError>([&] { read_scene((dir / "mesh.stl").string()); });
-  EXPECT_TRUE(contains(msg, (dir / "mesh.stl").string() +
-                                ": a binary STL stating 2 facets needs 184 bytes, the file has 154 (truncated, or not "
-                                "an STL file)"))
-      << msg;
+  const test::Thrown t = test::thrown<InputError>([&] { read_scene((dir / "mesh.stl").string()); });
+  EXPECT_TRUE(t.says({(dir / "mesh.stl").string() + ": ", "2 facets", "184 bytes", "has 154"}));
 }
 
 TEST(FileErrors, BinaryPlyLongerThanItsElementsIsRefused) {
@@ -565,7 +559,8 @@ TEST(FileErrors, BinaryPlyLongerThanItsElementsIsRefused) {
   // walk over the lists finds the second's 13 bytes (a count byte, three
   // 4-byte indices) beyond the declared elements. As declared, both read.
   for (const bool big : {false, true}) {
-    const fs::path dir = fresh_dir(big ? "ply_binary_long_be" : "ply_binary_long_le");
+    const test::TempDir tmp(big ? "big_endian" : "little_endian");
+    const fs::path& dir = tmp.path();
     auto body = [big](int faces) {
       std::string b = std::string("ply\nformat ") + (big ? "binary_big_endian" : "binary_little_endian") +
                       " 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n"
@@ -587,14 +582,11 @@ TEST(FileErrors, BinaryPlyLongerThanItsElementsIsRefused) {
       return b;
     };
     write_text(dir / "long.ply", body(1));
-    const std::string msg = message_of<InputError>([&] { read_scene((dir / "long.ply").string()); });
-    EXPECT_TRUE(contains(msg, (dir / "long.ply").string() +
-                                  ": 13 bytes after the 5 elements its PLY header declares (a wrong count would drop "
-                                  "them)"))
-        << msg;
+    const test::Thrown t = test::thrown<InputError>([&] { read_scene((dir / "long.ply").string()); });
+    EXPECT_TRUE(t.says({(dir / "long.ply").string() + ": ", "13 bytes", "5 elements"}));
     write_text(dir / "right.ply", body(2));
-    const std::string right = message_of<InputError>([&] { read_scene((dir / "right.ply").string()); });
-    EXPECT_TRUE(contains(right, "PLY files carry no materials")) << right;
+    const test::Thrown right = test::thrown<InputError>([&] { read_scene((dir / "right.ply").string()); });
+    EXPECT_TRUE(right.says({"right.ply", "no materials"}));  // read whole, then refused for its missing material
   }
 }
 
@@ -602,118 +594,105 @@ INSTANTIATE_TEST_SUITE_P(
     AllCases, FileErrors,
     ::testing::Values(
         FileErrorCase{"ply_needs_material", "mesh.ply", PLY_HEAD(3, 1) "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n",
-                      ": PLY files carry no materials, and every face needs a reflectance: put the mesh in a JSON "
-                      "scene that gives it a material, e.g. {\"materials\": {\"grey\": {\"reflectance\": [0.5, 0.5, "
-                      "0.5]}}, \"objects\": [{\"file\": \"mesh.ply\", \"material\": \"grey\"}]}"},
+                      ": ", {"PLY", "no materials", "{\"file\": \"mesh.ply\", \"material\": \"grey\"}"}},
         FileErrorCase{"stl_needs_material", "mesh.stl",
                       "solid s\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 1 0\nendloop\n"
                       "endfacet\nendsolid s\n",
-                      ": STL files carry no materials"},
+                      ": ", {"STL", "no materials"}},
         // Truncated text files: assimp read them up to the break without a
         // word (STL) or reported a coincident face (PLY).
         FileErrorCase{"stl_ascii_truncated", "mesh.stl",
                       "solid s\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 1 0\nendloop\n"
                       "endfacet\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\n",
-                      ": the facet of line 9 has no 'endfacet' (truncated file)"},
+                      ": ", {"line 9", "'endfacet'"}},
         FileErrorCase{"stl_ascii_no_endsolid", "mesh.stl",
                       "solid s\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 1 0\nendloop\n"
                       "endfacet\n",
-                      ": no 'endsolid' at the end (truncated file)"},
+                      ": ", {"'endsolid'"}},
         FileErrorCase{"ply_ascii_truncated", "mesh.ply", PLY_HEAD(3, 2) "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n",
-                      ": the PLY header declares 5 elements, but the file has 4 lines after its header (truncated, "
-                      "or a wrong count)"},
+                      ": ", {"5 elements", "4 lines"}},
         // More than the header declares: assimp dropped the rest silently.
         FileErrorCase{"ply_ascii_more_than_declared", "mesh.ply",
                       PLY_HEAD(4, 1) "0 0 0\n1 0 0\n0 1 0\n1 1 0\n3 0 1 2\n3 1 3 2\n\n",
-                      ": line 15 holds data after the 5 elements its PLY header declares (a wrong count would drop "
-                      "them)"},
+                      ": line 15", {"5 elements"}},
         // Found by fuzz_assimp_reader: assimp allocated 413 M indices for
         // this count (4.9 GB, 20 s) before refusing it.
         FileErrorCase{"ply_list_count_beyond_its_line", "mesh.ply",
                       PLY_HEAD(3, 1) "0 0 0\n1 0 0\n0 1 0\n30000000000000000000 0 1 2\n",
-                      ": line 13: a list of '30000000000000000000' values, but the line has 3 more"},
+                      ": line 13", {"'30000000000000000000'", "3 more"}},
         // Found by fuzz_assimp_reader: assimp allocated what a face count of
         // 46 digits declared (7.6 GB) before reading the body.
         FileErrorCase{"off_face_count_beyond_the_file", "mesh.off",
                       "OFF\n3 5000000000 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n",
-                      ": OFF header line 2: 3 vertices and 5e+09 faces need at least 4e+10 bytes, the file has 29 "
-                      "after the counts (truncated, or a wrong count)"},
+                      ": OFF header line 2", {"3 vertices", "5e+09 faces", "4e+10 bytes", "has 29"}},
         // Blank lines: long enough for the counts, one face short all the same.
         FileErrorCase{"off_fewer_faces_than_stated", "mesh.off",
                       "OFF\n3 2 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n\n\n\n\n\n\n",
-                      ": Validation failed: aiMesh::mFaces[1].mIndices is nullptr (a face with no vertices: fewer "
-                      "faces than the header states, a truncated file or a wrong count)"},
+                      ": ", {"aiMesh::mFaces[1].mIndices", "nullptr"}},
         FileErrorCase{"ply_index", "mesh.ply", PLY_HEAD(3, 1) "0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n",
-                      ": Validation failed: aiMesh::mFaces[0]::mIndices[2] is out of range"},
+                      ": ", {"aiMesh::mFaces[0]::mIndices[2]", "out of range"}},
         FileErrorCase{"off_index", "mesh.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 9\n",
-                      ": OFF: Vertex index is out of range"},
+                      ": OFF", {"Vertex index", "out of range"}},
         // assimp said "Faces with zero indices aren't allowed" of a face of 10.
         FileErrorCase{"off_face_of_ten_vertices", "mesh.off",
                       "OFF\n10 1 0\n0 0 0\n1 0 0\n2 0 0\n3 0 1\n3 0 2\n2 0 3\n1 0 3\n0 0 3\n-1 0 2\n-1 0 1\n"
                       "10 0 1 2 3 4 5 6 7 8 9\n",
-                      ": OFF: a face has no vertex or more than 9, which assimp's OFF reader refuses (write the mesh "
-                      "as OBJ or PLY: they take faces of any size)"},
+                      ": OFF", {"more than 9"}},
         FileErrorCase{"ply_parse", "mesh.ply", PLY_HEAD(3, 1) "0 0 0\nx 0 0\n0 1 0\n3 0 1 2\n",
-                      ": Cannot parse string \"x 0 0"},
+                      ": ", {"\"x 0 0"}},
         // Headers assimp would loop on without end (found by fuzz_assimp_reader), or
         // allocate for before reading the body: refused before assimp sees them.
         // Found by fuzz_json_scene: a number beyond double threw nlohmann's
         // out_of_range, an internal error.
         FileErrorCase{"json_number_beyond_double", "scene.json", "{\"objects\": [{\"file\": \"a.obj\", "
                       "\"transform\": {\"scale\": 7E777}}]}",
-                      ": number overflow parsing '7E777'"},
+                      ": ", {"overflow", "'7E777'"}},
         FileErrorCase{"ply_unknown_type", "mesh.ply",
                       "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
                       "element face 1\nproperty list u\x01" "char int vertex_indices\nend_header\n"
                       "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n",
-                      ": PLY header line 8: unknown property type 'u\\x01char'"},
+                      ": PLY header line 8", {"'u\\x01char'"}},
         FileErrorCase{"ply_no_end_header", "mesh.ply",
                       "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
                       "element face 1\nproperty list uchar int vertex_indices\nen'_header\n0 0 0\n",
-                      ": PLY header line 9: unexpected 'en'_header'"},
+                      ": PLY header line 9", {"'en'_header'"}},
         FileErrorCase{"ply_count_beyond_the_file", "mesh.ply", PLY_HEAD(3000000000, 1) "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n",
-                      ": the PLY header declares elements needing at least 18000000002 bytes, but the file has 26 "
-                      "after its header"},
+                      ": ", {"18000000002 bytes", "has 26"}},
         FileErrorCase{"gltf_base_colour", "tri.gltf",
                       GLTF_TRI(", \"materials\": [{\"name\": \"paint\", \"pbrMetallicRoughness\": {\"baseColorFactor\":"
                                " [1, 0.5, 0.5, 1]}}]", ", \"material\": 0"),
-                      ": materials[0] 'paint': pbrMetallicRoughness.baseColorFactor 1 0.5 0.5 is not a reflectance in "
-                      "[0, 1)"},
+                      ": materials[0] 'paint'", {"baseColorFactor 1 0.5 0.5", "[0, 1)"}},
         FileErrorCase{"gltf_default_base_colour", "tri.gltf",
                       GLTF_TRI(", \"materials\": [{\"emissiveFactor\": [1, 1, 1]}]", ", \"material\": 0"),
-                      ": materials[0] 'materials[0]': pbrMetallicRoughness.baseColorFactor 1 1 1 (the glTF default: "
-                      "the factor is not given) is not a reflectance in [0, 1)"},
+                      ": materials[0] 'materials[0]'", {"baseColorFactor 1 1 1", "glTF default", "[0, 1)"}},
         FileErrorCase{"gltf_strength", "tri.gltf",
                       GLTF_TRI(", \"materials\": [{\"name\": \"lamp\", \"emissiveFactor\": [1, 1, 1], \"extensions\": "
                                "{\"KHR_materials_emissive_strength\": {\"emissiveStrength\": \"high\"}}}]",
                                ", \"material\": 0"),
-                      ": materials[0] 'lamp': extensions.KHR_materials_emissive_strength.emissiveStrength: expected a "
-                      "number, got \"high\""},
+                      ": materials[0] 'lamp'",
+                      {"extensions.KHR_materials_emissive_strength.emissiveStrength", "got \"high\""}},
         FileErrorCase{"gltf_no_material", "tri.gltf", GLTF_TRI("", ""),
-                      ": mesh 'tri' has no material, and every face needs a reflectance"},
+                      ": ", {"mesh 'tri'", "no material"}},
         FileErrorCase{"gltf_version", "tri.gltf", "{\"asset\": {\"version\": \"1.0\"}}",
-                      ": asset.version is \"1.0\"; radmesh reads glTF 2.0"},
+                      ": asset.version", {"\"1.0\"", "glTF 2.0"}},
         FileErrorCase{"glb_header", "tri.glb", "not a binary glTF file at all",
-                      ": not a binary glTF file (no 'glTF' header and JSON chunk)"},
+                      ": ", {"'glTF' header"}},
         FileErrorCase{"unknown_extension", "scene.dae", "<COLLADA/>",
-                      ": unknown extension '.dae'; radmesh reads .obj, .ply, .stl, .off, .gltf, .glb and .json (a "
-                      "JSON scene)"},
-        FileErrorCase{"no_extension", "scene", "", ": no file extension; radmesh reads .obj, .ply"}),
+                      ": ", {"'.dae'", ".obj, .ply"}},
+        FileErrorCase{"no_extension", "scene", "", ": ", {"no file extension", ".obj, .ply"}}),
     [](const auto& info) { return std::string(info.param.name); });
 
 TEST(Readers, BadFaceInAPlyNamesTheFaceIndex) {
-  const fs::path dir = fresh_dir("ply_faces");
+  const test::TempDir tmp;
+  const fs::path& dir = tmp.path();
   write_text(dir / "nan.ply", PLY_HEAD(4, 2) "0 0 0\n1 0 0\n0 1 0\nnan 1 1\n3 0 1 2\n3 0 1 3\n");
   write_text(dir / "degenerate.ply", PLY_HEAD(3, 2) "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n3 0 1 0\n");
   write_text(dir / "nan.json", grey_scene("nan.ply"));
   write_text(dir / "degenerate.json", grey_scene("degenerate.ply"));
-  const std::string nan = message_of<InputError>([&] { read_scene((dir / "nan.json").string()); });
-  EXPECT_TRUE(contains(nan, (dir / "nan.ply").string() + " (face 1): face 'nan': coordinate nan 1 1 is not finite"))
-      << nan;
-  const std::string deg = message_of<InputError>([&] { read_scene((dir / "degenerate.json").string()); });
-  EXPECT_TRUE(contains(deg, (dir / "degenerate.ply").string() +
-                                " (face 1): face 'degenerate': has 2 distinct vertices; a face needs at least 3"))
-      << deg;
+  const test::Thrown nan = test::thrown<InputError>([&] { read_scene((dir / "nan.json").string()); });
+  EXPECT_TRUE(nan.says({(dir / "nan.ply").string() + " (face 1): face 'nan'", "nan 1 1"}));
+  const test::Thrown deg = test::thrown<InputError>([&] { read_scene((dir / "degenerate.json").string()); });
+  EXPECT_TRUE(deg.says({(dir / "degenerate.ply").string() + " (face 1): face 'degenerate'", "2 distinct vertices"}));
 }
 
 TEST(Readers, ObjStaysAsItWasAndMissingFilesAreIoErrors) {
@@ -733,7 +712,8 @@ TEST(Readers, ObjAndMtlStatementsGoOnPastABackslashAtTheLineEnd) {
   // the next line; a comment ending in one does not swallow what follows.
   // tinyobjloader knows no continuation, and the face below used to be an
   // error ("face vertex index '\' is not a valid index").
-  const fs::path dir = fresh_dir("continued");
+  const test::TempDir tmp;
+  const fs::path& dir = tmp.path();
   const std::string mtl_plain = "newmtl white\nKd 0.7 0.6 0.5\nnewmtl lamp\nKe 10 10 10\n";
   const std::string obj_plain =
       "mtllib m.mtl\nusemtl white\nv 0 0 0\nv 1 0 0\nv 1 0 1\nv 0 0 1\nf 1 4 3 2\n"
@@ -755,8 +735,8 @@ TEST(Readers, ObjAndMtlStatementsGoOnPastABackslashAtTheLineEnd) {
   EXPECT_EQ(cont.patches[1].line, 17);
   write_text(dir / "bad" / "m.mtl", mtl_plain);
   write_text(dir / "bad" / "s.obj", "mtllib m.mtl\nusemtl white\nv 0 0 0\nv 1 0 \\\n0\nv 1 0 1\nf 1 2 \\\n9\n");
-  const std::string msg = message_of<InputError>([&] { read_scene((dir / "bad" / "s.obj").string()); });
-  EXPECT_TRUE(contains(msg, "s.obj:7: face vertex index 9 is out of range")) << msg;
+  const test::Thrown t = test::thrown<InputError>([&] { read_scene((dir / "bad" / "s.obj").string()); });
+  EXPECT_TRUE(t.says({"s.obj:7", "index 9"}));
 }
 
 TEST(Readers, AnObjFaceOfMoreThan255VerticesKeepsThemAllAndTheFacesAfterIt) {
@@ -766,7 +746,8 @@ TEST(Readers, AnObjFaceOfMoreThan255VerticesKeepsThemAllAndTheFacesAfterIt) {
   // written with negative indices and v//vn pairs, its vertices with a
   // colour each (x y z r g b, as MeshLab writes them), and a triangle of
   // another object and material follows it.
-  const fs::path dir = fresh_dir("long_face");
+  const test::TempDir tmp;
+  const fs::path& dir = tmp.path();
   write_text(dir / "m.mtl", "newmtl white\nKd 0.7 0.7 0.7\nnewmtl lamp\nKe 10 10 10\nnewmtl grey\nKd 0.5 0.5 0.5\n");
   const int n = 300;
   const double r = 0.3;
@@ -799,7 +780,8 @@ TEST(Readers, AnObjFaceOfMoreThan255VerticesKeepsThemAllAndTheFacesAfterIt) {
 }
 
 TEST(Readers, ExtensionIsCaseInsensitive) {
-  const fs::path dir = fresh_dir("case");
+  const test::TempDir tmp;
+  const fs::path& dir = tmp.path();
   test::write_ply(dir / "octa.PLY", octahedron(), true);
   write_text(dir / "s.JSON", grey_scene("octa.PLY"));
   EXPECT_EQ(read_scene((dir / "s.JSON").string()).patches.size(), 8u);
@@ -869,7 +851,8 @@ TEST(Bunny, SceneStandsOnTheFloorOfItsRoom) {
 }
 
 TEST(Bunny, EveryFormatOfTheSameMeshGivesIdenticalPatches) {
-  const fs::path dir = fresh_dir("bunny");
+  const test::TempDir tmp;
+  const fs::path& dir = tmp.path();
   const PolyMesh bunny = read_bunny_ply();
   ASSERT_EQ(bunny.positions.size(), 1839u);
   ASSERT_EQ(bunny.faces.size(), 3674u);
@@ -894,7 +877,8 @@ namespace {
 TEST(Readers, MillionTrianglePlyLoadsWhole) {
   // Nothing lost at scale: every face and vertex of a 10^6-triangle binary
   // PLY. (Load times per format: radmesh_bench --load-times.)
-  const fs::path dir = fresh_dir("million");
+  const test::TempDir tmp;
+  const fs::path& dir = tmp.path();
   const int n = 708;  // 2 * 708^2 = 1002528 triangles, 709^2 = 502681 vertices
   test::write_ply(dir / "grid.ply", test::grid(n), true);
   write_text(dir / "grid.json", grey_scene("grid.ply"));
@@ -902,5 +886,4 @@ TEST(Readers, MillionTrianglePlyLoadsWhole) {
   EXPECT_EQ(s.patches.size(), 1002528u);
   EXPECT_EQ(s.vertices.size(), 502681u);
   EXPECT_EQ(s.report.vertices_welded, 3 * 1002528 - 502681);
-  fs::remove_all(dir);
 }

@@ -14,7 +14,6 @@
 #include <numbers>
 #include <string>
 
-#include <unistd.h>
 
 using namespace radmesh;
 namespace fs = std::filesystem;
@@ -22,7 +21,7 @@ using radmesh::test::contains;
 using radmesh::test::message_of;
 
 namespace {
-const std::string kData = RADMESH_TEST_DATA;
+using radmesh::test::kData;
 
 }  // namespace
 
@@ -59,6 +58,7 @@ TEST(Scene, RepeatedVerticesAreWelded) {
 
 struct BadCase {
   const char* file;
+  const char* type;  // the error's class
   const char* where;
   const char* value;
 };
@@ -67,28 +67,28 @@ class BadInput : public ::testing::TestWithParam<BadCase> {};
 
 TEST_P(BadInput, ErrorNamesFileLineAndValue) {
   const BadCase c = GetParam();
-  const std::string msg = message_of<Error>([&] { read_obj_scene(kData + "/bad/" + c.file); });
-  EXPECT_TRUE(contains(msg, c.where)) << msg;
-  EXPECT_TRUE(contains(msg, c.value)) << msg;
+  const test::Thrown t = test::thrown<Error>([&] { read_obj_scene(kData + "/bad/" + c.file); });
+  EXPECT_EQ(t.type, c.type) << t.message;
+  EXPECT_TRUE(t.says({c.where, c.value}));
 }
 
 INSTANTIATE_TEST_SUITE_P(
     AllCases, BadInput,
-    ::testing::Values(BadCase{"nan_coordinate.obj", "nan_coordinate.obj:6", "nan"},
-                      BadCase{"inf_coordinate.obj", "inf_coordinate.obj:6", "inf"},
-                      BadCase{"reflectance_one.obj", "reflectance_one.mtl:3", "1 1 1"},
-                      BadCase{"reflectance_negative.obj", "reflectance_negative.mtl:3", "-0.25"},
-                      BadCase{"negative_emission.obj", "negative_emission.mtl:4", "-1"},
-                      BadCase{"degenerate_face.obj", "degenerate_face.obj:9", "2 distinct"},
-                      BadCase{"missing_material.obj", "missing_material.obj:9", "no_such_material"},
-                      BadCase{"missing_mtl_file.obj", "missing_mtl_file.obj:2", "does_not_exist.mtl"},
-                      BadCase{"parse_error.obj", "parse_error.obj:7", "'x'"},
-                      BadCase{"bad_index.obj", "bad_index.obj:8", "9"},
-                      BadCase{"kd_nan.obj", "kd_nan.mtl:3", "'nan'"},
-                      BadCase{"ke_inf.obj", "ke_inf.mtl:4", "'inf'"},
-                      BadCase{"duplicate_material.obj", "duplicate_material.mtl:5", "'light'"},
-                      BadCase{"vertical_tab.obj", "vertical_tab.obj:6", "0x0B"},
-                      BadCase{"self_crossing_face.obj", "self_crossing_face.obj:8", "not a simple polygon"}),
+    ::testing::Values(BadCase{"nan_coordinate.obj", "InputError", "nan_coordinate.obj:6", "nan"},
+                      BadCase{"inf_coordinate.obj", "InputError", "inf_coordinate.obj:6", "inf"},
+                      BadCase{"reflectance_one.obj", "InputError", "reflectance_one.mtl:3", "1 1 1"},
+                      BadCase{"reflectance_negative.obj", "InputError", "reflectance_negative.mtl:3", "-0.25"},
+                      BadCase{"negative_emission.obj", "InputError", "negative_emission.mtl:4", "-1"},
+                      BadCase{"degenerate_face.obj", "InputError", "degenerate_face.obj:9", "2 distinct"},
+                      BadCase{"missing_material.obj", "InputError", "missing_material.obj:9", "no_such_material"},
+                      BadCase{"missing_mtl_file.obj", "InputError", "missing_mtl_file.obj:2", "does_not_exist.mtl"},
+                      BadCase{"parse_error.obj", "InputError", "parse_error.obj:7", "'x'"},
+                      BadCase{"bad_index.obj", "InputError", "bad_index.obj:8", "9"},
+                      BadCase{"kd_nan.obj", "InputError", "kd_nan.mtl:3", "'nan'"},
+                      BadCase{"ke_inf.obj", "InputError", "ke_inf.mtl:4", "'inf'"},
+                      BadCase{"duplicate_material.obj", "InputError", "duplicate_material.mtl:5", "'light'"},
+                      BadCase{"vertical_tab.obj", "InputError", "vertical_tab.obj:6", "0x0B"},
+                      BadCase{"self_crossing_face.obj", "InputError", "self_crossing_face.obj:8", "not a simple polygon"}),
     [](const auto& info) {
       std::string n = info.param.file;
       return n.substr(0, n.find('.'));
@@ -96,8 +96,7 @@ INSTANTIATE_TEST_SUITE_P(
 
 TEST(Scene, OneValueKdIsGreyAndAMissingKdIsSaid) {
   // The MTL format's one-value Kd means the same value in every channel.
-  const fs::path dir = fs::temp_directory_path() / ("radmesh_mtl_" + std::to_string(::getpid()));
-  fs::create_directories(dir);
+  const test::TempDir dir;
   std::ofstream(dir / "s.mtl") << "newmtl lamp\nKd 0.25\nKe 2\nnewmtl dark\nKe 0 0 0\n";
   std::ofstream(dir / "s.obj") << "mtllib s.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nusemtl lamp\nf 1 2 3\n"
                                   "usemtl dark\nf 2 4 3\n";
@@ -110,7 +109,6 @@ TEST(Scene, OneValueKdIsGreyAndAMissingKdIsSaid) {
   for (const std::string& w : s.report.warnings)
     if (contains(w, "s.mtl:4") && contains(w, "'dark' has no Kd")) ++said;
   EXPECT_EQ(said, 1);
-  fs::remove_all(dir);
 }
 
 TEST(Scene, UnreadableFileIsAnIoError) {
@@ -142,8 +140,7 @@ TEST(Scene, FacesThinnerThanTheWeldToleranceAreDroppedAsZeroArea) {
   // distinct vertices). Both have no inside at the scene's resolution and
   // are dropped with a warning, as faces of zero area are; a triangle 1e-8
   // high is kept.
-  const fs::path dir = fs::temp_directory_path() / ("radmesh_sliver_" + std::to_string(::getpid()));
-  fs::create_directories(dir);
+  const test::TempDir dir;
   std::ofstream(dir / "s.mtl") << "newmtl lamp\nKd 0 0 0\nKe 1 1 1\n";
   std::ofstream(dir / "s.obj") << "mtllib s.mtl\nusemtl lamp\nv 0 0 0\nv 2 0 0\nv 2 2 0\nv 0 2 0\n"
                                   "v 0.5 0.5 0\nv 1.5 0.5 0\nv 1 0.5000000001 0\nv 1.5 0.500000001 0\n"
@@ -154,17 +151,14 @@ TEST(Scene, FacesThinnerThanTheWeldToleranceAreDroppedAsZeroArea) {
   ASSERT_EQ(s.patches.size(), 2u);
   EXPECT_EQ(s.patches[1].name, "kept");
   ASSERT_EQ(s.report.warnings.size(), 3u);  // the third: 'kept' is cut out of the floor
-  EXPECT_TRUE(contains(s.report.warnings[0], "s.obj:16: face 'tri' is 1.00000008e-10 wide, below the weld tolerance"))
-      << s.report.warnings[0];
-  EXPECT_TRUE(contains(s.report.warnings[1], "s.obj:18: face 'quad' has its vertices welded into 2"))
-      << s.report.warnings[1];
+  EXPECT_TRUE(test::mentions(s.report.warnings[0], {"s.obj:16: face 'tri'", "1.00000008e-10 wide", "weld tolerance"}));
+  EXPECT_TRUE(test::mentions(s.report.warnings[1], {"s.obj:18: face 'quad'", "welded into 2"}));
   // What is left meshes: the floor around its thin hole and the kept
   // triangle in it cover the floor's area.
   const Mesh m = mesh_scene(s, {});
   const std::vector<double> area = test::patch_areas(s, m);
   EXPECT_NEAR(area[0] + area[1], 4.0, 1e-12);
   EXPECT_NEAR(area[1], 5e-9, 5e-11);
-  fs::remove_all(dir);
 }
 
 TEST(Scene, AFaceWhoseVerticesDoubleCannotTellApartSaysItIsTooFarFromTheOrigin) {
@@ -175,37 +169,33 @@ TEST(Scene, AFaceWhoseVerticesDoubleCannotTellApartSaysItIsTooFarFromTheOrigin) 
   far.name = "far";
   far.material = 0;
   far.points = {{1e49, 0, 0}, {1e49, 0, 4}, {1e49 + 4.0, 0, 4}, {1e49 + 4.0, 0, 0}};
-  const std::string msg = message_of<InputError>([&] { build_scene({far}, {test::material("grey", Rgb(0.5))}, "far"); });
-  EXPECT_TRUE(contains(msg, "face 'far': has 2 distinct vertices; a face needs at least 3; it lies 1e+49 from the "
-                            "origin, where double precision (16 digits) cannot keep its vertices apart"))
-      << msg;
+  const test::Thrown t = test::thrown<InputError>([&] { build_scene({far}, {test::material("grey", Rgb(0.5))}, "far"); });
+  EXPECT_TRUE(t.says({"face 'far'", "2 distinct vertices", "1e+49", "origin", "double precision"}));
   RawFace twice;
   twice.name = "twice";
   twice.material = 0;
   twice.points = {{0, 0, 0}, {1, 0, 0}, {0, 0, 0}};
-  const std::string near =
-      message_of<InputError>([&] { build_scene({twice}, {test::material("grey", Rgb(0.5))}, "twice"); });
-  EXPECT_TRUE(contains(near, "face 'twice': has 2 distinct vertices; a face needs at least 3")) << near;
-  EXPECT_FALSE(contains(near, "origin")) << near;
+  const test::Thrown near =
+      test::thrown<InputError>([&] { build_scene({twice}, {test::material("grey", Rgb(0.5))}, "twice"); });
+  EXPECT_TRUE(near.says({"face 'twice'", "2 distinct vertices"}));
+  EXPECT_FALSE(contains(near.message, "origin")) << near.message;
 }
 
 TEST(Scene, FacesWithoutAnObjectNameAreNamedAfterTheFile) {
   // No o or g line: the patch takes the file's stem (it was named '').
-  const fs::path dir = fs::temp_directory_path() / ("radmesh_unnamed_" + std::to_string(::getpid()));
-  fs::create_directories(dir);
+  const test::TempDir dir;
   std::ofstream(dir / "plain.mtl") << "newmtl m\nKd 0.5 0.5 0.5\nKe 1 1 1\n";
   std::ofstream(dir / "plain.obj") << "mtllib plain.mtl\nusemtl m\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
   const Scene s = read_obj_scene((dir / "plain.obj").string());
   ASSERT_EQ(s.patches.size(), 1u);
   EXPECT_EQ(s.patches[0].name, "plain");
-  fs::remove_all(dir);
 }
 
 TEST(Scene, AMaterialLibraryAtAnAbsolutePathIsReadFromAnyDirectory) {
   // The OBJ names its library by an absolute path and is read by a path
   // with a directory part: its materials were lost ("face has no material")
   // when the OBJ's directory was put before the absolute path.
-  const fs::path dir = fs::temp_directory_path() / ("radmesh_absolute_mtl_" + std::to_string(::getpid()));
+  const test::TempDir dir;
   fs::create_directories(dir / "lib");
   const fs::path library = fs::absolute(dir / "lib" / "m.mtl");
   std::ofstream(library) << "newmtl m\nKd 0.25 0.5 0.75\nKe 1 1 1\n";
@@ -216,7 +206,6 @@ TEST(Scene, AMaterialLibraryAtAnAbsolutePathIsReadFromAnyDirectory) {
   EXPECT_EQ(m.name, "m");
   EXPECT_EQ(m.reflectance, Rgb(0.25, 0.5, 0.75));
   EXPECT_EQ(m.emission, Rgb(1.0));
-  fs::remove_all(dir);
 }
 
 TEST(Scene, HolesAreOrientedAgainstTheOuterLoop) {
@@ -297,43 +286,38 @@ TEST(Scene, HugeCoordinatesAndEmissionAndOverlongLibraryNamesAreInputErrors) {
   // null energies and a radiosity of 1e308 where 2e308 was due.
   f.points = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
   m.emission = Rgb(1.0, 1e308, 1.0);
-  const std::string bright = message_of<InputError>([&] { build_scene({f}, {m}, "test"); });
-  EXPECT_TRUE(contains(bright, "emission (Ke) 1 1e+308 1 must be finite, >= 0 and at most 1e+50")) << bright;
+  const test::Thrown bright = test::thrown<InputError>([&] { build_scene({f}, {m}, "test"); });
+  EXPECT_TRUE(bright.says({"emission (Ke)", "1 1e+308 1", "1e+50"}));
   m.emission = Rgb(1e50);
   EXPECT_NO_THROW(build_scene({f}, {m}, "test"));
 
-  const fs::path dir = fs::temp_directory_path() / ("radmesh_long_mtllib_" + std::to_string(::getpid()));
-  fs::create_directories(dir);
+  const test::TempDir dir;
   const std::string name(300, 'a');
   std::ofstream(dir / "scene.obj") << "mtllib " << name << ".mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
   const std::string lib = message_of<InputError>([&] { read_obj_scene((dir / "scene.obj").string()); });
   EXPECT_TRUE(contains(lib, "scene.obj:1")) << lib;
   EXPECT_TRUE(contains(lib, "not found")) << lib;
-  fs::remove_all(dir);
 }
 
 TEST(Scene, DevicesAndDirectoriesAreRefusedNotReadForever) {
   // /dev/zero as a material library would be read forever: only regular
   // files are read, and the message names the library's line.
-  const fs::path dir = fs::temp_directory_path() / ("radmesh_dev_" + std::to_string(::getpid()));
-  fs::create_directories(dir);
+  const test::TempDir dir;
   std::ofstream(dir / "s.obj") << "mtllib /dev/zero\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
   std::string msg = message_of<Error>([&] { read_obj_scene((dir / "s.obj").string()); });
   EXPECT_TRUE(contains(msg, "s.obj:1")) << msg;
   EXPECT_TRUE(contains(msg, "not a regular file")) << msg;
   msg = message_of<IoError>([&] { read_obj_scene("/dev/zero"); });
-  EXPECT_TRUE(contains(msg, "/dev/zero: not a regular file")) << msg;
+  EXPECT_TRUE(test::mentions(msg, {"/dev/zero: ", "regular file"}));
   msg = message_of<IoError>([&] { read_obj_scene(dir.string()); });
   EXPECT_TRUE(contains(msg, "is a directory")) << msg;
-  fs::remove_all(dir);
 }
 
 TEST(Scene, AFaceWrittenTwiceIsAnErrorButTheTwoSidesOfAPanelAreNot) {
   // A duplicated face line made two coincident patches; the mesher then
   // crashed in run (issue 10's "two vertex lines swapped and one face line
   // duplicated"). The same vertices in reverse order are a panel's back.
-  const fs::path dir = fs::temp_directory_path() / ("radmesh_dupface_" + std::to_string(::getpid()));
-  fs::create_directories(dir);
+  const test::TempDir dir;
   std::ofstream(dir / "s.mtl") << "newmtl lamp\nKd 0.5 0.5 0.5\nKe 1 1 1\n";
   const std::string head = "mtllib s.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nusemtl lamp\n";
   std::ofstream(dir / "twice.obj") << head << "f 1 2 3 4\nf 2 3 4 1\n";
@@ -344,15 +328,13 @@ TEST(Scene, AFaceWrittenTwiceIsAnErrorButTheTwoSidesOfAPanelAreNot) {
   const Scene panel = read_obj_scene((dir / "panel.obj").string());
   ASSERT_EQ(panel.patches.size(), 2u);
   EXPECT_EQ(glm::dot(panel.patches[0].normal, panel.patches[1].normal), -1.0);
-  fs::remove_all(dir);
 }
 
 TEST(Scene, FacesFacingEachOtherAcrossAWeldedGapAreRefused) {
   // Two unit squares 1e-9 apart, front to front: welding (1e-9 of the scene
   // size) made them one surface seen from both sides, and the lower one got
   // no light at all while the summary said the light escaped.
-  const fs::path dir = fs::temp_directory_path() / ("radmesh_gap_" + std::to_string(::getpid()));
-  fs::create_directories(dir);
+  const test::TempDir dir;
   std::ofstream(dir / "s.mtl") << "newmtl lamp\nKd 0 0 0\nKe 1 1 1\nnewmtl grey\nKd 0.5 0.5 0.5\n";
   std::ofstream(dir / "s.obj") << "mtllib s.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n"
                                   "v 0 0 1e-9\nv 1 0 1e-9\nv 1 1 1e-9\nv 0 1 1e-9\n"
@@ -361,7 +343,6 @@ TEST(Scene, FacesFacingEachOtherAcrossAWeldedGapAreRefused) {
   EXPECT_TRUE(contains(msg, "s.obj:15")) << msg;
   EXPECT_TRUE(contains(msg, "s.obj:12")) << msg;
   EXPECT_TRUE(contains(msg, "gap of 1e-09")) << msg;
-  fs::remove_all(dir);
 }
 
 namespace {
@@ -398,7 +379,8 @@ TEST(Scene, AFaceLyingInAnotherOfItsPlaneIsCutOutOfIt) {
   EXPECT_NEAR(s.patch_area(mat), 1.0 - 0.16, 1e-12);
   EXPECT_NEAR(s.patch_area(ceiling), 15.0, 1e-12);
   bool said = false;
-  for (const std::string& w : s.report.warnings) said = said || contains(w, "face 'lamp' lies in face 'ceiling'");
+  for (const std::string& w : s.report.warnings)
+    said = said || (contains(w, "face 'lamp'") && contains(w, "lies in") && contains(w, "face 'ceiling'"));
   EXPECT_TRUE(said);
   // The mesh covers each patch once, and nothing is left overlapping.
   const Mesh m = mesh_scene(s, {});

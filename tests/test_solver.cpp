@@ -26,7 +26,7 @@ using namespace radmesh;
 using radmesh::test::transformed;
 
 namespace {
-const std::string kData = RADMESH_TEST_DATA;
+using radmesh::test::kData;
 
 struct Solved {
   Scene scene;
@@ -330,9 +330,7 @@ namespace {
 // run counter-clockwise seen from).
 using Quad = std::array<Vec3, 4>;
 Scene receiver_source_wall(const std::string& name, const Quad& a, const Quad& b, const Quad& wall) {
-  namespace fs = std::filesystem;
-  const fs::path dir = fs::temp_directory_path() / ("radmesh_test_" + name);
-  fs::create_directories(dir);
+  const test::TempDir dir(name);
   std::ofstream(dir / "scene.mtl") << "newmtl grey\nKd 0.5 0.5 0.5\n";
   {
     std::ofstream obj(dir / "scene.obj");
@@ -341,9 +339,7 @@ Scene receiver_source_wall(const std::string& name, const Quad& a, const Quad& b
       for (const Vec3& v : *q) obj << "v " << v.x << ' ' << v.y << ' ' << v.z << '\n';
     obj << "o a\nf 1 2 3 4\no b\nf 5 6 7 8\no wall\nf 9 10 11 12\n";
   }
-  const Scene s = read_obj_scene((dir / "scene.obj").string());
-  fs::remove_all(dir);
-  return s;
+  return read_obj_scene((dir / "scene.obj").string());
 }
 }  // namespace
 

@@ -1,18 +1,76 @@
-// Small helpers several test files share.
+// What the test programs share: the data folder, a fresh temporary folder
+// per test, checks of errors, and the scene builders.
 #pragma once
 
+#include "radmesh/errors.h"
 #include "radmesh/mesh.h"
 #include "radmesh/scene.h"
 
 #include <gtest/gtest.h>
 
-#include <algorithm>
-#include <exception>
+#include <unistd.h>
 
+#include <algorithm>
+#include <cctype>
+#include <exception>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <initializer_list>
 #include <string>
+#include <system_error>
 #include <vector>
 
 namespace radmesh::test {
+
+// ---------------------------------------------------------------- files
+
+// The test data: the project's data/ and tests/data/bad, copied into the
+// build tree (tests/CMakeLists.txt).
+inline const std::string kData = RADMESH_TEST_DATA;
+
+// A fresh, empty folder for the running test, removed with all it holds
+// when the object goes. Its name is the test's (suite and name) with the
+// process id, under ::testing::TempDir() (TEST_TMPDIR or TMPDIR, else
+// /tmp): tests run at once (ctest -j runs each test in a process of its
+// own) never share one. `tag` names a second folder of the same test; a
+// folder that is there already (two of one test and tag) is left alone
+// and the next free name taken (_1, _2, ...).
+class TempDir {
+public:
+  explicit TempDir(const std::string& tag = "") {
+    namespace fs = std::filesystem;
+    const ::testing::TestInfo* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    std::string name = info ? std::string(info->test_suite_name()) + "." + info->name() : "no_test";
+    if (!tag.empty()) name += "." + tag;
+    for (char& c : name)
+      if (!std::isalnum(static_cast<unsigned char>(c)) && c != '.' && c != '-') c = '_';
+    name = "radmesh_" + name.substr(0, 160) + "_" + std::to_string(::getpid());
+    const fs::path parent = ::testing::TempDir();
+    fs::create_directories(parent);
+    for (int n = 0;; ++n) {
+      path_ = parent / (n == 0 ? name : name + "_" + std::to_string(n));
+      if (fs::create_directory(path_)) break;
+    }
+  }
+  ~TempDir() {
+    std::error_code ec;
+    std::filesystem::remove_all(path_, ec);
+  }
+  TempDir(const TempDir&) = delete;
+  TempDir& operator=(const TempDir&) = delete;
+
+  const std::filesystem::path& path() const { return path_; }
+  std::string string() const { return path_.string(); }
+  std::filesystem::path operator/(const std::filesystem::path& part) const { return path_ / part; }
+
+private:
+  std::filesystem::path path_;
+};
+
+// ---------------------------------------------------------------- errors
+
+// ---------------------------------------------------------------- scenes
 
 // A material made in code (no file): its name, reflectance and emission.
 inline Material material(const std::string& name, const Rgb& reflectance, const Rgb& emission = Rgb(0.0)) {
@@ -46,39 +104,48 @@ inline std::vector<RawFace> box_faces(const std::string& name, int material, con
   return faces;
 }
 
-// Runs f, expects it to throw E, returns the message (a test failure when it
-// throws nothing or something else).
-template <class E, class F>
-std::string message_of(F f) {
-  try {
-    f();
-  } catch (const E& e) {
-    return e.what();
-  } catch (const std::exception& e) {
-    ADD_FAILURE() << "wrong exception type: " << e.what();
-    return {};
-  }
-  ADD_FAILURE() << "no exception";
-  return {};
+inline bool contains(const std::string& s, const std::string& part) { return s.find(part) != std::string::npos; }
+
+// Whether `text` holds every one of `parts` (a file:line, a value, a face's
+// name): a failure names the first one missing and shows the text.
+inline ::testing::AssertionResult mentions(const std::string& text, std::initializer_list<std::string> parts) {
+  for (const std::string& part : parts)
+    if (!contains(text, part)) return ::testing::AssertionFailure() << "no \"" << part << "\" in: " << text;
+  return ::testing::AssertionSuccess();
 }
 
-// What an error said: its message and the options it names (Error::options).
+// The radmesh error class of e, as a name: "InputError", "GeometryError",
+// "NumericalError", "IoError" (or "Error").
+inline std::string error_type(const Error& e) {
+  if (dynamic_cast<const InputError*>(&e)) return "InputError";
+  if (dynamic_cast<const GeometryError*>(&e)) return "GeometryError";
+  if (dynamic_cast<const NumericalError*>(&e)) return "NumericalError";
+  if (dynamic_cast<const IoError*>(&e)) return "IoError";
+  return "Error";
+}
+
+// What an error said: its class, its message and the options it names
+// (Error::options, as the options structs name them).
 struct Thrown {
+  std::string type;
   std::string message;
   std::vector<std::string> options;
   bool names(const std::string& option) const {
     return std::find(options.begin(), options.end(), option) != options.end();
   }
+  // Whether the message holds every one of `parts` (see mentions).
+  ::testing::AssertionResult says(std::initializer_list<std::string> parts) const { return mentions(message, parts); }
 };
 
-// Runs f, expects it to throw E (a radmesh error), returns what it said (a
-// test failure when it throws nothing or something else).
+// Runs f, expects it to throw E (a radmesh error: thrown<Error> takes any
+// and tells which in `type`), returns what it said (a test failure when it
+// throws nothing or something else).
 template <class E, class F>
 Thrown thrown(F f) {
   try {
     f();
   } catch (const E& e) {
-    return {e.what(), e.options()};
+    return {error_type(e), e.what(), e.options()};
   } catch (const std::exception& e) {
     ADD_FAILURE() << "wrong exception type: " << e.what();
     return {};
@@ -87,7 +154,11 @@ Thrown thrown(F f) {
   return {};
 }
 
-inline bool contains(const std::string& s, const std::string& part) { return s.find(part) != std::string::npos; }
+// thrown<E>(f)'s message alone.
+template <class E, class F>
+std::string message_of(F f) {
+  return thrown<E>(f).message;
+}
 
 // Index of the first patch named `name`, or -1.
 inline int patch_named(const Scene& s, const std::string& name) {
@@ -128,6 +199,22 @@ inline Scene room_with_panel(double h, double s) {
   panel.material = 1;
   panel.points = {{-s, h, -s}, {-s, h, s}, {s, h, s}, {s, h, -s}};
   return room_with({panel});
+}
+
+// Writes `dir`/scene.obj from the OBJ `src` + ".obj", each line (numbered
+// from 1) through `edit`, which returns the text to write in its place (one
+// or more lines); copies `src` + ".mtl" beside it under its own name, so
+// that the OBJ's mtllib still finds it. Returns the new OBJ's path.
+inline std::string write_edited_obj(const std::string& src, const std::filesystem::path& dir,
+                                    const std::function<std::string(const std::string&, int)>& edit) {
+  namespace fs = std::filesystem;
+  fs::create_directories(dir);
+  fs::copy_file(src + ".mtl", dir / fs::path(src + ".mtl").filename(), fs::copy_options::overwrite_existing);
+  std::ifstream in(src + ".obj");
+  std::ofstream obj(dir / "scene.obj");
+  int n = 0;
+  for (std::string line; std::getline(in, line);) obj << edit(line, ++n) << '\n';
+  return (dir / "scene.obj").string();
 }
 
 // Rebuilds a scene from its patches (outer loops) with every point mapped by

@@ -4,6 +4,7 @@
 #include "radmesh/png_render.h"
 #include "radmesh/vtk_writer.h"
 #include "radmesh/errors.h"
+#include "tests/test_util.h"
 
 #include <gtest/gtest.h>
 
@@ -20,7 +21,6 @@
 #include <cmath>
 #include <filesystem>
 #include <string>
-#include <unistd.h>
 
 namespace radmesh {
 namespace {
@@ -74,16 +74,8 @@ struct TwoTriangles {
 // A fresh directory per test, removed afterwards.
 class VtkIo : public ::testing::Test {
 protected:
-  void SetUp() override {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    dir = fs::temp_directory_path() /
-          ("radmesh_test_vtk_io_" + std::string(info->name()) + "_" + std::to_string(::getpid()));
-    fs::remove_all(dir);
-    fs::create_directories(dir);
-  }
-  void TearDown() override { fs::remove_all(dir); }
-
-  fs::path dir;
+  const radmesh::test::TempDir tmp;
+  const fs::path dir = tmp.path();
 };
 
 vtkNew<vtkUnstructuredGrid> read_vtu(const fs::path& path) {
