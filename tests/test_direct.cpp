@@ -270,8 +270,8 @@ TEST(Direct, ARoundLampOverARoundTableIsLitExactlyByTheCheapPath) {
     const Vec3 x(-0.7 + 1.4 * i / 10.0, 0.75, 0.1);
     EXPECT_NEAR(direct.reflected(x, table).x / 0.5, direct.unoccluded_form_factor(x, up, light), 1e-12);
   }
-  std::printf("[direct] round table: %d of 451 floor points shaded, %d dark, %d clipped exactly\n", shaded, dark,
-              counts.clipped);
+  std::printf("[direct] round table: %d of 451 floor points shaded, %d dark, %lld clipped exactly\n", shaded, dark,
+              static_cast<long long>(counts.clipped));
   EXPECT_GT(shaded, 100);
   EXPECT_GT(dark, 50);
   EXPECT_GT(counts.clipped, 50);
