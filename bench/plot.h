@@ -18,7 +18,7 @@ struct Series {            // one line on the plot: e.g. "cornell_box / matrix"
 // non-finite coordinate are skipped (log scale); a series left with no point
 // is not drawn. Returns false and sets *why when no X display can be opened
 // (VTK needs one); throws radmesh::InputError when a series has x and y of
-// different lengths, radmesh::IoError (meshing/errors.h) when writing fails.
+// different lengths, radmesh::IoError (radmesh/errors.h) when writing fails.
 bool plot_error_vs_time(const std::string& path, const std::string& title, const std::string& y_label,
                         const std::vector<Series>& series, std::string* why,
                         const std::string& x_label = "wall time [s]");

@@ -166,7 +166,7 @@ std::vector<Scenario> scenes(const std::string& data) {
                   {0.25, 16, 1, DiscontinuityMode::contacts, "matrix", {}, FieldMode::mean}},
                  {{0.5, 16, 1}, {0.25, 16, 1}}});
   // One bounce under a floating square: rho E times the exactly clipped
-  // visible form factor (radiosity/direct.h) on the floor, the emission on
+  // visible form factor (radmesh/direct.h) on the floor, the emission on
   // the light, nothing on the black occluder. Every field mode, full lines
   // against none: the field's error is the mesh's.
   std::vector<Settings> floating, floating_quick;
@@ -434,7 +434,7 @@ int field_parts(const Scenario& sc, const Scene& scene, const std::vector<Surfac
 }
 
 // A stored reference (the Cornell box, the box on the floor): at every
-// sample, the exact direct light (radiosity/direct.h: the visible part of
+// sample, the exact direct light (radmesh/direct.h: the visible part of
 // every emitter, clipped exactly) plus the indirect light gathered from a fine
 // matrix solution (its element radiosity less emission, Lambert's point form
 // factor to every element and `rays` shadow rays each). Only the indirect
@@ -487,7 +487,7 @@ int make_reference(const std::string& data, const Scenario& sc, double max_edge,
 }
 
 // The meshing study: the direct light reflected by every surface, exact at
-// every triangle corner (radiosity/direct.h) and interpolated linearly, against
+// every triangle corner (radmesh/direct.h) and interpolated linearly, against
 // the exact value at the samples. No solver is involved, so the error is the
 // mesh's alone. One row per (scene, discontinuity mode, max edge).
 int direct_study(const std::string& data, const std::string& out_dir, bool quick) {

@@ -123,8 +123,7 @@ std::string write_boxes_room(const std::string& dir, int k) {
     for (int j = 0; j < k; ++j) {
       const double x0 = margin + (i + 0.25) * cell, z0 = margin + (j + 0.25) * cell;
       const double x1 = x0 + size, z1 = z0 + size, y = height;
-      // Every face facing out (the sides once faced in: light met their
-      // backs and was lost, a fifth of the power).
+      // Every face facing out: light that meets a face's back is lost.
       w.quad({x0, y, z0}, {x0, y, z1}, {x1, y, z1}, {x1, y, z0});  // top
       w.quad({x0, 0, z0}, {x0, y, z0}, {x1, y, z0}, {x1, 0, z0});  // -z
       w.quad({x0, 0, z1}, {x1, 0, z1}, {x1, y, z1}, {x0, y, z1});  // +z
@@ -296,8 +295,8 @@ int scaling_benchmark(const ScalingOptions& o) {
   const std::string bunny = o.data + "/bunny/bunny_room.json";
   if (fs::exists(bunny)) {
     scenes.emplace_back(3684, bunny);
-    // The scanned mesh cut finer: a real mesh's series (its links were
-    // those of every bunny triangle alone once they fell below --min-area).
+    // The scanned mesh cut finer: a real mesh's series, into the range where
+    // its triangles fall below --min-area.
     for (int level = 1; 3674.0 * std::pow(4.0, level) + 10 <= o.max_triangles; ++level)
       scenes.emplace_back(3674.0 * std::pow(4.0, level) + 10, write_bunny_room(scene_dir, o.data, level));
   }

@@ -33,8 +33,8 @@ endif()
 
 # libFuzzer's coverage instrumentation (counters and comparison tracing) for
 # the code the fuzz targets reach: the readers (io) and meshing. Not for the
-# solvers, which no fuzz target calls: there it only slowed the sanitizer
-# suite's tests (9x the Release suite's time with it on every target).
+# solvers, which no fuzz target calls: there it would only slow the
+# sanitizer suite's tests (docs/decisions.md).
 function(radmesh_fuzzed target)
   if(RADMESH_FUZZ)
     target_compile_options(${target} PRIVATE -fsanitize=fuzzer-no-link)

@@ -22,8 +22,8 @@ namespace radmesh::fuzz {
 
 // A folder of this process's own, made once, removed at exit. The path is
 // never destroyed: a static path object would be destroyed before the exit
-// handler registered during its construction ran, and the handler then
-// read a dead path and removed nothing (every run left its folder behind).
+// handler registered during its construction ran, and the handler would
+// then read a dead path and remove nothing, leaving the folder behind.
 inline const std::filesystem::path& scratch_dir() {
   static const std::filesystem::path* const dir = [] {
     const char* tmp = std::getenv("TMPDIR");

@@ -140,9 +140,10 @@ def main():
             n = first + 4 * (2 * i + k)
             rug += b"f %d %d %d %d\n" % (n, n + 1, n + 2, n + 3)
     write("fuzz_mesh", "cornell_tiled_rug", obj.rstrip(b"\n") + rug + MARK + mtl)
-    # Narrow gaps: a panel standing 1e-5 from the floor's edge
-    # (meshed for minutes), and a panel standing 1e-10 from the edge of a
-    # thin strip lying in the floor (crashed CGAL's mesher).
+    # Narrow gaps: a panel standing 1e-5 from the floor's edge (the mesher
+    # must not cut the edge about the gap apart), and a panel standing 1e-10
+    # from the edge of a thin strip lying in the floor (which can crash CGAL's
+    # mesher).
     lamp = b"newmtl lamp\nKd 0.5 0.5 0.5\nKe 1 1 1\n"
     write("fuzz_mesh", "narrow_gap_panel",
           b"mtllib scene.mtl\nusemtl lamp\nv 0 0 0\nv 0 0 4\nv 4 0 4\nv 4 0 0\n"

@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # Runs every libFuzzer target, bounded. Two ways:
 #   scripts/fuzz.sh           the CI run: seed 1 and a fixed number of inputs per
-#                             target (about 30 s each on a 2-core machine; at most
-#                             120 s), so that the same commit fuzzes the same inputs
+#                             target (see ci_runs; at most 120 s each), so that
+#                             the same commit fuzzes the same inputs
 #   scripts/fuzz.sh SECONDS   exploration: a random seed, SECONDS per target
 # Needs the sanitizer build in build-sanitize/ (scripts/sanitize.sh makes it).
 # Each target starts from its seed corpus (fuzz/corpus/<target>/) in a working
@@ -13,7 +13,8 @@
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 seconds="${1:-}"
-# Inputs per target in the CI run: half of what 30 s ran on the development machine.
+# Inputs per target in the CI run: sized so that each target ends well inside
+# -max_total_time on a slow machine (docs/testing.md).
 declare -A ci_runs=([fuzz_obj_reader]=20000 [fuzz_assimp_reader]=5000 [fuzz_json_scene]=40000 [fuzz_mesh]=2000)
 build="$root/build-sanitize"
 work="$build/fuzz-work"

@@ -34,12 +34,13 @@ struct DirectCounts {
 // without holes and exactly planar, else each of its triangles) is clipped
 // to the pyramid from x over the emitter and to the slab between x and the emitter plane,
 // projected from x into the emitter's plane, and the union of these shadows
-// is subtracted from the emitter polygon (exact 2-D Boolean operations,
-// CGAL Epeck, in the emitter's plane). Lambert's contour formula applied to
-// what is left gives the unoccluded-part form factor. Rounding happens where
-// the shadows' corners are projected (in double precision, in homogeneous
-// coordinates, a shared corner alike for both shadows; in exact arithmetic
-// where an occluder comes near x) and where the visible polygon is turned
+// is subtracted from the emitter polygon (2-D Boolean operations by Clipper,
+// exact in integers on a fine grid in the emitter's plane). Lambert's contour
+// formula applied to what is left gives the unoccluded-part form factor.
+// Rounding happens where the shadows' corners are projected (in double
+// precision, in homogeneous coordinates, a shared corner alike for both
+// shadows; in exact arithmetic where an occluder comes near x), where they
+// are put on the grid, and where the visible polygon is turned
 // back into doubles for that formula: results agree with closed forms to
 // 1e-15 (tests).
 class DirectIllumination {

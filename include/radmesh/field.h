@@ -1,6 +1,6 @@
 // The field users see: radiosity at the vertices of the display mesh, made
 // from what a solver returns. `gather` evaluates every vertex anew: its
-// emission, the exact direct light (radiosity/direct.h) and the indirect
+// emission, the exact direct light (direct.h) and the indirect
 // light gathered from the solved element radiosity; `fit` and `mean` are
 // made from the element values alone (compute_nodal).
 #pragma once
@@ -132,11 +132,11 @@ private:
 // the field would take several times the solve's time (docs/decisions.md).
 inline constexpr double kGatherBudget = 2e7;
 // Past that budget the gather goes by clusters of patches (FieldEvaluator):
-// a vertex visits 80-300 clusters and patches on the scaling benchmark's
-// rooms, each dearer than a patch of the plain gather (rays to every far
-// cluster), taken as kClusterCut pairs; the direct pass still visits every
-// emitter. The automatic field also gathers while (mesh vertices) x
-// (kClusterCut + emitters) is within the budget.
+// a vertex visits a few hundred clusters and patches on large rooms, each
+// dearer than a patch of the plain gather (rays to every far cluster), taken
+// as kClusterCut pairs; the direct pass still visits every emitter. The
+// automatic field also gathers while (mesh vertices) x (kClusterCut +
+// emitters) is within the budget.
 inline constexpr double kClusterCut = 400;
 // Whether the gather visits every patch for each of `vertices` vertices
 // (else it goes by clusters).

@@ -1,5 +1,5 @@
 // Hierarchical radiosity (Hanrahan, Salzman & Aupperle 1991) on the element
-// hierarchy of meshing/hierarchy.h: links between nodes at any level, made
+// hierarchy of hierarchy.h: links between nodes at any level, made
 // by recursive refinement with an oracle on the transported light, solved by
 // gathering over links and pulling radiosity up through the hierarchy. The
 // receiver side gathers at leaf resolution (each leaf over its own and its

@@ -46,7 +46,7 @@ struct SceneReport {
   int vertices_welded = 0;        // vertices merged into an earlier coincident one
   int zero_area_faces_dropped = 0;
   int nonplanar_faces_split = 0;  // faces split into triangles
-  int faces_cut_out = 0;          // faces cut out of a face of their plane they lie in (meshing/overlap.h)
+  int faces_cut_out = 0;          // faces cut out of a face of their plane they lie in (src/scene/overlap.h)
   std::vector<std::string> warnings;
 };
 
@@ -58,7 +58,7 @@ struct Scene {
   SceneReport report;
   // Patch pairs (p < q, sorted) that lie in one plane facing the same way
   // with meeting boxes, whose overlap the mesh's triangles decide
-  // (meshing/overlap.h; filled by build_scene).
+  // (src/scene/overlap.h; filled by build_scene).
   std::vector<std::pair<int, int>> coplanar_pairs;
 
   std::vector<Vec3> loop_points(const std::vector<int>& loop) const;

@@ -7,7 +7,7 @@
 
 namespace radmesh {
 
-// .obj (+ .mtl)  OBJ with its MTL libraries: read_obj_scene (io/obj_reader.h).
+// .obj (+ .mtl)  OBJ with its MTL libraries: read_obj_scene (obj_reader.h).
 // .ply .stl .off  meshes without materials (through assimp): they need a JSON
 //                 scene that names one; read directly they give an InputError
 //                 saying so.
@@ -31,7 +31,7 @@ namespace radmesh {
 //   must be given one. Materials are merged by name; one name with different
 //   values is an error.
 // Every face of the input is one patch, validated, welded and split as
-// build_scene (meshing/scene.h) describes. Errors name the file and the line,
+// build_scene (scene.h) describes. Errors name the file and the line,
 // key or element: InputError for bad content, IoError for missing files.
 Scene read_scene(const std::string& path, const SceneOptions& options = {});
 

@@ -1,5 +1,5 @@
 // ParaView output: the solved mesh as a VTK XML unstructured grid (.vtu),
-// binary and zlib-compressed.
+// binary and LZ4-compressed.
 #pragma once
 
 #include "radmesh/discontinuity.h"

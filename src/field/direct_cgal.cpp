@@ -264,7 +264,7 @@ struct DirectIllumination::Impl {
   // the slab are half-planes in (A, B, W), and the polygon is clipped
   // there. Corners come out rounded to double: a corner two occluders share
   // (the edge between a box's faces) is computed alike for both, so CGAL
-  // need not resolve their equality in exact arithmetic, which is what made
+  // need not resolve their equality in exact arithmetic, which would make
   // the union slow. The exact path is taken where a clipped corner comes
   // within 1e-4 s of x's parallel plane (it is then near x, and the
   // division loses digits) or the rounded shadow is not simple.
@@ -354,9 +354,9 @@ struct DirectIllumination::Impl {
     // winding: every shadow made counter-clockwise). Integer arithmetic
     // decides every crossing alike whichever shadows share an edge; the
     // corners are rounded to the grid (by at most 2^-51 of the emitter's
-    // padded box), about the double rounding they had already. With CGAL's
-    // exact Boolean operations (Polygon_set_2, Epeck), which gave the same
-    // values to 1e-15, they took 84% of the direct pass.
+    // padded box), about the double rounding they had already. CGAL's exact
+    // Boolean operations (Polygon_set_2, Epeck) give the same values and
+    // cost many times more (docs/decisions.md).
     ClipperLib::Clipper clipper;
     clipper.AddPaths(e.lit, ClipperLib::ptSubject, true);
     for (const Polygon2& dark : shadows) {
@@ -521,7 +521,7 @@ struct DirectIllumination::Impl {
       // The emitter's corners, or past kMostBaseCorners its base (its box,
       // which holds it): each corner costs a pass over the occluder's
       // outline, and a round lamp over a round table of 1,024 corners each
-      // took 1 M steps a vertex.
+      // would take 1 M steps a vertex.
       for (const Vec3& v : e.loops[0].size() <= kMostBaseCorners ? e.loops[0] : e.base) {
         const double sv = glm::dot(v - c.outline[0], c.normal);
         if (!((sx > margin && sv < -margin) || (sx < -margin && sv > margin))) {

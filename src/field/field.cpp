@@ -168,9 +168,8 @@ Vec3 FieldEvaluator::evaluation_point(const Vec3& x, int patch, const Vec3& inwa
   // on a floor, a rug 1 mm above it, a lamp hung just under a ceiling):
   // the light around x changes within a few h of them, far less than an
   // element, so the side's value is taken 10 h in (at most a tenth of the
-  // way to its triangles' centroid). Taken at x, half lit, it darkened the
-  // lit side's interpolation over a whole element (the field's floor power
-  // 6.4% below its elements' beside a rug 1 mm up). A taller patch touching
+  // way to its triangles' centroid). Taken at x, half lit, it would darken
+  // the lit side's interpolation over a whole element. A taller patch touching
   // x (a block standing on the floor) keeps the hair below.
   // Far enough that the shadow rays (single precision) see the side, near
   // enough that the value is the side's limit: 1e-5 of the scene's size, at
@@ -207,8 +206,8 @@ Vec3 FieldEvaluator::evaluation_point(const Vec3& x, int patch, const Vec3& inwa
     if (length > 0.0) return hair_in();
     // No area around the vertex in its patch (a T-vertex on a crease that
     // only zero-area triangles use): off q within the patch's plane, to
-    // the side the patch lies on. Gathered on the crease itself, such
-    // vertices of a non-convex furnace came out 41% low.
+    // the side the patch lies on. Gathered on the crease itself, such a
+    // vertex would come out far too dark (a non-convex furnace shows it).
     const Vec3& nq = m.scene.patches[static_cast<size_t>(q)].normal;
     const Vec3 across = nq - glm::dot(nq, normal) * normal;
     if (!(glm::length(across) > 1e-6)) return x;  // q lies in the patch's plane
@@ -325,8 +324,8 @@ Rgb FieldEvaluator::Impl::gather_patch(size_t q, const Vec3& x, const Vec3& n, i
   // What may lie between x and the parts of q, found once (when a part
   // first needs a shaft test) where the cut has enough parts to pay for
   // it (it costs a few parts' tests); else every part is tested alone
-  // (`all`). On a field of 8 x 8 boxes, whose faces are cut into few
-  // parts, listing for every source doubled the gather's time.
+  // (`all`): where faces are cut into few parts (a box field's), listing
+  // for every source would cost more than the tests it saves.
   Occlusion::Candidates candidates;
   candidates.all = true;
   bool listed = false;

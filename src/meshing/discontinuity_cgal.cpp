@@ -673,8 +673,9 @@ private:
   // newest block to the oldest (a new block swallows the smaller ones before
   // it), and a short list of the latest. So a query visits O(log n) trees,
   // and each segment joins O(log n) trees in all. A scan of all of them for
-  // every new segment was quadratic: on the 64 x 64 box field the floor
-  // holds 16 k contact segments and was offered 130 k shadow lines.
+  // every new segment would be quadratic, and the floor under a large field
+  // of boxes holds many thousands of contact segments and is offered more
+  // shadow lines still.
   class KeptSegments {
   public:
     void push_back(const DiscontinuitySegment& s) {

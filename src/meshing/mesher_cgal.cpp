@@ -357,9 +357,9 @@ private:
     };
     // A line's end within near_ of a corner of its own patch is that corner
     // (an overhang clipped to a tilted face's corner ends 1e-7 of the
-    // diagonal from it, and CGAL's mesher crashed refining towards it); not
-    // any point within near_, since an end moved onto another patch's
-    // boundary point lies off its own patch's boundary, which crashed the
+    // diagonal from it, and CGAL's mesher can crash refining towards it);
+    // not any point within near_, since an end moved onto another patch's
+    // boundary point lies off its own patch's boundary, which can crash the
     // mesher too.
     auto end_id = [&](const Vec3& q) {
       const int corner = points.own_corner(q, own);
@@ -489,8 +489,8 @@ private:
         pts.push_back({t, g});
       }
       std::sort(pts.begin(), pts.end());
-      // On an edge cut into many points (5 x 10^4 where a narrow gap runs
-      // along it), CGAL locates a point by a scan of the edges while the
+      // On an edge cut into many points (as where a narrow gap runs along
+      // it), CGAL locates a point by a scan of the edges while the
       // triangulation is still a line (quadratic), so a vertex of the
       // outline off that line goes in first and each point is located from
       // the one before it; only there, since both change the triangulation
@@ -537,7 +537,8 @@ private:
     // lies on a line up to rounding is chained into it as well: a line end
     // constructed on another line (a shadow boundary ending on a contact
     // line) is rounded off it by 1e-15, and a constraint passing that close
-    // to a vertex is split by the mesher towards it without end (it crashed).
+    // to a vertex is split by the mesher towards it without end, until it
+    // crashes.
     std::vector<std::pair<Point2, int>> ends;
     for (const CDT::Vertex_handle& v : boundary_vertices) ends.push_back({v->point(), v->info().id});
     for (const auto& [a, b, kind] : constraints_[static_cast<size_t>(p)]) {
@@ -610,7 +611,7 @@ private:
     const bool sliver = width < floor && perimeter > 200.0 * width;
     // A line piece shorter than 1e-6 of the scene's size (a tilted panel's
     // overhang clipped to a floor's edge in two pieces 2e-6 long): CGAL's
-    // mesher crashed refining around it (inexact constructions at that
+    // mesher can crash refining around it (inexact constructions at that
     // scale), and no light varies over it.
     std::string gap;
     if (!sliver) {
@@ -655,8 +656,8 @@ private:
       // edges (outline and lines) cut at --max-edge, the inside filled. The
       // mesher splits a constrained edge while a point lies in its diametral
       // circle, so the two long edges of a sliver w wide are cut about w
-      // apart (a face 0.8 long and 1e-7 wide goes on for minutes towards
-      // 16 M points); a thousand times what is asked for stops it.
+      // apart (a face 0.8 long and 1e-7 wide would take 16 M points); a
+      // thousand times what is asked for stops it.
       double constrained = 0.0;
       for (auto e = cdt.finite_edges_begin(); e != cdt.finite_edges_end(); ++e)
         if (cdt.is_constrained(*e)) {
@@ -778,8 +779,8 @@ private:
   // angles, which CGAL's mesher handles). Such a vertex is an apex of a
   // triangle on the edge (one lies in the edge's diametral circle
   // whenever any visible vertex does). Refined, the floor's edge along that
-  // box would be cut 1e-5 apart (10^5 points, minutes to insert in the next
-  // round), and a vertex 1e-10 from a thin hole's edge crashes CGAL's
+  // box would be cut 1e-5 apart (10^5 points to insert in the next round),
+  // and a vertex 1e-10 from a thin hole's edge crashes CGAL's
   // mesher; at 1e-3 from the wall the floor is refined (10^3 points along
   // the box).
   static constexpr double kNarrowPoints = 1e4;
@@ -789,11 +790,11 @@ private:
   // outline and lines (unless MeshingOptions::refine_narrow_strips): CGAL's
   // mesher cuts two constrained edges running side by side about their gap
   // apart along them, and each element made there takes its own links (a
-  // carpet 1 mm above a floor, touching the walls, makes 107 x what each
-  // wall asks for, and the hierarchical solve runs out of memory), while
-  // ordinary faces make 0.5-9 x (the Cornell box 1.1, a sphere room 8.2) and
-  // lines side by side that CGAL leaves alone (a panel 1 mm from a wall, a
-  // partition 1 mm thick) under 1.
+  // carpet 1 mm above a floor, touching the walls, would take the
+  // hierarchical solve past its memory). kDense lies above what ordinary
+  // faces make (and lines side by side that CGAL leaves alone: a panel 1 mm
+  // from a wall, a partition 1 mm thick) and far below what such strips
+  // make (docs/decisions.md).
   static constexpr double kDense = 15.0, kDenseMin = 100.0;
   static constexpr size_t kCollinearRun = 1000;  // see insert_boundary
   // What makes it narrow, or "".

@@ -473,8 +473,8 @@ void check_binary_ply_body(std::istream& in, const std::string& path, const PlyH
 // An ASCII body has one line per element: fewer lines is a truncated file
 // (assimp reads what is there and reports something else), and a list's
 // count cannot exceed the values left on its line (assimp 5.2 allocates
-// what a count says: 413 M indices for one face whose count was a long run
-// of digits, 4.9 GB, found by fuzzing).
+// what a count says, and a count that is a long run of digits asks for
+// gigabytes).
 void check_ascii_ply_body(std::istream& in, const std::string& path, const PlyHeader& header) {
   const PlyLayout& layout = header.layout;
   int ln = header.ln;
@@ -596,7 +596,7 @@ void check_stl(const std::string& path) {
 
 // Checks an OFF header before assimp sees it: assimp 5.2 allocates the
 // arrays its vertex and face counts declare before reading the body (a
-// fuzzed face count of 46 digits asked for 7.6 GB). The counts must be whole
+// face count of many digits asks for gigabytes). The counts must be whole
 // numbers, and the rest of the file long enough for them: 3 numbers a
 // vertex, at least 4 a face (its size and 3 indices), each number at least
 // one character and a separator. Throws InputError naming the header line.

@@ -13,15 +13,15 @@
 namespace radmesh {
 
 // Deeper nesting is refused while parsing, before it is built: a parsed
-// value is destroyed and printed recursively, and a file of 100,000 '['
-// overflowed the stack (a segmentation fault instead of an error). No
+// value is destroyed and printed recursively, and a file of many thousands
+// of '[' would overflow the stack (a segmentation fault instead of an error). No
 // scene, glTF or state file nests anywhere near this.
 inline constexpr int kMaxJsonDepth = 256;
 
 // nlohmann::json::parse(in), throwing InputError naming `path` past
 // kMaxJsonDepth levels and, with `unique_keys`, at a key written twice in
 // one object (nlohmann keeps the last value silently: a scene with two
-// "materials" lost the first list); its own parse errors are left to the
+// "materials" would lose the first list); its own parse errors are left to the
 // caller.
 template <class Input>
 nlohmann::json parse_json_bounded(Input&& in, const std::string& path, bool unique_keys = true) {

@@ -1,5 +1,5 @@
 // The JSON scene file: places meshes from other files and assigns materials.
-// Keys (a promise to users, see io/scene_reader.h and README "Scene input"):
+// Keys (a promise to users, see radmesh/scene_reader.h and README "Scene input"):
 //   materials.NAME.reflectance [r, g, b], materials.NAME.emission [r, g, b]
 //   objects[i].file, objects[i].material, objects[i].transform.{scale, rotate_deg, translate}
 

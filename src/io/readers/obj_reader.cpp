@@ -159,8 +159,8 @@ void scan_mtl(const std::string& path, std::map<std::string, MtlInfo>* info) {
 }
 
 // tinyobjloader counts a face's vertices in an unsigned char: a face of 300
-// vertices came out with 44 (300 - 256), the rest of it dropped without a
-// word (a round lamp of 300 vertices lost 98% of its area). Such a face is
+// vertices comes out with 44 (300 - 256), the rest of it dropped without a
+// word. Such a face is
 // given to it as its first three vertices, which keeps its place, object
 // and material, and its vertices are taken from the scan.
 constexpr size_t kTinyobjMostVertices = 255;

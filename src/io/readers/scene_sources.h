@@ -1,6 +1,6 @@
 // Internal to radmesh_io (not installed, not for users): the faces and materials
 // one scene file carries, before build_scene, so that a JSON scene can combine
-// several files into one face list. The public entry point is io/scene_reader.h.
+// several files into one face list. The public entry point is radmesh/scene_reader.h.
 #pragma once
 
 #include "radmesh/scene.h"
@@ -28,7 +28,7 @@ SceneSource read_obj_source(const std::string& path);
 // without, the caller replaces them.
 SceneSource read_assimp_source(const std::string& path, bool check_materials);
 
-// The JSON scene file (io/scene_reader.h describes its keys).
+// The JSON scene file (radmesh/scene_reader.h describes its keys).
 Scene read_json_scene(const std::string& path, const SceneOptions& options);
 
 // Checks that `path` names a regular file radmesh can read (IoError

@@ -22,7 +22,7 @@ namespace radmesh::internal {
 
 // Collects the error messages a VTK object reports. While an object has an
 // ErrorEvent observer, VTK hands its errors to the observer instead of printing
-// them, which keeps the library silent as DESIGN.md requires.
+// them, which keeps the library silent as docs/architecture.md requires.
 class VtkErrorCatcher : public vtkCommand {
 public:
   static VtkErrorCatcher* New() { return new VtkErrorCatcher; }
@@ -66,8 +66,8 @@ void run_vtk_writer(Writer* writer, const std::string& path) {
 
 // Runs an XML `writer` (its input connected) into a temporary file renamed
 // onto `path` once whole. Not through memory: the writer's string and the
-// copy it hands out held twice the file at once (1 GB more at the peak for
-// a pixmap run's 525 MB radiosity.vtu).
+// copy it hands out would hold the file twice at once, at the peak of a
+// large pixmap run.
 template <class Writer>
 void write_xml_atomically(Writer* writer, const std::string& path) {
   write_file_atomically_by_name(path, [&](const std::string& tmp) {

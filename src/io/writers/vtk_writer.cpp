@@ -42,8 +42,8 @@ void check_count(const std::string& path, const char* what, std::size_t count,
 // VTK arrays over our own vectors instead of copies: a grid is written from
 // vectors that outlive it, and the writer only reads them (1 = VTK never
 // frees them). A pixmap run's display mesh has tens of millions of
-// triangles, and each copy of a 3-component field held 24 bytes a triangle
-// more at the peak.
+// triangles, and each copy of a 3-component field would hold 24 bytes a
+// triangle more at the peak.
 static_assert(sizeof(Rgb) == 3 * sizeof(double) && sizeof(Vec3) == 3 * sizeof(double));
 template <class Array, class T>
 vtkNew<Array> view_array(const char* name, const T* values, std::size_t count, int components) {
@@ -144,8 +144,8 @@ void add_mesh_cell_data(const std::string& path, vtkCellData* cell_data, const S
   cell_data->AddArray(emission);
 }
 
-// Binary, LZ4-compressed .vtu (on the Cornell box 0.14 s for what zlib level 1
-// wrote in 0.31 s, files 1.4x larger), written to a temporary file renamed
+// Binary, LZ4-compressed .vtu (faster to write than zlib, for somewhat
+// larger files: docs/decisions.md), written to a temporary file renamed
 // into place.
 void write_grid(const std::string& path, vtkUnstructuredGrid* grid) {
   vtkNew<vtkXMLUnstructuredGridWriter> writer;

@@ -35,9 +35,9 @@ struct Counters {
 // whole view of the scene (1 in a closed one, exactly where nothing
 // occludes: the point form factors cover each point's hemisphere once), but
 // A_i F_ij and A_j F_ji differ by the receiver quadrature's error, and then
-// the matrix creates or destroys light: the Cornell box's balance was off by
-// 1e-4 of the emitted power, a large receiver close to a small source
-// (a ceiling 5 cm over a box) by 4e-4. Each pair keeps the estimate made at
+// the matrix creates or destroys light, most where a large receiver lies
+// close to a small source (a ceiling just over a box). Each pair keeps the
+// estimate made at
 // the smaller element's points (that error grows with the receiver's size
 // over the distance), both entries from it; then symmetric scales s (Sinkhorn
 // balancing of the symmetric A_i F_ij) bring every row back to its own sum t:
@@ -71,12 +71,12 @@ void make_reciprocal(const ElementSet& el, std::vector<double>& F) {
       }
   });
   // Over-relaxed in log s: 1.5 x the half step of the plain symmetric
-  // iteration takes the Cornell box's rows to within 1e-10 of their sums in
-  // 32 rounds instead of 51 (1.8 x: 80 rounds, oscillating).
+  // iteration converges in fewer rounds than the plain step, while a larger
+  // factor oscillates.
   // Rows need not all be reachable: where elements see only each other's
   // sides (a bipartite exchange) the scales cannot give every row its sum, and
-  // the rounds stop at 40 with the entries still reciprocal, the rows within
-  // 2e-5 of their sums on the box on the floor.
+  // the rounds stop at 40 with the entries still reciprocal and the rows
+  // close to their sums.
   constexpr double kOverRelaxation = 1.5;
   std::vector<double> s(un, 1.0), next(un, 1.0), misfit(un, 0.0);
   for (int round = 0; round < 40; ++round) {

@@ -36,7 +36,7 @@ Method make_matrix_method() {
   m.meshing = [](const Scene&) {
     MeshingOptions mo;  // the meshing defaults: diagonal / 12, full discontinuity meshing
     // Its elements are its unknowns: a face left coarse beside a narrow
-    // strip (a carpet's edge 1 mm up a wall) came out 20% dark.
+    // strip (a carpet's edge 1 mm up a wall) would come out dark.
     mo.refine_narrow_strips = true;
     return mo;
   };

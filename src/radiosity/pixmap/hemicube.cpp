@@ -140,8 +140,9 @@ void Hemicube::render_face(int f, const std::vector<HemicubeTriangle>& triangles
     // ray of screen point (x, y), n . (x right + y up + forward) / (n . da).
     // Interpolated over the clipped polygon's fan instead, a sliver of it
     // (a floor's edge seen along the screen's diagonal, a corner clipped
-    // at the near plane) gave a pixel centre on its edges a weight on that
-    // corner's huge depth, and a floor 3.7 m away showed through a wall 2 m away.
+    // at the near plane) would give a pixel centre on its edges a weight on
+    // that corner's huge depth, and a far floor would show through a nearer
+    // wall.
     const Vec3 n = glm::cross(t.b - t.a, t.c - t.a);
     const double plane = glm::dot(n, da);
     if (plane == 0.0) continue;  // seen edge on

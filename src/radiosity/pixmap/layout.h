@@ -36,8 +36,8 @@ struct UnionFind {
 // What a pixmap run holds per texel at its peak, besides the cached rows:
 // the texel grids and state, the display mesh and its values, and the
 // radiosity.vtu being written, of which the grids alone are about 90 bytes.
-// Peak resident memory over texels, with one shot, is 656 bytes on the
-// Cornell box at 7.6 M texels and 660 on the 16 x 16 box field at 5.8 M.
+// Taken from the peak resident memory over texels of large runs with one
+// shot, rounded up.
 constexpr double kBytesPerTexel = 700.0;
 
 // InputError unless the options are in range.

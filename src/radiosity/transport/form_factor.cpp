@@ -187,7 +187,7 @@ struct LambertBatch {
   size_t n = 0;
   // Room for `items` first triangles (and as many seconds) without
   // reallocating: filled by index (no push_back per coordinate: that
-  // bookkeeping took longer than the kernel itself).
+  // bookkeeping costs more than the kernel itself).
   void start(size_t items) {
     if (sum.size() < 2 * items) {
       for (auto& v : d) v.resize(2 * items);

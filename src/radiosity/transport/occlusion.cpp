@@ -15,15 +15,15 @@ namespace {
 // polygons' own planes and the planes through an edge of one polygon and a
 // vertex of the other that have both polygons on one side. A patch that
 // only touches the hull (a wall of the room along which the shaft runs, a
-// face standing on the edge of one polygon) is thus clear; when it was
-// not, its shadow rays were cast, and the few that grazed it in single
-// precision made a pair near the room's corners look partly hidden.
+// face standing on the edge of one polygon) is thus clear; otherwise its
+// shadow rays would be cast, and the few that graze it in single precision
+// would make a pair near the room's corners look partly hidden.
 // The planes depend on a and b alone: they are made as the first polygon
 // tested needs them, in a fixed order, and kept for the next ones (a shaft
-// has several candidates, and each made every plane anew). A plane costs a
+// has several candidates, and each would make every plane anew). A plane costs a
 // pass over a's and b's points, and there are 2 |a| |b| to try: past
 // kMostWork points classified, no more are tried (a shaft between two
-// round faces of 20,000 vertices each would have taken 3 x 10^13 steps),
+// round faces of 20,000 vertices each would take 3 x 10^13 steps),
 // and the candidate is taken as in the way (its rays are cast).
 template <class A, class B>
 class ShaftPlanes {
@@ -171,8 +171,7 @@ bool Occlusion::shaft_blocked(int pa, int pb, const A& a, const B& b, const Vec3
   for (const Vec3& v : a) shaft.add(v);
   for (const Vec3& v : b) shaft.add(v);
   // The candidates first: with more than kMaxTests of them the shaft is
-  // taken as occludable whatever the tests would say, so none is made
-  // (before, the first kMaxTests were tested anyway; results are the same).
+  // taken as occludable whatever the tests would say, so none is made.
   std::array<int, kMaxTests> candidates;
   int count = 0;
   const bool few = tree_.overlapping(shaft, eps_, [&](int k) {

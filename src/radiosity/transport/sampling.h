@@ -56,8 +56,8 @@ inline Vec3 triangle_point(const Vec3& a, const Vec3& b, const Vec3& c, double u
 // The last i in [begin, end) with cum[i] <= target, for a nondecreasing
 // cum (prefix sums of areas) with cum[begin] <= target: what
 // std::upper_bound over (begin, end) gives, less one. Sampling an area
-// fraction u of a long run of triangles, a binary search missed the cache
-// at nearly every step (6% of a box field's run): the search starts at
+// fraction u of a long run of triangles, a binary search misses the cache
+// at nearly every step: the search starts at
 // begin + u (end - begin), where equal areas would put target, and
 // gallops from there to a bracket that it then halves.
 inline int area_index(const double* cum, int begin, int end, double target, double u) {

@@ -82,17 +82,15 @@ struct RayCount {
 // Only rays between points that lie in front of each other's planes count
 // (light passes only there); a pair none of whose rays does takes the
 // fraction over all of them. So an element straddling the other's plane is
-// not darkened by what blocks its back half: counting every ray left the
-// Cornell box's element values 0.1-0.3% low against a brute-force gather.
+// not darkened by what blocks its back half.
 // Each ray that counts is weighed by the point kernel between its ends
 // (cos x cos / r^2, as the link's form factor weighs the pair's points), so
 // the fraction is that of the transport, not of the point pairs: they
 // differ where what is hidden sends more (or less) than what is seen, as
 // where an occluder near the receiver hides a source's far part and not its
-// near part (test TheFractionIsTheTransportsWhereAnOccluderHidesTheSourcesFarPart).
-// In a closed room lit by a lamp hung 10 cm in front of a wall, facing it,
-// the plain fraction let 0.75% of the emitted power escape (pixmap: 0.16%);
-// weighed, 0.44%.
+// near part (test TheFractionIsTheTransportsWhereAnOccluderHidesTheSourcesFarPart);
+// the plain fraction lets power escape from a closed room lit by a lamp hung
+// close in front of a wall (docs/decisions.md).
 class VisibilityEstimator {
 public:
   // `rays` is rounded up to a perfect square (the strata).

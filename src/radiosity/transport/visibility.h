@@ -36,9 +36,8 @@ public:
   // diagonal, and the whole segment between the lifted ends is tested. A
   // patch standing on either surface next to an end (a box's wall on the
   // floor) thus blocks the segment however near the end it stands; the open
-  // segment of visible() starts 1e-6 of its length past the end, and on a
-  // field of open-bottomed boxes a floor point 7e-7 from a wall saw the
-  // ceiling under the box that way.
+  // segment of visible() starts 1e-6 of its length past the end, so a floor
+  // point nearer than that to a wall would see under the wall.
   static constexpr double kLift = 1e-6;
   void visible_off_surfaces(const Vec3* from, const Vec3& from_normal, const Vec3* to, const Vec3& to_normal, size_t n,
                             int ignore_a, int ignore_b, unsigned char* seen) const;

@@ -153,10 +153,9 @@ namespace {
 // n rays traced in one call into seen[i] (1: nothing hit), each made by
 // ray(i). Said to be incoherent, which they mostly are (point pairs drawn
 // over two elements, or from one point to samples spread over a source):
-// Embree then traces them one by one instead of in packets. Against the
-// coherent flag: the Cornell box 0.98x and the 16 x 16 box field 0.97x the
-// wall time, the same links and rays (on the box field a few rays grazing
-// box edges came out otherwise: patch errors against a fine solve the same).
+// Embree then traces them one by one instead of in packets, no slower than
+// with the coherent flag and with the same links and rays (up to a few rays
+// that graze edges).
 template <class MakeRay>
 void trace_rays(const RTCScene scene, QueryContext& ctx, size_t n, MakeRay&& ray, unsigned char* seen) {
   ctx.base.flags = RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT;
