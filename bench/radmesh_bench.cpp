@@ -470,10 +470,10 @@ int make_reference(const std::string& data, const Scenario& sc, double max_edge,
   const std::string path = path_out.empty() ? data + "/" + sc.name + "/reference.csv" : path_out;
   write_file_atomically(path, [&](std::ostream& out) {
     out << "# " << sc.name << " reference radiosity at the benchmark's " << samples.size()
-        << " sample points (radiosity/error_metric.h surface_samples(scene, " << kSamples << ")).\n"
+        << " sample points (radmesh/error_metric.h surface_samples(scene, " << kSamples << ")).\n"
         << "# Made by: radmesh_bench --make-reference --scenes " << sc.name << " --max-edge " << max_edge
         << " --rays " << rays
-        << ": exact direct light (radiosity/direct.h) plus the indirect light gathered at each point from a "
+        << ": exact direct light (radmesh/direct.h) plus the indirect light gathered at each point from a "
            "matrix solve with full discontinuity meshing ("
         << mesh.triangle_count() << " elements, receiver quadrature level 3).\n"
         << "patch,x,y,z,r,g,b\n"
