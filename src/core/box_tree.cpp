@@ -1,3 +1,6 @@
+// The box tree (core/box_tree.h): a bounding-volume hierarchy over boxes,
+// built once and queried for the boxes that meet a box or a segment.
+
 #include "core/box_tree.h"
 
 #include <algorithm>

@@ -1,3 +1,6 @@
+// Helpers for error messages: a place ("file:line: "), a second place in
+// a message, and numbers written short.
+
 #include "radmesh/errors.h"
 
 #include <sstream>

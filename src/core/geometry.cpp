@@ -1,3 +1,6 @@
+// Small geometric measures shared by every part: triangle area, loop
+// length, the distance from a point to a segment.
+
 #include "radmesh/geometry.h"
 
 #include <algorithm>

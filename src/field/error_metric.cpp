@@ -1,3 +1,8 @@
+// The error metric tests and benchmarks share: stratified sample points
+// on every surface, the per-vertex field (or the element values) at them,
+// and the area-weighted relative L2, L-infinity and per-patch errors of the
+// reflected part B - E against a reference.
+
 #include "radmesh/error_metric.h"
 
 #include "radmesh/errors.h"

@@ -1,3 +1,7 @@
+// Probes: radiosity at points the user names, each on a surface that faces
+// the probe's normal (a probe on none is an error, found before any work),
+// evaluated as the gather field evaluates a vertex (FieldEvaluator).
+
 #include "radmesh/probe.h"
 
 #include "radmesh/errors.h"

@@ -1,3 +1,8 @@
+// The element tree of hierarchical radiosity: the initial mesh's
+// triangles as roots, split into four at edge midpoints shared between
+// neighbours, and the conforming mesh of its leaves with zero-area
+// triangles closing every T-vertex.
+
 #include "radmesh/hierarchy.h"
 
 #include "radmesh/errors.h"

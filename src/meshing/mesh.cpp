@@ -1,3 +1,6 @@
+// The mesh's per-triangle measures, its feature edges, and the meshing
+// options a user sets: their table and their resolution against a scene.
+
 #include "radmesh/mesh.h"
 
 #include "radmesh/errors.h"

@@ -1,3 +1,7 @@
+// Mesh quality for mesh studies: per triangle its smallest and largest
+// angles and aspect ratio, per patch their summaries and the
+// discontinuity segments and zero-area triangles it holds.
+
 #include "radmesh/mesh.h"
 
 #include <algorithm>

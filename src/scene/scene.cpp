@@ -1,3 +1,8 @@
+// The scene model: raw faces and materials checked value by value, welded,
+// split where not planar, without zero-area faces (dropped, counted) or
+// coincident ones (refused), coplanar overlaps cut out; and what a scene
+// answers (areas, bounds, materials).
+
 #include "radmesh/scene.h"
 
 #include "scene/overlap.h"

@@ -1,3 +1,6 @@
+// The probe file (lines "label x y z nx ny nz"), read with every value
+// checked, and probes.csv, the values found there.
+
 #include "radmesh/probe_file.h"
 
 #include "io/writers/atomic_file.h"

@@ -1,3 +1,6 @@
+// Histograms as PNG pictures (radmesh quality's angle and aspect-ratio
+// plots) through VTK's charts and an X display.
+
 #include "radmesh/histogram.h"
 
 #include "io/render/vtk_render.h"

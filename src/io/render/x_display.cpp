@@ -1,3 +1,6 @@
+// The X display connection VTK's render windows borrow (x_display.h): the
+// one place Xlib is included.
+
 #include "io/render/x_display.h"
 
 #include <X11/Xlib.h>

@@ -1,3 +1,7 @@
+// Files written whole: to a temporary name beside the target, renamed into
+// place once complete, so that a failure leaves no half-written file and an
+// existing file untouched.
+
 #include "io/writers/atomic_file.h"
 
 #include "radmesh/errors.h"

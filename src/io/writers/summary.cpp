@@ -1,3 +1,7 @@
+// summary.json (the run's options, counts, times, quality, warnings, skips,
+// per-object and per-patch means, the solver's counters, the energy
+// balance and the field) and the CSV tables beside it.
+
 #include "radmesh/summary.h"
 
 #include "io/writers/atomic_file.h"

@@ -1,3 +1,8 @@
+// The cluster tree above the patches or the initial triangles: a volume
+// hierarchy (or Tanaka and Noma's shape approximation), each cluster with
+// oriented normal groups whose form factors, straddle and radiosity stand
+// for its members seen from afar.
+
 #include "radiosity/transport/clusters.h"
 
 #include "radiosity/transport/sampling.h"

@@ -1,3 +1,7 @@
+// Form factors: Lambert's exact contour formula from a point to a polygon,
+// receiver quadrature points graded toward the source, and the element
+// form factors the methods share.
+
 #include "radmesh/form_factor.h"
 
 #include "radiosity/transport/lambert_kernel.h"

@@ -1,3 +1,7 @@
+// Occlusion without rays: which patches may lie between two elements or a
+// point and an element (their shaft), so that rays are cast only where
+// something can occlude, and the scene's convex-enclosure test.
+
 #include "radiosity/transport/occlusion.h"
 
 #include <algorithm>

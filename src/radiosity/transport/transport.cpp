@@ -1,3 +1,8 @@
+// The transport core every method shares: the element set (triangle,
+// patch, material), the visibility estimator (shadow rays where the shaft
+// holds an occluder), the energy balance and the sweeps' stopping rule
+// with its Aitken extrapolation.
+
 #include "radiosity/transport/transport.h"
 
 #include "radmesh/errors.h"
