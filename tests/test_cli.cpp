@@ -326,6 +326,8 @@ TEST_P(CliErrors, OneLineErrorNonZeroExitNoOutput) {
 INSTANTIATE_TEST_SUITE_P(
     BadInputs, CliErrors,
     ::testing::Values(BadRun{"run DATA/bad/nan_coordinate.obj", "nan_coordinate.obj:6"},
+                      BadRun{"run DATA/cornell_box/cornell_box.obj --method pixmap --rays 4", "--rays"},
+                      BadRun{"run DATA/cornell_box/cornell_box.obj --method pixmap --max-edge 50", "--max-edge"},
                       BadRun{"run DATA/bad/reflectance_one.obj", "reflectance_one.mtl:3"},
                       BadRun{"run DATA/bad/negative_emission.obj", "negative_emission.mtl:4"},
                       BadRun{"run DATA/bad/degenerate_face.obj", "degenerate_face.obj:9"},

@@ -112,6 +112,14 @@ public:
   MethodOptions(Options value, std::vector<OptionValue> values)
       : value_(std::make_shared<const Options>(std::move(value))), type_(&typeid(Options)),
         values_(std::move(values)) {}
+  // `value` checked against its table (InputError naming the first option
+  // out of range), with its values listed.
+  template <class Options>
+  static MethodOptions checked(const OptionTable<Options>& table, Options value) {
+    table.check(value);
+    std::vector<OptionValue> values = table.values(value);
+    return MethodOptions(std::move(value), std::move(values));
+  }
   // The options struct; InputError when it holds another type (options of
   // another method).
   template <class Options>
@@ -204,10 +212,7 @@ Method make_method(std::string name, std::string help, const OptionTable<Options
   m.name = std::move(name);
   m.help = std::move(help);
   m.options = table.specs();
-  m.parse = [table](const OptionValues& given) {
-    Options o = table.parse(given);
-    return MethodOptions(o, table.values(o));
-  };
+  m.parse = [table](const OptionValues& given) { return MethodOptions::checked(table, table.parse(given)); };
   m.solve = [solve = std::move(solve)](const Scene& scene, const Mesh& mesh, const SolveOptions& so,
                                        const MethodOptions& mo, const SolveCallbacks& cb) {
     return solve(scene, mesh, so, mo.get<Options>(), cb);

@@ -182,9 +182,8 @@ Method make_hierarchical_method() {
 
 Result solve(const Scene& scene, const HierarchicalOptions& options, const SolveOptions& common,
              const SolveCallbacks& callbacks) {
-  const OptionTable<HierarchicalOptions>& table = hierarchical_option_table();
-  table.check(options);
-  return solve(scene, find_method(kName), MethodOptions(options, table.values(options)), common, callbacks);
+  return solve(scene, find_method(kName), MethodOptions::checked(hierarchical_option_table(), options), common,
+               callbacks);
 }
 
 }  // namespace radmesh

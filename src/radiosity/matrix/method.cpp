@@ -45,7 +45,7 @@ Method make_matrix_method() {
 
 Result solve(const Scene& scene, const MatrixOptions& options, const SolveOptions& common,
              const SolveCallbacks& callbacks) {
-  return solve(scene, find_method(kName), MethodOptions(options, {}), common, callbacks);
+  return solve(scene, find_method(kName), MethodOptions::checked(matrix_option_table(), options), common, callbacks);
 }
 
 }  // namespace radmesh

@@ -157,9 +157,7 @@ Method make_pixmap_method() {
 
 Result solve(const Scene& scene, const PixmapOptions& options, const SolveOptions& common,
              const SolveCallbacks& callbacks) {
-  const OptionTable<PixmapOptions>& table = pixmap_option_table();
-  table.check(options);
-  return solve(scene, find_method(kName), MethodOptions(options, table.values(options)), common, callbacks);
+  return solve(scene, find_method(kName), MethodOptions::checked(pixmap_option_table(), options), common, callbacks);
 }
 
 }  // namespace radmesh
