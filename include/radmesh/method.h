@@ -93,8 +93,8 @@ struct MethodResult {
 struct SolveCallbacks {
   ProgressFn progress;
   // Called after every refinement round of a method that has rounds (or
-  // every snapshot_every shots of the pixmap method), with the result as it
-  // then stands (for a series of files).
+  // every so many steps of a progressive one), with the result as it then
+  // stands (for a series of files).
   std::function<void(const MethodResult&, int round)> on_round;
   // Polled by methods that can stop early and still return a consistent
   // result (Method::resumable): true stops them (MethodResult::interrupted).
