@@ -596,6 +596,11 @@ int main(int argc, char** argv) {
   } catch (const radmesh::Error& e) {
     std::fprintf(stderr, "radmesh: error: %s\n", as_flags(e).c_str());
     return 1;
+  } catch (const std::bad_alloc&) {
+    std::fprintf(stderr,
+                 "radmesh: error: out of memory: the system refused an allocation; lower --max-memory (its checks "
+                 "then refuse the run before it allocates) or the options that size the run\n");
+    return 1;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "radmesh: internal error: %s\n", e.what());
     return 3;

@@ -11,6 +11,11 @@
 
 #include <filesystem>
 #include <memory>
+#include <new>
+
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 using namespace radmesh;
 using radmesh::test::kData;
@@ -114,6 +119,41 @@ TEST(Solve, AResultOutlivesItsSceneAndWritesItsFiles) {
   ASSERT_TRUE(state);
   EXPECT_TRUE(test::thrown<InputError>([&] { read_method_state(find_method("matrix"), dir.string()); })
                   .names("resume"));
+}
+
+TEST(Solve, AnAllocationTheSystemRefusesIsANumericalErrorNotAnInternalOne) {
+  // A method whose solve runs out of memory: run_method says so as a
+  // radmesh error naming max_memory, not std::bad_alloc.
+  Method m = find_method("matrix");
+  m.solve = [](const Scene&, const Mesh&, const SolveOptions&, const MethodOptions&, const SolveCallbacks&) -> MethodResult {
+    throw std::bad_alloc();
+  };
+  const Scene scene = box_on_floor();
+  const Mesh mesh = mesh_scene(scene, MeshingOptions{});
+  const test::Thrown t = test::thrown<NumericalError>([&] { run_method(m, scene, mesh, {}, OptionValues{}); });
+  EXPECT_TRUE(t.names("max_memory"));
+  EXPECT_TRUE(t.says({"box_on_floor.obj", "out of memory"}));
+}
+
+TEST(Solve, TheMemoryLimitIsWithinTheProcesssDataLimit) {
+  // Under ulimit -d (or -v) an allocation past the limit fails whatever the
+  // machine holds: the default limit is half of it. In a child process, so
+  // that the limit does not outlive the check.
+  const pid_t pid = fork();
+  ASSERT_GE(pid, 0);
+  if (pid == 0) {
+    rlimit r{};
+    getrlimit(RLIMIT_DATA, &r);
+    r.rlim_cur = rlim_t{4} << 30;
+    if (r.rlim_max != RLIM_INFINITY && r.rlim_max < r.rlim_cur) r.rlim_cur = r.rlim_max;
+    if (setrlimit(RLIMIT_DATA, &r) != 0) _exit(2);
+    const double limit = memory_limit_bytes(SolveOptions{});
+    _exit(limit <= 0.5 * static_cast<double>(r.rlim_cur) ? 0 : 1);
+  }
+  int status = 0;
+  waitpid(pid, &status, 0);
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 0);
 }
 
 TEST(OptionTable, ReadsChecksAndListsAStruct) {

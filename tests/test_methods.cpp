@@ -248,7 +248,13 @@ TEST_P(Conformance, TranslatedRotatedAndScaledScenesGiveTheSamePatchMeans) {
       {"translated", [](const Vec3& v) { return v + Vec3(123.0, -45.5, 7.25); }},
       {"rotated", rotate},
       {"scaled 1e-4", [](const Vec3& v) { return 1e-4 * v; }},
-      {"scaled 1e4", [](const Vec3& v) { return 1e4 * v; }}};
+      {"scaled 1e4", [](const Vec3& v) { return 1e4 * v; }},
+      // Far past float's range for products of coordinates (Embree traces
+      // in float: a length cubed overflowed at 1e12 and rays passed through
+      // occluders), near the ends of the documented range.
+      {"scaled 1e12", [](const Vec3& v) { return 1e12 * v; }},
+      {"scaled 1e-12", [](const Vec3& v) { return 1e-12 * v; }},
+      {"scaled 1e40", [](const Vec3& v) { return 1e40 * v; }}};
   struct Case {
     const char* file;
     int rays;

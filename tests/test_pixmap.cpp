@@ -470,6 +470,51 @@ TEST(PixmapSolver, FurnaceConvergesToEOverOneMinusRho) {
   EXPECT_NEAR(run.state.power_escaped.x, 0.0, 1e-7 * run.power_emitted.x);  // F rounded to float
 }
 
+TEST(PixmapSolver, AnyEmissionTheSceneAcceptsIsCarriedThroughItsFloatTexels) {
+  // The texels are float: an emission of 1e39 overflowed them (the run never
+  // ended, or with a shot limit wrote NaN), and 1e-300 underflowed to a
+  // black scene. Radiosity is linear in the emission, so each run must give
+  // the furnace's B = 2 E everywhere, up to float's rounding.
+  Scene scene = read_obj_scene(kData + "/furnace_cube/furnace_cube.obj");
+  PixmapOptions o;
+  o.texel_size = 0.25;
+  o.hemicube_res = 16;
+  o.shots = 40;
+  for (const double e : {1.0, 1e39, 1e-300, 1e50}) {
+    for (Material& m : scene.materials) m.emission = Rgb(e);
+    const PixmapSolver solver(scene, o, threads(0));
+    Mesh mesh;
+    Solution sol;
+    std::vector<int> texel;
+    const PixmapRun run = solver.run(solver.initial_state());
+    solver.display_mesh(solver.display(run.state, solver.ambient(run.state)), mesh, sol, texel);
+    double sum = 0.0, area = 0.0;
+    for (int t = 0; t < mesh.triangle_count(); ++t) {
+      ASSERT_TRUE(std::isfinite(sol.element[static_cast<size_t>(t)].x)) << e;
+      sum += sol.element[static_cast<size_t>(t)].x * mesh.area(t);
+      area += mesh.area(t);
+    }
+    EXPECT_NEAR(sum / area / (2.0 * e), 1.0, 0.02) << "emission " << e;
+    EXPECT_NEAR(solver.power_emitted().x / (6.0 * e), 1.0, 1e-12) << "emission " << e;
+  }
+}
+
+TEST(PixmapSolver, AHemicubeTooLargeForTheMemoryLimitIsRefusedBeforeItIsMade) {
+  // Its buffers grow with the square of the resolution: 16384 pixels (in
+  // the option's range) are 15 GiB, which ended in std::bad_alloc under a
+  // 6 GB address-space limit whatever max_memory said.
+  const Scene scene = read_obj_scene(kData + "/parallel_plates/parallel_plates.obj");
+  PixmapOptions o;
+  o.hemicube_res = 8192;  // 3.75 GiB
+  SolveOptions so = threads(0);
+  so.max_memory = 0.5;
+  const test::Thrown t = test::thrown<NumericalError>([&] { PixmapSolver solver(scene, o, so); });
+  EXPECT_TRUE(t.names("hemicube_res") && t.names("max_memory"));
+  EXPECT_TRUE(t.says({"8192", "3.75 GiB", "0.5 GiB"}));
+  o.hemicube_res = 64;
+  EXPECT_NO_THROW(PixmapSolver(scene, o, so));
+}
+
 TEST(PixmapSolver, ReflectanceNearOneConvergesAndTheAmbientTermFillsWhatIsUnshot) {
   // rho = 0.999: B = E / (1 - rho) = 1000. Stopped at an unshot power of
   // 1e-3 of the emitted, the state lacks the bounces of what is unshot: the

@@ -12,6 +12,7 @@
 #include <filesystem>
 #include <fstream>
 #include <numbers>
+#include <limits>
 #include <string>
 
 
@@ -179,6 +180,21 @@ TEST(Scene, AFaceWhoseVerticesDoubleCannotTellApartSaysItIsTooFarFromTheOrigin) 
       test::thrown<InputError>([&] { build_scene({twice}, {test::material("grey", Rgb(0.5))}, "twice"); });
   EXPECT_TRUE(near.says({"face 'twice'", "2 distinct vertices"}));
   EXPECT_FALSE(contains(near.message, "origin")) << near.message;
+}
+
+TEST(Scene, ASubnormalEmissionIsRefusedNamingTheMaterialAndTheLimit) {
+  // 5e-324 keeps one significant bit: the light it gave was dark, with
+  // 99.5% of the power unaccounted for. 0 and the smallest normal number
+  // are accepted.
+  std::vector<RawFace> faces = test::box_faces("room", 0, Vec3(0.0), Vec3(1.0), false);
+  for (const double e : {5e-324, 1e-310}) {
+    const test::Thrown t = test::thrown<InputError>(
+        [&] { build_scene(faces, {test::material("lamp", Rgb(0.5), Rgb(e))}, "room"); });
+    EXPECT_TRUE(t.says({"material 'lamp'", "emission", "2.22507386e-308"}));
+  }
+  EXPECT_NO_THROW(build_scene(faces, {test::material("lamp", Rgb(0.5), Rgb(0.0))}, "room"));
+  EXPECT_NO_THROW(
+      build_scene(faces, {test::material("lamp", Rgb(0.5), Rgb(std::numeric_limits<double>::min()))}, "room"));
 }
 
 TEST(Scene, FacesWithoutAnObjectNameAreNamedAfterTheFile) {

@@ -150,6 +150,8 @@ std::string scene_fingerprint(const Scene& scene);
 void check_resumable(const PixmapState& state, const Scene& scene, const PixmapLayout& layout,
                      const PixmapOptions& options, const std::string& where);
 
+// What a run ends with. Its state, ambient term and powers are in the
+// solver's units (PixmapSolver::unit).
 struct PixmapRun {
   PixmapState state;
   bool interrupted = false;   // stopped by the cancel flag
@@ -193,6 +195,13 @@ public:
   // counts it as emitted and escaped, as the other methods do; and one
   // warning per such patch (enclosed_emitter_warnings).
   Rgb power_enclosed() const;
+  // Scene units of radiosity per unit of the solver's: the states, the
+  // texel values of display() and ambient() are in the solver's units, and
+  // display_mesh(), power_emitted() and power_enclosed() in the scene's. 1
+  // unless the scene's largest emission lies outside [2^-60, 2^60], where it
+  // is the power of two that brings that emission near 1 (float, which the
+  // texels are held in, could not carry it).
+  double unit() const;
   const std::vector<std::string>& warnings() const;
   // The state before any shot: B = unshot = E.
   PixmapState initial_state() const;

@@ -85,6 +85,12 @@ void check_material(const Material& m) {
     if (!std::isfinite(e) || e < 0.0 || e > kMaxEmission)
       throw InputError(at(m.emission_line) + "emission (Ke) " + fmt(m.emission) + " must be finite, >= 0 and at most " +
                        format_number(kMaxEmission));
+    // A subnormal number keeps only some of its digits (5e-324 none but
+    // one), and the light it gives is no longer what the file says.
+    if (e > 0.0 && e < std::numeric_limits<double>::min())
+      throw InputError(at(m.emission_line) + "emission (Ke) " + fmt(m.emission) + " is below " +
+                       format_number(std::numeric_limits<double>::min()) +
+                       ", the smallest number carried at full precision: give 0 or at least that");
   }
 }
 

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <deque>
+#include <new>
 #include <set>
 
 namespace radmesh {
@@ -160,8 +161,10 @@ std::shared_ptr<const MethodState> read_method_state(const Method& method, const
   return method.read_state(out_dir);
 }
 
-MethodResult run_method(const Method& method, const Scene& scene, const Mesh& mesh, const SolveOptions& options,
-                        const MethodOptions& method_options, const SolveCallbacks& callbacks) {
+namespace {
+
+MethodResult solve_and_field(const Method& method, const Scene& scene, const Mesh& mesh, const SolveOptions& options,
+                             const MethodOptions& method_options, const SolveCallbacks& callbacks) {
   check_solve_options(options);
   if (callbacks.resume) check_resumable(method);
   const auto start = std::chrono::steady_clock::now();
@@ -193,6 +196,23 @@ MethodResult run_method(const Method& method, const Scene& scene, const Mesh& me
   r.warnings.insert(r.warnings.end(), r.solution.stats.warnings.begin(), r.solution.stats.warnings.end());
   if (const std::string w = unlit_warning(scene, r); !w.empty()) r.warnings.push_back(w);
   return r;
+}
+
+}  // namespace
+
+MethodResult run_method(const Method& method, const Scene& scene, const Mesh& mesh, const SolveOptions& options,
+                        const MethodOptions& method_options, const SolveCallbacks& callbacks) {
+  // What the memory limit counts is refused with its own message before it
+  // is allocated; an allocation the system refuses beyond that is said
+  // here, not left to surface as an internal error.
+  try {
+    return solve_and_field(method, scene, mesh, options, method_options, callbacks);
+  } catch (const std::bad_alloc&) {
+    throw NumericalError(scene.source + ": out of memory: the system refused an allocation the " + method.name +
+                             " method did not count; lower max_memory (its checks then refuse the run before it "
+                             "allocates) or the options that size the run",
+                         {"max_memory"});
+  }
 }
 
 MethodResult run_method(const Method& method, const Scene& scene, const Mesh& mesh, const SolveOptions& options,

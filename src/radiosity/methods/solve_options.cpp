@@ -3,8 +3,10 @@
 
 #include "radmesh/solve.h"
 
+#include <sys/resource.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdio>
 
 namespace radmesh {
@@ -62,7 +64,17 @@ double physical_memory_bytes() {
 }  // namespace
 
 double memory_limit_bytes(const SolveOptions& options) {
-  return options.max_memory > 0.0 ? options.max_memory * 1024.0 * 1024.0 * 1024.0 : 0.5 * physical_memory_bytes();
+  double limit = options.max_memory > 0.0 ? options.max_memory * 1024.0 * 1024.0 * 1024.0 : 0.5 * physical_memory_bytes();
+  // Under a limit on the process's address space or data (ulimit -v, -d)
+  // an allocation past it fails whatever the machine holds: half of it is
+  // what the run's counted structures may take (the libraries, the
+  // allocator's slack and what is not counted take the rest).
+  for (const int resource : {RLIMIT_AS, RLIMIT_DATA}) {
+    rlimit r{};
+    if (getrlimit(resource, &r) == 0 && r.rlim_cur != RLIM_INFINITY)
+      limit = std::min(limit, 0.5 * static_cast<double>(r.rlim_cur));
+  }
+  return limit;
 }
 
 double resident_memory_bytes() {

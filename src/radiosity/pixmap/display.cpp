@@ -146,14 +146,15 @@ void PixmapSolver::display_mesh(const std::vector<std::vector<float>>& texels, M
   auto value = [&](long long g) {
     const int k = m.pixmap_of_global(g);
     const size_t i = static_cast<size_t>(g - L.pixmaps[k].first) * 3;
-    return Rgb(texels[k][i], texels[k][i + 1], texels[k][i + 2]);
+    return Rgb(texels[k][i], texels[k][i + 1], texels[k][i + 2]) * m.unit;
   };
   for (size_t t = 0; t < mesh.triangles.size(); ++t) {
     const long long g = m.display_texel[t];
     // Inside a closed object: no light, but what an emitter emits there
     // (power_enclosed).
     if (m.display_dark[static_cast<size_t>(mesh.triangles[t][0])])
-      solution.element[t] = m.emission[static_cast<size_t>(m.display_pixmap[static_cast<size_t>(mesh.triangles[t][0])])];
+      solution.element[t] =
+          m.emission[static_cast<size_t>(m.display_pixmap[static_cast<size_t>(mesh.triangles[t][0])])] * m.unit;
     if (g < 0) continue;
     solution.element[t] = value(g);
     texel_of_triangle[t] = static_cast<int>(g - L.pixmaps[m.pixmap_of_global(g)].first);
@@ -166,7 +167,7 @@ void PixmapSolver::display_mesh(const std::vector<std::vector<float>>& texels, M
   nodal.radiosity.assign(mesh.positions.size(), Rgb(0.0));
   for (size_t v = 0; v < mesh.positions.size(); ++v) {
     if (m.display_dark[v]) {
-      nodal.radiosity[v] = m.emission[static_cast<size_t>(m.display_pixmap[v])];
+      nodal.radiosity[v] = m.emission[static_cast<size_t>(m.display_pixmap[v])] * m.unit;
       continue;
     }
     const int k = m.display_pixmap[v];
@@ -188,14 +189,14 @@ void PixmapSolver::display_mesh(const std::vector<std::vector<float>>& texels, M
         wsum += w;
       }
     if (wsum > 1e-12) {
-      nodal.radiosity[v] = sum / wsum;
+      nodal.radiosity[v] = sum / wsum * m.unit;
     } else {
       // A vertex with no covered texel centre around it with weight: the
       // texel it lies in (clamped to the grid).
       const int i = std::clamp(static_cast<int>(std::floor(p.s)), 0, pm.width - 1);
       const int j = std::clamp(static_cast<int>(std::floor(p.t)), 0, pm.height - 1);
       const int o = pm.owner[static_cast<size_t>(j) * pm.width + i];
-      if (o >= 0) nodal.radiosity[v] = Rgb(texels[k][o * 3], texels[k][o * 3 + 1], texels[k][o * 3 + 2]);
+      if (o >= 0) nodal.radiosity[v] = Rgb(texels[k][o * 3], texels[k][o * 3 + 1], texels[k][o * 3 + 2]) * m.unit;
     }
   }
 }

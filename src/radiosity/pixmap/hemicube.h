@@ -41,6 +41,11 @@ public:
   explicit Hemicube(int resolution);
   // InputError naming --hemicube-res unless `resolution` is even and in [2, 16384].
   static void check_resolution(int resolution);
+  // The bytes a hemicube of `resolution` holds: 3 x resolution^2 pixels,
+  // each an id, a depth and a delta form factor.
+  static double bytes(int resolution) {
+    return 3.0 * static_cast<double>(resolution) * resolution * (sizeof(int) + 2 * sizeof(double));
+  }
 
   int resolution() const { return resolution_; }
 

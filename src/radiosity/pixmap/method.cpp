@@ -33,10 +33,10 @@ MethodResult result_of(const std::shared_ptr<const PixmapSolver>& solver, const 
   SolveStats& st = r.solution.stats;
   st.elements = L.covered;
   st.convex_enclosure = convex;
-  st.power_absorbed = state.power_absorbed;
+  st.power_absorbed = state.power_absorbed * solver->unit();
   // What emitting parts inside closed objects emit goes into the objects:
   // emitted and escaped, as the other methods count it.
-  st.power_escaped = state.power_escaped + solver->power_enclosed();
+  st.power_escaped = state.power_escaped * solver->unit() + solver->power_enclosed();
   st.power_emitted = solver->power_emitted() + solver->power_enclosed();
   st.warnings = solver->warnings();
   // Its state (to resume from) and its lightmaps, beside radiosity.vtu.
@@ -126,7 +126,9 @@ Method make_pixmap_method() {
                   count("rows_cached", static_cast<double>(run.rows_cached)),
                   count("pixels_spread", static_cast<double>(run.pixels_spread)),
                   measure("unshot_fraction", run.unshot_fraction),
-                  Counter{"ambient", {run.ambient.x, run.ambient.y, run.ambient.z}, "", true, false},
+                  Counter{"ambient",
+                          {run.ambient.x * solver->unit(), run.ambient.y * solver->unit(), run.ambient.z * solver->unit()},
+                          "", true, false},
                   count("interrupted", run.interrupted ? 1.0 : 0.0)};
     r.seconds = {{"hemicubes", run.seconds_hemicubes},
                  {"shots", run.seconds_shots},

@@ -17,7 +17,9 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
+#include <sstream>
 
 namespace radmesh {
 
@@ -474,6 +476,17 @@ void PixmapSolver::Impl::RowReceiver::collect(const std::vector<char>& near_texe
 // source texels: the faces of a box that a lamp crosses receive, along the
 // lamp, from the lamp's texels that the box's outline cuts, where F varies
 // fastest, and a few points on those would give them too little light.
+void PixmapSolver::Impl::refuse_row(int s) const {
+  const Shooter& sh = layout.shooters[s];
+  std::ostringstream m;
+  m.precision(3);
+  m << scene.source << ": the near field of a block of " << sh.texels.size() << " texels needs more than the "
+    << row_budget / (1u << 30) << " GiB of the " << memory_limit / (1u << 30)
+    << " GiB allowed that the texels and the hemicube leave; use a smaller block or a larger texel_size, or raise "
+       "max_memory";
+  throw NumericalError(m.str(), {"block", "texel_size", "max_memory"});
+}
+
 Row PixmapSolver::Impl::compute_row(int s, Hemicube& cube, long long& spread_pixels) const {
   const Shooter& sh = layout.shooters[s];
   const Pixmap& own = layout.pixmaps[sh.pixmap];
@@ -485,6 +498,10 @@ Row PixmapSolver::Impl::compute_row(int s, Hemicube& cube, long long& spread_pix
   const std::vector<SourcePolygon> sources = source_polygons(sh);
   const double reach = near_reach(sh, own);
   const bool sky = sees_sky(cube);
+  // The near field's factors, one per (near texel, source texel), grow with
+  // the block's area and the texels in reach: counted before they are
+  // made, against what the texels and the hemicube leave of the memory.
+  std::atomic<double> near_bytes{0.0};
   tbb::parallel_for(0, npm, [&](int k) {
     if (k == sh.pixmap) return;
     const Pixmap& pm = layout.pixmaps[k];
@@ -503,6 +520,8 @@ Row PixmapSolver::Impl::compute_row(int s, Hemicube& cube, long long& spread_pix
     if (narrow) receiver.take_narrow(reach, sky, sources);
     std::vector<char> near_texel;
     if (reach > 0.0 && !narrow) near_texel = receiver.near_texels(reach);
+    const double count = static_cast<double>(std::count(near_texel.begin(), near_texel.end(), 1));
+    if (near_bytes.fetch_add(count * static_cast<double>(nsrc) * sizeof(float)) > row_budget) refuse_row(s);
     receiver.collect(near_texel, sources);
   });
   return join_parts(parts, nsrc, spread_pixels);

@@ -14,6 +14,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <sstream>
 
 namespace radmesh {
 
@@ -59,7 +60,18 @@ PixmapSolver::PixmapSolver(const Scene& input, const PixmapOptions& options, con
   const Scene& scene = m.scene;
   internal::check_options(options);
   m.coarse = internal::outline_triangulation(scene);
-  const double memory = memory_limit_bytes(solve);
+  const double limit = memory_limit_bytes(solve);
+  // The hemicube's buffers come first: they grow with the square of its
+  // resolution (16 GB at the largest), whatever the scene.
+  const double cube_bytes = Hemicube::bytes(options.hemicube_res);
+  if (cube_bytes > limit) {
+    std::ostringstream m;
+    m.precision(3);
+    m << scene.source << ": a hemicube of " << options.hemicube_res << " pixels needs " << cube_bytes / (1u << 30)
+      << " GiB, more than the " << limit / (1u << 30) << " GiB allowed; use a smaller hemicube_res or raise max_memory";
+    throw NumericalError(m.str(), {"hemicube_res", "max_memory"});
+  }
+  const double memory = limit - cube_bytes;
   m.vis = std::make_unique<Visibility>(scene);
   m.layout = internal::layout_of(scene, m.coarse, options, memory, m.vis.get());
   if (m.layout.texels >= (1LL << 32)) throw NumericalError(scene.source + ": more than 2^32 texels; use a larger texel_size", {"texel_size"});
@@ -72,9 +84,16 @@ PixmapSolver::PixmapSolver(const Scene& input, const PixmapOptions& options, con
     m.polygons.push_back({polygons.positions[tri[0]], polygons.positions[tri[1]], polygons.positions[tri[2]],
                           scene.patches[p].normal, p});
   }
+  double top = 0.0;
+  for (const Material& mat : scene.materials) top = std::max(top, max3(mat.emission));
+  if (top > 0.0 && (top > 0x1p60 || top < 0x1p-60)) {
+    int exponent = 0;
+    std::frexp(top, &exponent);
+    m.unit = std::ldexp(1.0, exponent);
+  }
   for (const Pixmap& pm : m.layout.pixmaps) {
     m.rho.push_back(scene.materials[pm.material].reflectance);
-    m.emission.push_back(scene.materials[pm.material].emission);
+    m.emission.push_back(scene.materials[pm.material].emission / m.unit);
   }
   for (size_t k = 0; k < m.layout.pixmaps.size(); ++k) {
     const Pixmap& pm = m.layout.pixmaps[k];
@@ -91,6 +110,7 @@ PixmapSolver::PixmapSolver(const Scene& input, const PixmapOptions& options, con
   for (size_t s = 0; s < m.layout.shooters.size(); ++s)
     for (int t : m.layout.shooters[s].texels) m.shooter_of[m.global(m.layout.shooters[s].pixmap, t)] = static_cast<int>(s);
   m.row_budget = std::max(0.0, memory - internal::kBytesPerTexel * static_cast<double>(m.layout.texels));
+  m.memory_limit = limit;
   m.build_display();
 }
 
@@ -99,7 +119,8 @@ PixmapSolver::~PixmapSolver() = default;
 const Scene& PixmapSolver::scene() const { return impl_->scene; }
 const PixmapLayout& PixmapSolver::layout() const { return impl_->layout; }
 
-Rgb PixmapSolver::power_emitted() const { return impl_->power_emitted; }
+Rgb PixmapSolver::power_emitted() const { return impl_->power_emitted * impl_->unit; }
+double PixmapSolver::unit() const { return impl_->unit; }
 Rgb PixmapSolver::power_enclosed() const { return impl_->power_enclosed; }
 const std::vector<std::string>& PixmapSolver::warnings() const { return impl_->warnings; }
 

@@ -59,10 +59,18 @@ struct PixmapSolver::Impl {
   Mesh coarse;
   PixmapLayout layout;
   std::vector<HemicubeTriangle> polygons;
-  std::vector<Rgb> rho, emission;           // per pixmap
+  // The texels hold radiosity in float, in units of `unit` (scene units per
+  // solver unit): 1, or where the largest emission lies outside [2^-60,
+  // 2^60] the power of two that brings it near 1. Radiosity is linear in
+  // the emission and a power of two scales exactly, so every emission the
+  // scene accepts is carried in float's range, and a scene inside the
+  // window is solved exactly as it is.
+  double unit = 1.0;
+  std::vector<Rgb> rho, emission;           // per pixmap; emission in solver units
   std::vector<int> shooter_of;              // per global texel: its shooter (-1: none)
-  double row_budget = 0.0;                  // bytes the cached rows may take
-  Rgb power_emitted{0.0};                   // sum of E x area over the texels
+  double row_budget = 0.0;                  // bytes the rows may take: the cached ones, or one in the making
+  double memory_limit = 0.0;                // SolveOptions::max_memory in bytes (for messages)
+  Rgb power_emitted{0.0};                   // sum of E x area over the texels, solver units
   Rgb power_enclosed{0.0};                  // E x area of the emitting triangles inside closed objects
   std::vector<std::string> warnings;        // one per emitting patch with such triangles
   // The display mesh: geometry built once.
@@ -111,6 +119,8 @@ struct PixmapSolver::Impl {
   // The row of shooter s, its hemicube rendered into `cube`; adds the pixels
   // spread over more than one texel to `spread_pixels` (rows.cpp).
   internal::Row compute_row(int s, Hemicube& cube, long long& spread_pixels) const;
+  // NumericalError: shooter s's row would pass row_budget.
+  [[noreturn]] void refuse_row(int s) const;
   // What one receiving pixmap takes of a row (rows.cpp).
   struct RowReceiver;
 

@@ -8,6 +8,8 @@
 
 #include <embree3/rtcore.h>
 
+#include <algorithm>
+#include <cmath>
 #include <limits>
 #include <string>
 #include <vector>
@@ -51,7 +53,15 @@ struct Visibility::Impl {
   RTCDevice device = nullptr;
   RTCScene scene = nullptr;
   std::vector<int> prim_patch;
-  Vec3 origin{0.0};  // geometry is stored relative to this point (float precision)
+  // Embree traces in float: geometry and rays are stored relative to
+  // `origin` and scaled by `scale`, the power of two that brings the scene's
+  // extent near 1, so that its products of coordinates (a cross product
+  // dotted with a third vector: a length cubed) stay far inside float's
+  // range whatever the scene's unit. A power of two scales exactly, so
+  // rounding to float and every decision are the same as at the scene's own
+  // size where that is in range.
+  Vec3 origin{0.0};
+  double scale = 1.0;
   double lift = 0.0;  // how far visible_off_surfaces lifts a segment's ends off their surfaces
   double reach = 0.0;         // of ray_end's rays: 4 x the scene's diagonal
   std::vector<Vec3> normals;  // per patch
@@ -75,6 +85,11 @@ Visibility::Visibility(const Scene& scene) : impl_(std::make_unique<Impl>()) {
     hi = glm::max(hi, p);
   }
   m.origin = mesh.positions.empty() ? Vec3(0.0) : 0.5 * (lo + hi);
+  if (!mesh.positions.empty()) {
+    int exponent = 0;
+    std::frexp(std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z}), &exponent);
+    m.scale = std::ldexp(1.0, -exponent);
+  }
   // About 17 float steps at the scene's edge: the lifted end lies off its
   // surface (and off a patch coinciding with it, as a two-sided panel's
   // back) in the float coordinates Embree traces in.
@@ -92,7 +107,7 @@ Visibility::Visibility(const Scene& scene) : impl_(std::make_unique<Impl>()) {
       geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), mesh.triangles.size()));
   if (!verts || !idx) throw NumericalError("Embree: cannot allocate geometry buffers");
   for (size_t i = 0; i < mesh.positions.size(); ++i) {
-    const Vec3 p = mesh.positions[i] - m.origin;
+    const Vec3 p = (mesh.positions[i] - m.origin) * m.scale;
     verts[3 * i] = static_cast<float>(p.x);
     verts[3 * i + 1] = static_cast<float>(p.y);
     verts[3 * i + 2] = static_cast<float>(p.z);
@@ -114,10 +129,12 @@ Visibility::~Visibility() = default;
 
 namespace {
 
-// A ray from `from` (relative to `origin`) along `direction` over the
-// parameter range [tnear, tfar], and a context ignoring two patches.
-RTCRay make_ray(const Vec3& from, const Vec3& origin, const Vec3& direction, float tnear, float tfar) {
-  const Vec3 o = from - origin;
+// A ray from `from` along `direction` over the parameter range [tnear,
+// tfar], both taken to Embree's frame (relative to `origin`, times `scale`:
+// the parameter keeps its meaning), and a context ignoring two patches.
+RTCRay make_ray(const Vec3& from, const Vec3& origin, double scale, Vec3 direction, float tnear, float tfar) {
+  const Vec3 o = (from - origin) * scale;
+  direction *= scale;
   RTCRay ray;
   ray.org_x = static_cast<float>(o.x);
   ray.org_y = static_cast<float>(o.y);
@@ -170,24 +187,24 @@ void trace_rays(const RTCScene scene, QueryContext& ctx, size_t n, MakeRay&& ray
 }
 
 // Open segments (from[i], to[i]), the first and last 1e-6 of each left out.
-void trace_segments(const RTCScene scene, const Vec3& origin, QueryContext& ctx, const Vec3* from, const Vec3* to,
-                    size_t n, unsigned char* seen) {
+void trace_segments(const RTCScene scene, const Vec3& origin, double scale, QueryContext& ctx, const Vec3* from,
+                    const Vec3* to, size_t n, unsigned char* seen) {
   trace_rays(
-      scene, ctx, n, [&](size_t i) { return make_ray(from[i], origin, to[i] - from[i], 1e-6f, 1.0f - 1e-6f); }, seen);
+      scene, ctx, n, [&](size_t i) { return make_ray(from[i], origin, scale, to[i] - from[i], 1e-6f, 1.0f - 1e-6f); }, seen);
 }
 
 }  // namespace
 
 void Visibility::visible(const Vec3* from, const Vec3* to, size_t n, int ignore_a, int ignore_b, unsigned char* seen) const {
   QueryContext ctx = make_context(impl_->prim_patch, ignore_a, ignore_b);
-  trace_segments(impl_->scene, impl_->origin, ctx, from, to, n, seen);
+  trace_segments(impl_->scene, impl_->origin, impl_->scale, ctx, from, to, n, seen);
 }
 
 void Visibility::visible_each(const Vec3* from, const Vec3* to, size_t n, int ignore_a, const int* ignore_each,
                               unsigned char* seen) const {
   QueryContext ctx = make_context(impl_->prim_patch, ignore_a, -1);
   ctx.ignore_each = ignore_each;
-  trace_segments(impl_->scene, impl_->origin, ctx, from, to, n, seen);
+  trace_segments(impl_->scene, impl_->origin, impl_->scale, ctx, from, to, n, seen);
 }
 
 bool Visibility::visible_off_surfaces(const Vec3& from, const Vec3& from_normal, const Vec3& to, const Vec3& to_normal,
@@ -206,7 +223,7 @@ void Visibility::visible_off_surfaces(const Vec3* from, const Vec3& from_normal,
       m.scene, ctx, n,
       [&](size_t i) {
         const Vec3 a = from[i] + up_from;
-        return make_ray(a, m.origin, to[i] + up_to - a, 0.0f, 1.0f);
+        return make_ray(a, m.origin, m.scale, to[i] + up_to - a, 0.0f, 1.0f);
       },
       seen);
 }
@@ -222,7 +239,7 @@ void Visibility::visible_off_surfaces_each(const Vec3* from, const Vec3* from_no
       m.scene, ctx, n,
       [&](size_t i) {
         const Vec3 a = from[i] + m.lift * from_normal[i];
-        return make_ray(a, m.origin, to[i] + m.lift * to_normal[i] - a, 0.0f, 1.0f);
+        return make_ray(a, m.origin, m.scale, to[i] + m.lift * to_normal[i] - a, 0.0f, 1.0f);
       },
       seen);
 }
@@ -232,7 +249,7 @@ int Visibility::first_hit(const Vec3& from, const Vec3& direction, double reach,
   QueryContext ctx = make_context(m.prim_patch, ignore, -1);
   RTCRayHit rh;
   // Not the surface the ray leaves (nor one lying on it).
-  rh.ray = make_ray(from, m.origin, direction, static_cast<float>(1e-7 * reach), static_cast<float>(reach));
+  rh.ray = make_ray(from, m.origin, m.scale, direction, static_cast<float>(1e-7 * reach), static_cast<float>(reach));
   rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
   rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
   rtcIntersect1(m.scene, &ctx.base, &rh);
