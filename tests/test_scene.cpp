@@ -197,6 +197,18 @@ TEST(Scene, ASubnormalEmissionIsRefusedNamingTheMaterialAndTheLimit) {
       build_scene(faces, {test::material("lamp", Rgb(0.5), Rgb(std::numeric_limits<double>::min()))}, "room"));
 }
 
+TEST(Scene, AnObjectTheWeldLeavesNothingOfIsNamedWithItsExtent) {
+  // A room 4 across and a box 1e6 across moved 1e20 away: the scene spans
+  // 1e20, points within 1e-9 of that weld, and the whole room vanished
+  // ("the scene has no faces with area", naming nothing).
+  std::vector<RawFace> faces = test::box_faces("room", 0, Vec3(0.0), Vec3(4.0), false);
+  const std::vector<RawFace> far = test::box_faces("far", 0, Vec3(1e20, 0, 0), Vec3(1e20 + 1e6, 1e6, 1e6));
+  faces.insert(faces.end(), far.begin(), far.end());
+  const test::Thrown t =
+      test::thrown<InputError>([&] { build_scene(faces, {test::material("grey", Rgb(0.5), Rgb(1.0))}, "far"); });
+  EXPECT_TRUE(t.says({"object 'room'", "6 faces", "1e+11", "1e+20"}));
+}
+
 TEST(Scene, FacesWithoutAnObjectNameAreNamedAfterTheFile) {
   // No o or g line: the patch takes the file's stem (it was named '').
   const test::TempDir dir;

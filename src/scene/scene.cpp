@@ -325,6 +325,18 @@ public:
     auto at = [&f] { return where(f.file, f.line) + "face '" + f.name + "': "; };
     Vec3 given(0.0);
     for (const Vec3& p : f.points) given += p / static_cast<double>(f.points.size());
+    auto [slot, fresh] = objects_.try_emplace(f.name, object_order_.size());
+    if (fresh) {
+      object_order_.push_back({f.name, ObjectFaces{}});
+      object_order_.back().second.file = f.file;
+      object_order_.back().second.line = f.line;
+    }
+    ObjectFaces& object = object_order_[slot->second].second;
+    for (const Vec3& p : f.points) {
+      object.lo = glm::min(object.lo, p);
+      object.hi = glm::max(object.hi, p);
+    }
+    const size_t patches_before = scene_.patches.size();
     // Dropped, counted, and said for the first 5.
     auto drop_as_zero_area = [&](const std::string& why) {
       if (++scene_.report.zero_area_faces_dropped <= 5)
@@ -336,6 +348,7 @@ public:
       // Distinct as given, welded into fewer than 3: thinner than the weld
       // tolerance, a zero-area face at the scene's resolution.
       drop_as_zero_area("has its vertices welded into " + std::to_string(kept) + " within " + weld_text_);
+      ++object.welded;
       return;
     }
     if (kept < 3) {
@@ -369,6 +382,7 @@ public:
     // it has no inside, and meshing it found no triangle.
     if (2.0 * area / diam < welder_.tolerance()) {
       drop_as_zero_area("is " + format_number(2.0 * area / diam) + " wide, below " + weld_text_);
+      ++object.welded;
       return;
     }
     const Vec3 n = newell / (2.0 * area);
@@ -389,6 +403,7 @@ public:
         throw InputError(at() + "is not planar (deviation " + format_number(deviation) +
                          ") and has holes; split it into planar faces");
       split_into_triangles(f, patch, outer, given, deviation, diam);
+      object.kept += scene_.patches.size() > patches_before ? 1 : 0;
       return;
     }
 
@@ -416,6 +431,25 @@ public:
                        "; check the order of the face's vertices (radmesh needs faces whose edges do not cross)");
     scene_.patches.push_back(std::move(patch));
     raw_centroid_.push_back(given);
+    ++object.kept;
+  }
+
+  // InputError for an object (faces of one name) the weld left nothing of
+  // that is itself small at the scene's resolution (under 1000 weld
+  // tolerances across; a long sliver is dropped as zero-area, with a
+  // warning): a scene spanning far more than its objects (one moved 1e20
+  // away) makes every other object a point.
+  void refuse_vanished_objects(const std::string& source) const {
+    for (const auto& [name, o] : object_order_) {
+      if (o.kept > 0 || o.welded == 0 || !(glm::length(o.hi - o.lo) < 1e3 * welder_.tolerance())) continue;
+      throw InputError(where(o.file, o.line) + "object '" + name + "': " +
+                       (o.welded == 1 ? std::string("its face is") : "all its " + std::to_string(o.welded) + " faces are") +
+                       " finer than the scene's resolution: it is " + format_number(glm::length(o.hi - o.lo)) +
+                       " across, and points closer than " + format_number(welder_.tolerance()) +
+                       " (1e-9 of the scene's size) are one; the scene (" + source + ") spans " +
+                       format_number(welder_.tolerance() / options_.weld_tolerance) +
+                       ": bring its parts closer together, or solve them apart");
+    }
   }
 
 private:
@@ -460,6 +494,16 @@ private:
   Welder welder_;
   std::string weld_text_;
   std::vector<Vec3> raw_centroid_;
+  // Per object name: its faces kept and dropped by the weld, their extent,
+  // where it starts.
+  struct ObjectFaces {
+    int kept = 0, welded = 0;
+    Vec3 lo{std::numeric_limits<double>::infinity()}, hi{-std::numeric_limits<double>::infinity()};
+    std::string file;
+    int line = 0;
+  };
+  std::vector<std::pair<std::string, ObjectFaces>> object_order_;  // in the order of their first faces
+  std::unordered_map<std::string, size_t> objects_;                  // name -> its place in object_order_
 };
 
 // Two faces on the same vertices facing the same way (a face line written
@@ -561,6 +605,7 @@ Scene build_scene(const std::vector<RawFace>& faces, std::vector<Material> mater
   const double diag = check_faces(faces, scene);
   PatchMaker maker(scene, options, diag);
   for (const RawFace& f : faces) maker.add(f);
+  maker.refuse_vanished_objects(source);
   refuse_coincident_patches(scene, maker.raw_centroid(), options, diag);
   cut_out_coplanar_faces(scene, source, options);
 
