@@ -430,7 +430,7 @@ PixmapLayout layout_of(const Scene& scene, const Mesh& coarse, const PixmapOptio
   const std::vector<std::vector<std::pair<Vec3, Vec3>>> contact_world = contact_lines(coarse, L);
   for (int t = 0; t < coarse.triangle_count(); ++t) triangles_of[L.pixmap_of_patch[coarse.patch[t]]].push_back(t);
   const std::unordered_map<uint64_t, int> pixmap_of_edge = pixmaps_of_edges(coarse, L);
-  double bytes = 0.0;
+  double bytes = Hemicube::bytes(options.hemicube_res);  // the solver's hemicube comes out of the same limit
   for (size_t k = 0; k < L.pixmaps.size(); ++k) {
     Pixmap& pm = L.pixmaps[k];
     set_frame(pm, scene, L.texel_size, options.max_texels);

@@ -71,9 +71,9 @@ PixmapSolver::PixmapSolver(const Scene& input, const PixmapOptions& options, con
       << " GiB, more than the " << limit / (1u << 30) << " GiB allowed; use a smaller hemicube_res or raise max_memory";
     throw NumericalError(m.str(), {"hemicube_res", "max_memory"});
   }
-  const double memory = limit - cube_bytes;
+  const double memory = limit - cube_bytes;  // what the texels and the rows may take
   m.vis = std::make_unique<Visibility>(scene);
-  m.layout = internal::layout_of(scene, m.coarse, options, memory, m.vis.get());
+  m.layout = internal::layout_of(scene, m.coarse, options, limit, m.vis.get());
   if (m.layout.texels >= (1LL << 32)) throw NumericalError(scene.source + ": more than 2^32 texels; use a larger texel_size", {"texel_size"});
   // The hemicube renders whole polygons (their coarsest triangulation): the
   // contact lines would only add triangles.
