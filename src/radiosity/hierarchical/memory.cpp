@@ -22,13 +22,19 @@ void Hierarchical::check_memory() {
                      static_cast<double>(out_.stats.leaf_terms) * sizeof(Term) +
                      ClusterTree::bytes(static_cast<double>(ct_.size()), static_cast<double>(ct_.group_count())) +
                      (ct_.empty() ? 0.0 : bin_bytes(static_cast<double>(ct_.group_count()), out_.tree.root_count()));
-  const double bytes = std::max(held_before_ + own, resident_memory_bytes());
-  if (bytes > limit_)
-    throw NumericalError(scene_.source + ": hierarchical refinement reached " + std::to_string(links) +
-                         " links; with them the process needs " + format_number(bytes / kGiB) + " GiB (its links, leaf terms and clusters " +
-                         format_number(own / kGiB) + "), more than the " + format_number(limit_ / kGiB) +
-                         " GiB allowed; raise epsilon or min_area, or raise max_memory",
-                         {"epsilon", "min_area", "max_memory"});
+  const double counted = held_before_ + own, resident = resident_memory_bytes();
+  if (std::max(counted, resident) <= limit_) return;
+  // Say which figure passed the limit, and what it is made of.
+  const std::string made = links > 0 ? "reached " + std::to_string(links) + " links" : "had stored no link yet";
+  const std::string needs =
+      resident >= counted
+          ? "the process holds " + format_number(resident / kGiB) + " GiB (" + format_number(own / kGiB) +
+                " of it the solver's links, leaf terms and clusters)"
+          : "with them the process needs " + format_number(counted / kGiB) + " GiB (" + format_number(held_before_ / kGiB) +
+                " held when the solve began, " + format_number(own / kGiB) + " for the links, leaf terms and clusters)";
+  throw NumericalError(scene_.source + ": hierarchical refinement " + made + "; " + needs + ", more than the " +
+                           format_number(limit_ / kGiB) + " GiB allowed; raise epsilon or min_area, or raise max_memory",
+                       {"epsilon", "min_area", "max_memory"});
 }
 
 // Between blocks of link pairs and of leaf terms (in_blocks), the
