@@ -290,6 +290,11 @@ private:
   VisibilityEstimator visibility_;
   double min_area_ = 0.0, max_emission_ = 0.0;
   double mean_root_area_ = 0.0;  // the oracle's area weight's reference (pw)
+  // The sending weights (sent_) are areas x form factors in float: they are
+  // kept in units of this power of two near the mean root's area, so that
+  // a scene of any unit stays inside float's range (they only share a
+  // link's transport out, so their unit cancels, exactly).
+  double area_unit_ = 1.0;
   double diagonal_ = 0.0;        // the scene's, once (Scene::diagonal visits every vertex)
   double limit_ = 0.0;           // memory limit, bytes
   double held_before_ = 0.0;     // the process's resident memory when the solver began, bytes

@@ -122,7 +122,8 @@ void Hierarchical::leaf_terms() {
   // in its own empty place in inv_sent_ (no array per link for it).
   for (size_t x = 0; x < n; ++x)
     for (const Term& t : terms_[x])
-      if (inv_sent_[static_cast<size_t>(t.q)] <= 0.0) inv_sent_[static_cast<size_t>(t.q)] -= tri_[x].area * term_f(x, t);
+      if (inv_sent_[static_cast<size_t>(t.q)] <= 0.0)
+        inv_sent_[static_cast<size_t>(t.q)] -= tri_[x].area / area_unit_ * term_f(x, t);
   for (size_t p = 0; p < n; ++p)
     for (const Link& l : links_[p]) {
       if (l.source < 0) continue;  // a cluster sends it
@@ -336,7 +337,7 @@ void Hierarchical::sender_terms(size_t y, const std::vector<int>& out_begin, con
         l.visible < 1.0 && own_rays_matter(max3(rho_[static_cast<size_t>(p)]) * l.f *
                                            max3(glm::abs(B_[y] - B_[static_cast<size_t>(l.source)])));
     const double v = own_rays ? own_visible_fraction(static_cast<int>(y), p, leaf_rays_[y]) : l.visible;
-    const float w = static_cast<float>(t.area * f[k] * v) * node_open_[y];
+    const float w = static_cast<float>(t.area / area_unit_ * f[k] * v) * node_open_[y];
     if (w > 0.0f) sent.push_back({l.slot, w});
   }
   sent.shrink_to_fit();
