@@ -86,6 +86,18 @@ template <class Real>
 std::string assimp_number(std::string_view token, double* meant) {
   std::string why = read_number(token, meant);
   if (!why.empty()) return why;
+  // assimp's parser reads a run of more than 19 digits as 0, saying so in
+  // its log: such a run is refused here without calling it (the log is
+  // global, and another thread's import may be creating or destroying it).
+  size_t run = 0, longest = 0;
+  for (const char c : token) {
+    run = c >= '0' && c <= '9' ? run + 1 : 0;
+    longest = std::max(longest, run);
+  }
+  if (longest > 19)
+    return "has a run of " + std::to_string(longest) +
+           " digits; assimp's parser reads more than 19 in a row as 0 (write it with fewer digits, or in exponent "
+           "notation)";
   char text[kMaxNumberChars + 1];
   std::memcpy(text, token.data(), token.size());
   text[token.size()] = '\0';
