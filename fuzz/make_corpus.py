@@ -112,6 +112,31 @@ def glb():
     return struct.pack("<III", 0x46546C67, 2, 12 + len(body)) + body
 
 
+# fuzz_numbers: a place, a byte (high bit: a run of zeros), then the token's
+# characters as indices into the target's alphabet.
+NUMBER_ALPHABET = "0123456789.eE+-0123456789.e-xXpPnNaAiIfFyY,0"
+NUMBER_PLACES = ["obj_coordinate", "mtl_kd", "ply_float", "ply_double", "off_coordinate", "stl_coordinate",
+                 "json_translate", "probe", "obj_index", "ply_index", "ply_count", "off_index"]
+
+
+def number_seed(place, token, zeros=0):
+    return bytes([NUMBER_PLACES.index(place), (0x80 | zeros) if zeros else 0]) + \
+        bytes(NUMBER_ALPHABET.index(c) for c in token)
+
+
+# fuzz_gltf_nodes: a shape (0 edges, 1 chain, 2 fan, 3 tree) and its bytes.
+def nodes_seed(shape, *values):
+    return bytes([shape, *values])
+
+
+def gltf_with_nodes(nodes, roots):
+    doc, buf = gltf_parts([1, 1, 1])
+    doc["buffers"][0]["uri"] = "data:application/octet-stream;base64," + base64.b64encode(buf).decode()
+    doc["nodes"] = nodes
+    doc["scenes"] = [{"nodes": roots}]
+    return json.dumps(doc).encode()
+
+
 def main():
     if corpus.exists():
         shutil.rmtree(corpus)
@@ -165,6 +190,54 @@ def main():
                (1, "stl_binary", stl_binary()), (2, "off", off()), (3, "gltf", gltf()), (4, "glb", glb())]
     for selector, name, content in formats:
         write("fuzz_assimp_reader", name, bytes([selector]) + content)
+
+    # Hostile files of the reader classes (docs/scenes.md, "File checks"):
+    # node trees deep, wide and cyclic; data past the declared counts;
+    # strides that overlap; a GLB with bytes past its declared length.
+    chain = [{"children": [i + 1]} for i in range(299)] + [{"mesh": 0}]
+    hostile = [(3, "gltf_chain_300_levels", gltf_with_nodes(chain, [0])),
+               (3, "gltf_fan_2000", gltf_with_nodes([{"mesh": 0, "children": list(range(1, 2000))}] +
+                                                     [{} for _ in range(1999)], [0])),
+               (3, "gltf_cycle", gltf_with_nodes([{"children": [1]}, {"mesh": 0, "children": [0]}], [0])),
+               (3, "gltf_two_parents", gltf_with_nodes([{"children": [2]}, {"children": [2]}, {"mesh": 0}], [0, 1])),
+               (2, "off_extra_face", off() + b"3 0 1 2\n"),
+               (2, "off_hex_coordinate", off().replace(b"\n1 0 0\n", b"\n0x1p0 0 0\n")),
+               (0, "ply_ascii_extra_value", ply_ascii().replace(b"\n1 0 0\n", b"\n1 0 0 5\n")),
+               (0, "ply_ascii_long_digits", ply_ascii().replace(b"\n1 0 0\n", b"\n123456789012345678901234e-23 0 0\n")),
+               (1, "stl_ascii_extra_value", stl_ascii().replace(b"vertex 1 0 0\n", b"vertex 1 0 0 7\n", 1))]
+    doc, buf = gltf_parts([1, 1, 1])
+    doc["buffers"][0]["uri"] = "data:application/octet-stream;base64," + base64.b64encode(buf).decode()
+    doc["bufferViews"][0]["byteStride"] = 4
+    hostile.append((3, "gltf_stride_4", json.dumps(doc).encode()))
+    hostile.append((4, "glb_tail", glb() + b"junk"))
+    for selector, name, content in hostile:
+        write("fuzz_assimp_reader", name, bytes([selector]) + content)
+    bom = obj_with_mtl(data / "parallel_plates" / "parallel_plates.obj")
+    write("fuzz_obj_reader", "bom_and_hex", b"\xef\xbb\xbf" + bom.replace(b"\nv ", b"\nv 0x1p0 ", 1))
+    write("fuzz_json_scene", "nul_in_file_name", b'{"objects": [{"file": "room.obj\\u0000.ply"}]}')
+
+    for place, token, zeros in [("obj_coordinate", "1.5", 0), ("obj_coordinate", "0x1p0", 0),
+                                ("obj_coordinate", "0.1e1", 90), ("mtl_kd", "0.5", 0), ("mtl_kd", "+0.5", 0),
+                                ("ply_float", "123456789012345678901234e-23", 0), ("ply_float", "1,5", 0),
+                                ("ply_double", "0.0000000000000000015e18", 0), ("off_coordinate", "15e-1", 0),
+                                ("off_coordinate", "1e99999999999999999999", 0), ("stl_coordinate", "-.5E+1", 0),
+                                ("stl_coordinate", "nan", 0), ("json_translate", "1.25", 0),
+                                ("json_translate", "-0.0e-400", 0), ("probe", "2.5", 0), ("probe", "inf", 0),
+                                ("obj_index", "-1", 0), ("obj_index", "+3", 0), ("ply_index", "002", 0),
+                                ("ply_index", "4294967298", 0), ("ply_count", "3", 0), ("off_index", "-1", 0)]:
+        write("fuzz_numbers", "%s_%s" % (place, re.sub(r"[^0-9a-zA-Z]", "_", token)), number_seed(place, token, zeros))
+
+    for name, content in [("explicit_tree", nodes_seed(0, 5, 0, 1, 4, 0, 2, 4, 1, 3, 5, 2, 4, 9)),
+                          ("explicit_cycle", nodes_seed(0, 3, 0, 1, 5, 1, 2, 4, 2, 0, 4)),
+                          ("explicit_two_parents", nodes_seed(0, 3, 0, 2, 5, 1, 2, 7)),
+                          ("explicit_fraction", nodes_seed(0, 2, 0, 1, 0xF5)),
+                          ("chain_200", nodes_seed(1, 200, 0, 0)),
+                          ("chain_300", nodes_seed(1, 44, 1, 0)),
+                          ("chain_cycle", nodes_seed(1, 10, 0, 1, 3)),
+                          ("fan_500", nodes_seed(2, 0xF4, 1, 2)),
+                          ("fan_past_the_bound", nodes_seed(2, 3, 0, 0xFF)),
+                          ("tree_3_ary", nodes_seed(3, 2, 6))]:
+        write("fuzz_gltf_nodes", name, content)
 
     files.mkdir(parents=True)
     (files / "room.obj").write_bytes((data / "bunny" / "room.obj").read_bytes())

@@ -4,7 +4,8 @@
 #                             target (see ci_runs; at most 120 s each), so that
 #                             the same commit fuzzes the same inputs
 #   scripts/fuzz.sh SECONDS   exploration: a random seed, SECONDS per target
-# Needs the sanitizer build in build-sanitize/ (scripts/sanitize.sh makes it).
+# Needs the sanitizer build in build-sanitize/ (scripts/sanitize.sh makes it;
+# RADMESH_FUZZ_BUILD names another build folder).
 # Each target starts from its seed corpus (fuzz/corpus/<target>/) in a working
 # copy under build-sanitize/fuzz-work/; an input that crashes, hangs (10 s),
 # leaks or breaks a check is written to build-sanitize/fuzz-work/<target>/ and
@@ -15,10 +16,12 @@ root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 seconds="${1:-}"
 # Inputs per target in the CI run: sized so that each target ends well inside
 # -max_total_time on a slow machine (docs/testing.md).
-declare -A ci_runs=([fuzz_obj_reader]=20000 [fuzz_assimp_reader]=5000 [fuzz_json_scene]=40000 [fuzz_mesh]=2000)
-build="$root/build-sanitize"
+declare -A ci_runs=([fuzz_obj_reader]=20000 [fuzz_assimp_reader]=5000 [fuzz_json_scene]=40000 [fuzz_mesh]=2000
+                   [fuzz_gltf_nodes]=2000 [fuzz_numbers]=10000)
+build="${RADMESH_FUZZ_BUILD:-$root/build-sanitize}"
 work="$build/fuzz-work"
-targets=(fuzz_obj_reader fuzz_assimp_reader fuzz_json_scene fuzz_mesh)
+# RADMESH_FUZZ_TARGETS="a b" runs only those targets.
+read -r -a targets <<< "${RADMESH_FUZZ_TARGETS:-fuzz_obj_reader fuzz_assimp_reader fuzz_json_scene fuzz_mesh fuzz_gltf_nodes fuzz_numbers}"
 status=0
 for t in "${targets[@]}"; do
   rm -rf "${work:?}/$t"

@@ -6,6 +6,7 @@
 #include "io/readers/json_parse.h"
 #include "radmesh/obj_reader.h"
 #include "io/readers/scene_sources.h"
+#include "io/readers/text_syntax.h"
 #include "radmesh/errors.h"
 
 #include <nlohmann/json.hpp>
@@ -23,6 +24,7 @@ namespace {
 
 namespace fs = std::filesystem;
 using Json = nlohmann::ordered_json;  // keeps the file's order of materials
+using internal::shown;
 
 std::string dump(const Json& v) {
   std::string s = v.dump();
@@ -46,7 +48,7 @@ struct Context {
         continue;
       std::string list;
       for (const char* a : allowed) list += std::string(list.empty() ? "" : ", ") + "\"" + a + "\"";
-      fail(key.empty() ? "\"" + it.key() + "\"" : key + "." + it.key(), "unknown key; expected " + list);
+      fail(key.empty() ? "\"" + shown(it.key()) + "\"" : key + "." + shown(it.key()), "unknown key; expected " + list);
     }
   }
   Vec3 three(const Json& v, const std::string& key) const {
@@ -139,7 +141,7 @@ public:
     }
     const Material& old = list_[static_cast<size_t>(it->second)];
     if (old.reflectance != m.reflectance || old.emission != m.emission)
-      throw InputError(at + "material '" + m.name + "' is defined twice with different values: " +
+      throw InputError(at + "material '" + shown(m.name) + "' is defined twice with different values: " +
                        where_[static_cast<size_t>(it->second)] + " (reflectance " + fmt(old.reflectance) +
                        ", emission " + fmt(old.emission) + ") and " + where + " (reflectance " + fmt(m.reflectance) +
                        ", emission " + fmt(m.emission) + "); rename one");
@@ -158,7 +160,7 @@ private:
 };
 
 Material parse_material(const Context& ctx, const std::string& name, const Json& m) {
-  const std::string key = "materials." + name;
+  const std::string key = "materials." + shown(name);
   if (!m.is_object()) ctx.fail(key, "expected an object with \"reflectance\" (and \"emission\"), got " + dump(m));
   ctx.only_keys(m, key, {"reflectance", "emission"});
   if (!m.contains("reflectance")) ctx.fail(key, "missing \"reflectance\" (3 numbers in [0, 1))");
@@ -180,7 +182,7 @@ Material parse_material(const Context& ctx, const std::string& name, const Json&
 
 std::string material_where(const Material& m, const std::string& fallback) {
   if (m.file.empty()) return fallback;
-  return where(m.file, m.line) + "material '" + m.name + "'";
+  return where(m.file, m.line) + "material '" + shown(m.name) + "'";
 }
 
 }  // namespace
@@ -207,7 +209,7 @@ Scene read_json_scene(const std::string& path, const SceneOptions& options) {
     const Json& ms = doc["materials"];
     if (!ms.is_object()) ctx.fail("materials", "expected an object of named materials, got " + dump(ms));
     for (auto it = ms.begin(); it != ms.end(); ++it)
-      materials.add(parse_material(ctx, it.key(), it.value()), path + ": materials." + it.key(), path + ": ");
+      materials.add(parse_material(ctx, it.key(), it.value()), path + ": materials." + shown(it.key()), path + ": ");
   }
 
   if (!doc.contains("objects")) throw InputError(path + ": missing \"objects\" (a list of {\"file\": ...})");
@@ -227,6 +229,10 @@ Scene read_json_scene(const std::string& path, const SceneOptions& options) {
     if (!o["file"].is_string() || o["file"].get<std::string>().empty())
       ctx.fail(key + ".file", "expected a file name, got " + dump(o["file"]));
     const std::string name = o["file"].get<std::string>();
+    // A control character, NUL included, is no part of a file name radmesh
+    // opens (the system would read up to a NUL, and a message would end there).
+    if (std::any_of(name.begin(), name.end(), [](char c) { return static_cast<unsigned char>(c) < 0x20; }))
+      ctx.fail(key + ".file", "a file name with a control character: " + dump(o["file"]));
     const fs::path given(name);
     const std::string file = (given.is_absolute() ? given : dir / given).string();
     const std::string ext = lower_extension(name);
@@ -247,7 +253,7 @@ Scene read_json_scene(const std::string& path, const SceneOptions& options) {
         std::string known;
         if (doc.contains("materials"))
           for (auto it = doc["materials"].begin(); it != doc["materials"].end(); ++it)
-            known += std::string(known.empty() ? "" : ", ") + it.key();
+            known += std::string(known.empty() ? "" : ", ") + shown(it.key());
         ctx.fail(key + ".material", "unknown material " + dump(m) + " (\"materials\" defines " +
                                         (known.empty() ? std::string("none") : known) + ")");
       }

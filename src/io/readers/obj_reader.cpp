@@ -1,10 +1,14 @@
 // OBJ + MTL reading. tinyobjloader parses; a line-by-line pre-scan of our own
 // checks every value first, because tinyobjloader reads "nan" or "x" as 0 and
 // keeps no line numbers, and we owe users a message with file:line and value.
+// Numbers are read in radmesh's one syntax (text_syntax.h), and every
+// coordinate tinyobjloader read is compared with what its text means: the
+// value checked is the value used, or the file is refused at that line.
 
 #include "radmesh/obj_reader.h"
 
 #include "io/readers/scene_sources.h"
+#include "io/readers/text_syntax.h"
 #include "radmesh/errors.h"
 
 #include <tiny_obj_loader.h>
@@ -47,19 +51,10 @@ std::vector<std::string> split_ws(const std::string& line, const std::string& pa
   return out;
 }
 
-bool parse_double(const std::string& s, double* v) {
-  if (s.empty()) return false;
-  char* end = nullptr;
-  *v = std::strtod(s.c_str(), &end);
-  return end == s.c_str() + s.size();
-}
-
-bool parse_int(const std::string& s, long* v) {
-  if (s.empty()) return false;
-  char* end = nullptr;
-  *v = std::strtol(s.c_str(), &end, 10);
-  return end == s.c_str() + s.size();
-}
+using internal::read_number;
+using internal::read_whole;
+using internal::reads_as_double;
+using internal::shown;
 
 // A statement of an OBJ or MTL file: its text and the line it starts on.
 // A line ending in a backslash goes on in the next one (the formats'
@@ -79,7 +74,8 @@ struct Lines {
     for (const Line& l : lines) (out += l.text) += '\n';
     return out;
   }
-  bool rewritten = false;  // some statement was changed for tinyobjloader (ObjScan::long_faces)
+  bool rewritten = false;  // some statement was changed for tinyobjloader (ObjScan::long_faces, mtllib)
+  bool byte_order_mark = false;  // the file starts with one (tinyobjloader would read it as part of a statement)
 };
 
 Lines read_lines(const std::string& path) {
@@ -90,6 +86,7 @@ Lines read_lines(const std::string& path) {
   int number = 0;
   for (std::string l; std::getline(in, l);) {
     ++number;
+    if (number == 1) out.byte_order_mark = internal::strip_byte_order_mark(l);
     if (!l.empty() && l.back() == '\r') l.pop_back();
     // A comment does not go on: "# made in C:\models\" would swallow the
     // statement after it.
@@ -127,10 +124,19 @@ void scan_mtl(const std::string& path, std::map<std::string, MtlInfo>* info) {
     if (tok.empty() || tok[0][0] == '#') continue;
     if (tok[0] == "newmtl") {
       if (tok.size() < 2) throw InputError(where(path, ln) + "newmtl without a name");
+      // tinyobjloader names the material with the rest of the line after
+      // "newmtl" and one separator; an OBJ's usemtl names one word.
+      const std::string& text = lines[i].text;
+      std::string rest = text.substr(text.find_first_not_of(" \t") + 7);
+      rest.erase(rest.find_last_not_of(" \t") + 1);
+      if (tok.size() != 2 || rest != tok[1])
+        throw InputError(where(path, ln) + "material name '" + shown(rest) +
+                         "' is not one word after one space: a usemtl names one word (write the name without "
+                         "spaces)");
       current = tok[1];
       const auto old = info->find(current);
       if (old != info->end())
-        throw InputError(where(path, ln) + "material '" + current + "' is defined again (first at " +
+        throw InputError(where(path, ln) + "material '" + shown(current) + "' is defined again (first at " +
                          where(old->second.file, old->second.line) + "one name must mean one material)");
       (*info)[current] = {path, ln, 0, 0, Rgb(0.0), Rgb(0.0)};
     } else if (tok[0] == "Kd" || tok[0] == "Ke") {
@@ -139,10 +145,9 @@ void scan_mtl(const std::string& path, std::map<std::string, MtlInfo>* info) {
         throw InputError(where(path, ln) + tok[0] + " needs 3 numbers (or 1), got '" + lines[i].text + "'");
       Rgb value(0.0);
       for (size_t k = 1; k < tok.size(); ++k) {
-        double v;
-        if (!parse_double(tok[k], &v))
-          throw InputError(where(path, ln) + tok[0] + " value '" + tok[k] + "' is not a number");
-        if (!std::isfinite(v)) throw InputError(where(path, ln) + tok[0] + " value '" + tok[k] + "' is not finite");
+        double v = 0.0;
+        const std::string why = read_number(tok[k], &v);
+        if (!why.empty()) throw InputError(where(path, ln) + tok[0] + " value '" + shown(tok[k]) + "' " + why);
         value[static_cast<int>(k) - 1] = v;
       }
       if (tok.size() == 2) value = Rgb(value.x);  // one value: grey
@@ -172,7 +177,19 @@ struct ObjScan {
   std::map<size_t, std::vector<long>> long_faces;
   std::map<std::string, MtlInfo> materials;
   std::string joined;  // the statements, where some span several lines or were rewritten; else empty
+  // Per v statement: its line, and x, y, z as their text means (compared
+  // with what tinyobjloader read).
+  std::vector<int> vertex_lines;
+  std::vector<double> coordinates;
 };
+
+// The file a material library name refers to, as one spelling ("m.mtl" and
+// "./m.mtl" are one library).
+std::string library_key(const fs::path& file) {
+  std::error_code ec;
+  const fs::path canonical = fs::weakly_canonical(file, ec);
+  return (ec ? file.lexically_normal() : canonical).string();
+}
 
 ObjScan scan_obj(const std::string& path) {
   ObjScan scan;
@@ -181,6 +198,7 @@ ObjScan scan_obj(const std::string& path) {
   const fs::path dir = fs::path(path).parent_path();
   long vertices = 0;
   std::set<std::string> used;
+  std::set<std::string> libraries;
   std::map<std::string, int> used_line;
   for (size_t i = 0; i < lines.size(); ++i) {
     const int ln = lines[i].number;
@@ -194,27 +212,48 @@ ObjScan scan_obj(const std::string& path) {
         throw InputError(where(path, ln) + "vertex needs 3 coordinates (then a weight, or 3 colour values), got '" +
                          lines[i].text + "'");
       for (size_t k = 1; k < tok.size(); ++k) {
-        double v;
-        const std::string what = k <= 3 ? "coordinate '" : "vertex value '";
-        if (!parse_double(tok[k], &v)) throw InputError(where(path, ln) + what + tok[k] + "' is not a number");
-        if (!std::isfinite(v)) throw InputError(where(path, ln) + what + tok[k] + "' is not finite");
+        double v = 0.0;
+        const std::string why = read_number(tok[k], &v);
+        if (!why.empty())
+          throw InputError(where(path, ln) + (k <= 3 ? "coordinate '" : "vertex value '") + shown(tok[k]) + "' " +
+                           why);
+        if (k <= 3) scan.coordinates.push_back(v);
       }
+      scan.vertex_lines.push_back(ln);
       ++vertices;
     } else if (key == "f") {
       if (tok.size() < 4)
-        throw InputError(where(path, ln) + "face needs at least 3 vertices, got '" + lines[i].text + "'");
+        throw InputError(where(path, ln) + "face needs at least 3 vertices, got '" + shown(lines[i].text) + "'");
       const bool long_face = tok.size() - 1 > kTinyobjMostVertices;
       std::vector<long> indices;
       for (size_t k = 1; k < tok.size(); ++k) {
-        const std::string idx = tok[k].substr(0, tok[k].find('/'));
-        long v;
-        if (!parse_int(idx, &v) || v == 0)
-          throw InputError(where(path, ln) + "face vertex index '" + tok[k] + "' is not a valid index");
-        const long abs = v > 0 ? v : vertices + v + 1;
+        // v, v/vt, v//vn or v/vt/vn: each a whole number (tinyobjloader
+        // reads them with atoi, which takes "2x" as 2 and 4294967297 as 1).
+        const std::string& corner = tok[k];
+        std::vector<std::string> parts(1);
+        for (const char c : corner) {
+          if (c == '/')
+            parts.emplace_back();
+          else
+            parts.back().push_back(c);
+        }
+        const std::string& idx = parts[0];
+        long long v = 0;
+        std::string why = read_whole(idx, true, &v);
+        if (why.empty() && v == 0) why = "is 0 (OBJ indices start at 1)";
+        if (why.empty() && parts.size() > 3) why = "has more than 3 parts";
+        for (size_t p = 1; why.empty() && p < parts.size(); ++p) {
+          long long other = 0;
+          if (!(p == 1 && parts.size() == 3 && parts[1].empty())) why = read_whole(parts[p], true, &other);
+          if (why.empty() && other == 0 && !parts[p].empty()) why = "is 0 (OBJ indices start at 1)";
+        }
+        if (!why.empty())
+          throw InputError(where(path, ln) + "face vertex index '" + shown(corner) + "' " + why);
+        const long long abs = v > 0 ? v : vertices + v + 1;
         if (abs < 1 || abs > vertices)
           throw InputError(where(path, ln) + "face vertex index " + idx + " is out of range (" +
                            std::to_string(vertices) + " vertices defined so far)");
-        if (long_face) indices.push_back(abs - 1);
+        if (long_face) indices.push_back(static_cast<long>(abs - 1));
       }
       if (long_face) {
         scan.long_faces[scan.face_lines.size()] = std::move(indices);
@@ -223,6 +262,14 @@ ObjScan scan_obj(const std::string& path) {
       }
       scan.face_lines.push_back(ln);
     } else if (key == "mtllib") {
+      // tinyobjloader loads the first library of a statement that it can
+      // open: each is given to it in a statement of its own.
+      if (tok.size() > 2) {
+        std::string own;
+        for (size_t k = 1; k < tok.size(); ++k) own += (k > 1 ? "\nmtllib " : "mtllib ") + tok[k];
+        lines[i].text = own;
+        read.rewritten = true;
+      }
       for (size_t k = 1; k < tok.size(); ++k) {
         const fs::path mtl = dir / tok[k];
         std::error_code ec;  // a name the system cannot look up (too long, ...) is not found, not an exception
@@ -234,24 +281,28 @@ ObjScan scan_obj(const std::string& path) {
         } catch (const IoError& e) {
           throw InputError(where(path, ln) + "material library '" + tok[k] + "': " + e.what());
         }
-        scan_mtl(mtl.string(), &scan.materials);
+        // A library named again (by another spelling too) is read once.
+        if (libraries.insert(library_key(mtl)).second) scan_mtl(mtl.string(), &scan.materials);
       }
     } else if (key == "usemtl") {
       if (tok.size() < 2) throw InputError(where(path, ln) + "usemtl without a name");
+      if (tok.size() > 2)
+        throw InputError(where(path, ln) + "usemtl names one material, got '" + shown(lines[i].text) +
+                         "' (a material name has no spaces)");
       if (!used.count(tok[1])) used_line[tok[1]] = ln;
       used.insert(tok[1]);
     } else if (key == "vt" || key == "vn" || key == "o" || key == "g" || key == "s" || key == "l" ||
                key == "p") {
       // accepted; texture coordinates, normals, lines and points are not used
     } else {
-      throw InputError(where(path, ln) + "unknown OBJ statement '" + key + "'");
+      throw InputError(where(path, ln) + "unknown OBJ statement '" + shown(key) + "'");
     }
   }
   for (const std::string& name : used)
     if (!scan.materials.count(name))
       throw InputError(where(path, used_line[name]) + "material '" + name +
                        "' is not defined in any mtllib file");
-  if (read.continued || read.rewritten) scan.joined = read.joined();
+  if (read.continued || read.rewritten || read.byte_order_mark) scan.joined = read.joined();
   return scan;
 }
 
@@ -267,8 +318,10 @@ SceneSource read_obj_source(const std::string& path) {
   // or at an absolute path): tinyobjloader's own reader prefixes the OBJ's
   // directory to an absolute path too, and a scene read from another
   // directory lost its materials ("face has no material").
+  // A library named again, by any spelling, is read once (as the scan read it).
   struct LibraryReader : tinyobj::MaterialReader {
     fs::path dir;
+    std::set<std::string> read;
     bool operator()(const std::string& name, std::vector<tinyobj::material_t>* materials,
                     std::map<std::string, int>* names, std::string* warn, std::string* err) override {
       const fs::path file = dir / name;
@@ -276,6 +329,7 @@ SceneSource read_obj_source(const std::string& path) {
         if (err) *err += "cannot open material library " + file.string() + "\n";
         return false;
       }
+      if (!read.insert(library_key(file)).second) return true;
       std::istringstream in(read_lines(file.string()).joined());
       tinyobj::LoadMtl(names, materials, &in, warn, err);
       return true;
@@ -292,6 +346,17 @@ SceneSource read_obj_source(const std::string& path) {
   if (!tinyobj::LoadObj(&attrib, &shapes, &tiny_materials, &warn, &err, &obj, &library, false, false))
     throw InputError(path + ": " + (err.empty() ? "cannot parse" : err));
 
+  // The value checked is the value used: each coordinate tinyobjloader read
+  // (with a parser of its own) is the one its text means.
+  if (attrib.vertices.size() != scan.coordinates.size())
+    throw InputError(path + ": tinyobjloader read " + std::to_string(attrib.vertices.size() / 3) +
+                     " vertices, the file has " + std::to_string(scan.vertex_lines.size()) + " v statements");
+  for (size_t i = 0; i < scan.coordinates.size(); ++i)
+    if (!reads_as_double(attrib.vertices[i], scan.coordinates[i]))
+      throw InputError(where(path, scan.vertex_lines[i / 3]) + "coordinate " + std::string(1, "xyz"[i % 3]) + " = " +
+                       format_number(scan.coordinates[i]) + " reads as " + format_number(attrib.vertices[i]) +
+                       " in the OBJ parser (tinyobjloader); write it with fewer digits");
+
   // Materials in tinyobjloader's order (its faces index them), with the
   // values our own scan read and checked.
   SceneSource source;
@@ -301,7 +366,8 @@ SceneSource read_obj_source(const std::string& path) {
     mat.name = m.name;
     const auto it = scan.materials.find(m.name);
     if (it == scan.materials.end())
-      throw InputError(path + ": material '" + m.name + "' was read but not found by the MTL scan");
+      throw InputError(path + ": material '" + shown(m.name) +
+                       "' was read by tinyobjloader but not by radmesh's scan of the material libraries");
     const MtlInfo& info = it->second;
     mat.file = info.file;
     mat.line = info.line;

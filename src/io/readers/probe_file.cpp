@@ -5,6 +5,7 @@
 
 #include "io/writers/atomic_file.h"
 #include "io/readers/scene_sources.h"
+#include "io/readers/text_syntax.h"
 #include "io/writers/json_file.h"
 #include "radmesh/errors.h"
 
@@ -24,6 +25,7 @@ std::vector<Probe> read_probes(const std::string& path) {
   int ln = 0;
   for (std::string line; std::getline(in, line);) {
     ++ln;
+    if (ln == 1) internal::strip_byte_order_mark(line);
     if (const auto hash = line.find('#'); hash != std::string::npos) line.resize(hash);
     std::istringstream s(line);
     std::vector<std::string> tok;
@@ -35,10 +37,8 @@ std::vector<Probe> read_probes(const std::string& path) {
     double v[6];
     for (int k = 0; k < 6; ++k) {
       const std::string& t = tok[static_cast<size_t>(k) + 1];
-      char* end = nullptr;
-      v[k] = std::strtod(t.c_str(), &end);
-      if (end != t.c_str() + t.size() || !std::isfinite(v[k]))
-        throw InputError(where(path, ln) + "value '" + t + "' is not a finite number");
+      const std::string why = internal::read_number(t, &v[k]);
+      if (!why.empty()) throw InputError(where(path, ln) + "value '" + internal::shown(t) + "' " + why);
     }
     Probe p;
     p.label = tok[0];
