@@ -15,10 +15,11 @@ root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 seconds="${1:-}"
 # Inputs per target in the CI run: sized so that each target ends well inside
 # -max_total_time on a slow machine (docs/testing.md).
-declare -A ci_runs=([fuzz_obj_reader]=20000 [fuzz_assimp_reader]=5000 [fuzz_json_scene]=40000 [fuzz_mesh]=2000)
+declare -A ci_runs=([fuzz_obj_reader]=20000 [fuzz_assimp_reader]=5000 [fuzz_json_scene]=40000 [fuzz_mesh]=2000
+                   [fuzz_writers]=1000)
 build="$root/build-sanitize"
 work="$build/fuzz-work"
-targets=(fuzz_obj_reader fuzz_assimp_reader fuzz_json_scene fuzz_mesh)
+targets=(fuzz_obj_reader fuzz_assimp_reader fuzz_json_scene fuzz_mesh fuzz_writers)
 status=0
 for t in "${targets[@]}"; do
   rm -rf "${work:?}/$t"
