@@ -11,6 +11,7 @@
 #include "radmesh/errors.h"
 #include "radmesh/mesh.h"
 #include "radmesh/method.h"
+#include "radmesh/output_batch.h"
 #include "radmesh/probe.h"
 #include "radmesh/solve.h"
 #include "radmesh/version.h"
@@ -149,20 +150,21 @@ extern "C" void on_interrupt(int) {
 }
 const char* const kQualityOutputs = R"(quality\.csv|quality_(min_angle|aspect_ratio)\.png)";
 
-// Makes the output directory (IoError naming it when that fails) and
-// removes what an earlier run of the same command left there (files whose
-// names match `outputs`) that this run does not write again (round files,
-// links, probes, pictures), so the directory holds one run's results.
-void prepare_output_dir(const std::string& dir, const std::string& outputs, const std::vector<std::string>& will_write) {
-  std::error_code ec;
-  fs::create_directories(dir, ec);
-  if (ec) throw IoError("-o " + dir + ": cannot create the output directory: " + ec.message());
+// Makes the output directory in `batch` (IoError naming it when that
+// fails) and has the batch remove, once committed, what an earlier run of
+// the same command left there (files whose names match `outputs`) that this
+// run does not write again (round files, links, probes, pictures), so the
+// directory holds one run's results. A run that fails leaves it as it was.
+void prepare_output_dir(OutputBatch& batch, const std::string& dir, const std::string& outputs,
+                        const std::vector<std::string>& will_write) {
+  batch.create_directories(dir);
   const std::regex ours(outputs);
+  std::error_code ec;
   for (const fs::directory_entry& e : fs::directory_iterator(dir, ec)) {
     const std::string name = e.path().filename().string();
     if (e.is_regular_file() && std::regex_match(name, ours) &&
         std::find(will_write.begin(), will_write.end(), name) == will_write.end())
-      fs::remove(e.path(), ec);
+      batch.remove_on_commit(e.path().string());
   }
 }
 
@@ -285,7 +287,9 @@ Computed compute(const Params& p, const Method* method, Reporter& rep) {
 }
 
 // The files of a run, once everything is computed: only now is the output
-// directory touched. Returns the paths written, in order.
+// directory touched. All of them are written under temporary names and
+// renamed at the end (OutputBatch): when one cannot be written, none is
+// left and the directory is as it was. Returns the paths written, in order.
 std::vector<std::string> write_outputs(const Params& p, Computed& c, Reporter& rep) {
   const MethodResult* result = c.result ? &*c.result : nullptr;
   const Mesh& out_mesh = c.out_mesh();
@@ -301,7 +305,8 @@ std::vector<std::string> write_outputs(const Params& p, Computed& c, Reporter& r
   if (result && p.png) outputs.push_back("radiosity.png");
   if (result)
     for (const std::string& name : result->files.names) outputs.push_back(name);
-  prepare_output_dir(p.out_dir, run_outputs(), outputs);
+  OutputBatch batch;
+  prepare_output_dir(batch, p.out_dir, run_outputs(), outputs);
 
   rep.begin("write");
   std::vector<std::string> written;
@@ -360,6 +365,7 @@ std::vector<std::string> write_outputs(const Params& p, Computed& c, Reporter& r
     write_patches_csv(csv, c.scene, out_mesh, result ? &result->solution : nullptr);
     written.push_back(csv);
   }
+  batch.commit();
   return written;
 }
 
@@ -428,10 +434,12 @@ int quality(Params& p) {
                 (r.patch < 0 ? std::string("total") : names[static_cast<size_t>(r.patch)]).c_str(), r.triangles,
                 r.min_angle, r.max_angle, r.aspect_p50, r.aspect_p95, r.aspect_max, r.contact_segments,
                 r.d1_segments, r.d2_segments, r.zero_area);
-  prepare_output_dir(p.out_dir, kQualityOutputs, {"quality.csv", "quality_min_angle.png", "quality_aspect_ratio.png"});
+  OutputBatch batch;  // all files or none, as for run
+  prepare_output_dir(batch, p.out_dir, kQualityOutputs,
+                     {"quality.csv", "quality_min_angle.png", "quality_aspect_ratio.png"});
   const std::string csv = (fs::path(p.out_dir) / "quality.csv").string();
   write_quality_csv(csv, names, rows);
-  std::printf("%s\n", csv.c_str());
+  std::vector<std::string> written = {csv};
   // Histograms of every triangle's smallest angle and aspect ratio.
   const std::pair<const char*, const std::vector<double>*> plots[] = {{"min_angle", &q.min_angle},
                                                                       {"aspect_ratio", &q.aspect_ratio}};
@@ -439,10 +447,12 @@ int quality(Params& p) {
     const std::string png = (fs::path(p.out_dir) / ("quality_" + std::string(name) + ".png")).string();
     std::string why;
     if (plot_histogram(png, std::string("radmesh quality: ") + name, name, *values, 30, &why))
-      std::printf("%s\n", png.c_str());
+      written.push_back(png);
     else if (!p.quiet)
       std::fprintf(stderr, "[radmesh] histograms skipped: %s\n", why.c_str());
   }
+  batch.commit();
+  for (const std::string& w : written) std::printf("%s\n", w.c_str());
   return 0;
 }
 
@@ -541,6 +551,9 @@ std::string as_flags(const Error& e) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  // A file-size limit (ulimit -f) reached is a write that fails, reported
+  // like a full disk, not a signal that kills the program mid-write.
+  std::signal(SIGXFSZ, SIG_IGN);
   CLI::App app{"radmesh: exact-geometry meshing and radiosity.\n"
                "Lengths are in the scene file's units; emission (Ke) is radiant exitance, and\n"
                "radiosity comes out in the same unit (per unit area of the file's unit)."};

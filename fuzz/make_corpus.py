@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """Writes the fuzzers' seed corpora (fuzz/corpus/<target>/) and the files the
-JSON-scene target may name (fuzz/files/), from the bundled scenes and small
-hand-made meshes. Run from anywhere; the output is committed."""
+JSON-scene target may name (fuzz/files/), from the bundled scenes, small
+hand-made meshes and, for the writers, fault points. Run from anywhere; the
+output is committed."""
 import base64
 import json
 import pathlib
@@ -238,6 +239,17 @@ def main():
                           ("fan_past_the_bound", nodes_seed(2, 3, 0, 0xFF)),
                           ("tree_3_ary", nodes_seed(3, 2, 6))]:
         write("fuzz_gltf_nodes", name, content)
+
+    # The writers: byte 0 the groups of files (0: all), byte 1 the fault
+    # (0: the disk fills, 1: a rename fails), then where, as a fraction of
+    # 2^32 of the set's bytes (renames); 2^32 - 1: no fault.
+    for fault, kind in ((0, "full"), (1, "rename")):
+        for frac in (0.0, 0.1, 0.5, 0.9, 0.999):
+            write("fuzz_writers", "all_%s_%03d" % (kind, round(1000 * frac)),
+                  bytes([0, fault]) + struct.pack("<I", int(frac * 2 ** 32)))
+    write("fuzz_writers", "all_no_fault", bytes([0, 0]) + struct.pack("<I", 2 ** 32 - 1))
+    for groups, name in ((1, "vtk"), (2, "pixmap"), (4, "tables")):
+        write("fuzz_writers", name + "_full_500", bytes([groups, 0]) + struct.pack("<I", 2 ** 31))
 
     files.mkdir(parents=True)
     (files / "room.obj").write_bytes((data / "bunny" / "room.obj").read_bytes())

@@ -16,12 +16,18 @@
 #include <iterator>
 #include <nlohmann/json.hpp>
 
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
 #include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <functional>
+#include <map>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -613,4 +619,268 @@ TEST(Cli, CtrlCStopsAPixmapRunWhichSavesItsStateAndSaysHowToResume) {
   const PixmapState st = read_pixmap_state(out.string());
   EXPECT_GT(st.shots, 0);
   EXPECT_EQ(read_summary(out)["solver"]["interrupted"], 1);
+}
+
+// ---------------------------------------------------------------- full disks
+
+namespace {
+
+// Every file under `dir` (relative name -> content); empty when there is no `dir`.
+std::map<std::string, std::string> folder(const fs::path& dir) {
+  std::map<std::string, std::string> out;
+  if (!fs::exists(dir)) return out;
+  for (const auto& e : fs::recursive_directory_iterator(dir)) {
+    if (!e.is_regular_file()) continue;
+    std::ifstream in(e.path(), std::ios::binary);
+    out[fs::relative(e.path(), dir).string()] =
+        std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  }
+  return out;
+}
+
+std::string names(const std::map<std::string, std::string>& files) {
+  std::string out;
+  for (const auto& [name, content] : files) out += (out.empty() ? "" : ", ") + name;
+  return "{" + out + "}";
+}
+
+// Runs radmesh as run_cli does, but no file it writes may grow past `limit`
+// bytes (RLIMIT_FSIZE: a write past it fails with EFBIG, as one on a full
+// disk fails with ENOSPC). SIGXFSZ keeps its default action (the program
+// must not be killed by it). glibc fills what the program allocates with a
+// pattern (no thread cache, MALLOC_PERTURB_), so that reading memory never
+// set (VTK's XML writer freed such a pointer on a failed write) fails every
+// time. A status of 128 + N: killed by signal N.
+Result run_cli_limited(const std::string& args, long limit) {
+  const test::TempDir tmp("stderr");
+  const fs::path err = tmp / "stderr.txt";
+  const std::string cmd = "DISPLAY= GLIBC_TUNABLES=glibc.malloc.tcache_count=0 MALLOC_PERTURB_=165 exec " + kExe +
+                          " " + args + " >/dev/null 2>" + err.string();
+  std::fflush(nullptr);
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    const rlimit r{static_cast<rlim_t>(limit), static_cast<rlim_t>(limit)};
+    ::setrlimit(RLIMIT_FSIZE, &r);
+    ::execl("/bin/sh", "sh", "-c", cmd.c_str(), static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  int status = 0;
+  ::waitpid(pid, &status, 0);
+  std::ifstream in(err);
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  return {WIFSIGNALED(status) ? 128 + WTERMSIG(status) : WEXITSTATUS(status), text};
+}
+
+// A flat grid of n x n squares, two triangles each (one patch each), all
+// named `name`, in DIR/grid.obj.
+std::string write_grid(const fs::path& dir, int n, const std::string& name) {
+  fs::create_directories(dir);
+  std::ofstream(dir / "grid.mtl") << "newmtl grey\nKd 0.5 0.5 0.5\nKe 1 1 1\n";
+  std::ofstream obj(dir / "grid.obj");
+  obj << "mtllib grid.mtl\n";
+  for (int j = 0; j <= n; ++j)
+    for (int i = 0; i <= n; ++i) obj << "v " << i << " 0 " << j << "\n";
+  obj << "o " << name << "\nusemtl grey\n";
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      const int a = j * (n + 1) + i + 1, b = a + 1, c = a + n + 2, d = a + n + 1;
+      obj << "f " << a << ' ' << d << ' ' << c << "\nf " << a << ' ' << c << ' ' << b << "\n";
+    }
+  return (dir / "grid.obj").string();
+}
+
+// A run whose largest file is `largest`: its arguments (DATA: the test data,
+// SCENE: the scene `scene` writes into a folder and returns, when given).
+struct FullDiskRun {
+  const char* largest;
+  const char* args;
+  std::function<std::string(const fs::path&)> scene;
+};
+
+std::ostream& operator<<(std::ostream& os, const FullDiskRun& r) { return os << r.largest; }
+
+class CliFullDisk : public ::testing::TestWithParam<FullDiskRun> {};
+
+}  // namespace
+
+// A run with a limit halfway between the size of its largest file and the
+// next largest: that file cannot be written whole, every other one can
+// (the files written before it are complete). The run exits 1 (not killed, by SIGXFSZ or a crash in
+// a writer) with one line naming that file, and leaves the output folder
+// as it was: an earlier run's files of the same names unchanged, a stale
+// round file this run would have removed still there, a user's file kept,
+// and no file (or temporary file) of its own.
+TEST_P(CliFullDisk, TheLargestFileFailsAndTheFolderIsLeftAsItWas) {
+  const test::TempDir tmp;
+  std::string args = GetParam().args;
+  for (size_t k; (k = args.find("DATA")) != std::string::npos;) args.replace(k, 4, kData);
+  if (GetParam().scene) {
+    const std::string scene = GetParam().scene(tmp / "scene");
+    for (size_t k; (k = args.find("SCENE")) != std::string::npos;) args.replace(k, 5, scene);
+  }
+  const fs::path whole = tmp / "whole", out = tmp / "out", fresh = tmp / "new" / "out";
+  const Result r = run_cli(args + " -o " + whole.string());
+  ASSERT_EQ(r.status, 0) << r.err;
+  const auto files = folder(whole);
+  std::string largest;
+  size_t size = 0, second = 0;
+  for (const auto& [name, content] : files) {
+    if (content.size() > size) {
+      second = size;
+      size = content.size();
+      largest = name;
+    } else {
+      second = std::max(second, content.size());
+    }
+  }
+  ASSERT_EQ(largest, GetParam().largest) << names(files);
+  ASSERT_GT(size, second + 1000);
+  const long limit = static_cast<long>((size + second) / 2);
+  // An earlier run's results in the folder.
+  for (const auto& [name, content] : files) {
+    fs::create_directories((out / name).parent_path());
+    std::ofstream(out / name) << "an earlier run's " << name << "\n";
+  }
+  std::ofstream(out / "radiosity_round_7.vtu") << "an earlier run's round 7\n";
+  std::ofstream(out / "notes.txt") << "the user's notes\n";
+  const auto before = folder(out);
+
+  const Result full = run_cli_limited(args + " -o " + out.string(), limit);
+  EXPECT_EQ(full.status, 1) << full.err;
+  EXPECT_EQ(std::count(full.err.begin(), full.err.end(), '\n'), 1) << full.err;
+  EXPECT_TRUE(test::mentions(full.err, {"radmesh: error: ", (out / largest).string()}));
+  const auto after = folder(out);
+  EXPECT_TRUE(after == before) << "before: " << names(before) << "\nafter: " << names(after);
+
+  // Into a folder the run makes: none left.
+  const Result into_new = run_cli_limited(args + " -o " + fresh.string(), limit);
+  EXPECT_EQ(into_new.status, 1) << into_new.err;
+  EXPECT_TRUE(test::mentions(into_new.err, {(fresh / largest).string()}));
+  EXPECT_FALSE(fs::exists(fresh.parent_path())) << names(folder(fresh.parent_path()));
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Files, CliFullDisk,
+    ::testing::Values(
+        FullDiskRun{"radiosity.vtu", "run DATA/parallel_plates/parallel_plates.obj --method matrix --no-png -q", {}},
+        // After the .vtu, the round files, the .pvd and the contact lines.
+        FullDiskRun{"links.vtu", "run DATA/box_on_floor/box_on_floor.obj --method hierarchical --epsilon 0.01 "
+                                 "--export-links --no-png -q", {}},
+        // After the .vtu, the pixmap state, the lightmaps and the MTL.
+        FullDiskRun{"lightmapped.obj", "run DATA/parallel_plates/parallel_plates.obj --method pixmap --no-png -q", {}},
+        // After the .vtu: 2000 probes.
+        FullDiskRun{"probes.csv", "run DATA/parallel_plates/parallel_plates.obj --method matrix --no-png -q --probe SCENE",
+                    [](const fs::path& dir) {
+                      fs::create_directories(dir);
+                      std::ofstream p(dir / "probes.txt");
+                      for (int k = 0; k < 2000; ++k)
+                        p << "p" << k << ' ' << 0.05 + 0.9 * (k % 40) / 40 << ' ' << 0.05 + 0.9 * (k / 40) / 50
+                          << " 1 0 0 -1\n";
+                      return (dir / "probes.txt").string();
+                    }},
+        // After the .vtu: 800 patches with a long name each in the summary.
+        FullDiskRun{"summary.json", "mesh SCENE --max-edge 1000 --discontinuity off -q",
+                    [](const fs::path& dir) { return write_grid(dir, 20, std::string(1000, 'g')); }},
+        // After the .vtu and summary.json: 10082 patches, beyond the summary's list.
+        FullDiskRun{"patches.csv", "mesh SCENE --max-edge 1000 --discontinuity off -q",
+                    [](const fs::path& dir) { return write_grid(dir, 71, std::string(300, 'g')); }}),
+    [](const ::testing::TestParamInfo<FullDiskRun>& info) {
+      std::string name = std::to_string(info.index) + "_" + info.param.largest;
+      for (char& c : name)
+        if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
+      return name;
+    });
+
+// The pixmap run's radiosity.vtu (its display mesh), the first file a run
+// writes, limited to half its size: where VTK's XML writer crashed (SIGSEGV,
+// SIGBUS or an abort in free) and left radiosity.vtu.tmp. Exit 1 naming it,
+// and nothing left, not even the folder the run made.
+TEST(Cli, AFileSizeLimitInThePixmapVtuFailsTheRunWithoutACrash) {
+  const test::TempDir tmp;
+  const std::string args = "run " + kData + "/parallel_plates/parallel_plates.obj --method pixmap --no-png -q";
+  const fs::path whole = tmp / "whole", out = tmp / "new" / "out";
+  const Result r = run_cli(args + " -o " + whole.string());
+  ASSERT_EQ(r.status, 0) << r.err;
+  const long half = static_cast<long>(fs::file_size(whole / "radiosity.vtu") / 2);
+  for (const long limit : {half, half / 8}) {
+    const Result full = run_cli_limited(args + " -o " + out.string(), limit);
+    EXPECT_EQ(full.status, 1) << "limit " << limit << ": " << full.err;
+    EXPECT_TRUE(test::mentions(full.err, {"radmesh: error: ", (out / "radiosity.vtu").string()}));
+    EXPECT_FALSE(fs::exists(out.parent_path())) << names(folder(out.parent_path()));
+  }
+}
+
+// A real full disk: a tmpfs of a few pages, mounted in a mount namespace of
+// the test's own (unshare; skipped where that is not allowed). Runs `args`
+// into it and returns what the run said on stderr, its exit status and what
+// it left on the disk (ls -A); false when no tmpfs could be mounted.
+struct OnFullDisk {
+  int status = -1;
+  std::string err, left;
+};
+bool run_on_tmpfs(const test::TempDir& tmp, const std::string& args, long bytes, OnFullDisk& out) {
+  const fs::path mnt = tmp / "mnt", status = tmp / "status.txt", listing = tmp / "listing.txt", err = tmp / "err.txt";
+  fs::create_directories(mnt);
+  const std::string inside = "mount -t tmpfs -o size=" + std::to_string(bytes / 1024) + "k tmpfs " + mnt.string() +
+                             " || exit 99; DISPLAY= " + kExe + " " + args + " -o " + mnt.string() + "/out 2>" +
+                             err.string() + " >/dev/null; echo $? >" + status.string() + "; ls -A " + mnt.string() +
+                             " >" + listing.string();
+  bool mounted = false;
+  for (const char* unshare : {"unshare -rm", "unshare -m"}) {
+    const std::string cmd = std::string(unshare) + " sh -c '" + inside + "' 2>/dev/null";
+    const int rc = std::system(cmd.c_str());
+    if (WIFEXITED(rc) && WEXITSTATUS(rc) == 0) {
+      mounted = true;
+      break;
+    }
+  }
+  if (!mounted) return false;
+  std::ifstream s(status), l(listing), e(err);
+  s >> out.status;
+  out.left.assign(std::istreambuf_iterator<char>(l), std::istreambuf_iterator<char>());
+  out.err.assign(std::istreambuf_iterator<char>(e), std::istreambuf_iterator<char>());
+  return true;
+}
+
+// Whole pages of a file of `size` bytes (what it takes of a tmpfs).
+long pages(size_t size) {
+  const long page = ::sysconf(_SC_PAGESIZE);
+  return (static_cast<long>(size) + page - 1) / page;
+}
+
+// The disk fills while the pixmap run's radiosity.vtu (its display mesh:
+// where VTK's XML writer crashed) is written, the first file of the run:
+// exit 1 naming it, nothing left.
+TEST(Cli, ADiskThatFillsInTheVtuFailsTheRunWhichLeavesNothingOfItsOwn) {
+  const test::TempDir tmp;
+  const std::string args = "run " + kData + "/parallel_plates/parallel_plates.obj --method pixmap --no-png -q";
+  const Result r = run_cli(args + " -o " + (tmp / "whole").string());
+  ASSERT_EQ(r.status, 0) << r.err;
+  const long half = pages(fs::file_size(tmp / "whole" / "radiosity.vtu")) / 2;
+  OnFullDisk full;
+  if (!run_on_tmpfs(tmp, args, half * ::sysconf(_SC_PAGESIZE), full))
+    GTEST_SKIP() << "cannot mount a small tmpfs here (unshare -rm and unshare -m both refused)";
+  EXPECT_EQ(full.status, 1) << full.err;
+  EXPECT_TRUE(test::mentions(full.err, {"radmesh: error: ", (tmp / "mnt" / "out" / "radiosity.vtu").string()}));
+  EXPECT_EQ(full.left, "") << "left on the full disk: " << full.left;
+}
+
+// The disk fills while summary.json is written, after the .vtu, the round
+// files and the .pvd of a hierarchical run: exit 1 naming summary.json, and
+// nothing left: not the complete radiosity.vtu, not the folder it made.
+TEST(Cli, ADiskThatFillsAtTheSummaryFailsTheRunWhichLeavesNothingOfItsOwn) {
+  const test::TempDir tmp;
+  const std::string args = "run " + kData + "/parallel_plates/parallel_plates.obj --method hierarchical --no-png -q";
+  const Result r = run_cli(args + " -o " + (tmp / "whole").string());
+  ASSERT_EQ(r.status, 0) << r.err;
+  long n = 0;
+  for (const auto& [name, content] : folder(tmp / "whole"))
+    n += name == "summary.json" ? pages(content.size()) - 1 : pages(content.size());
+  ASSERT_GE(pages(fs::file_size(tmp / "whole" / "summary.json")), 2);
+  OnFullDisk full;
+  if (!run_on_tmpfs(tmp, args, n * ::sysconf(_SC_PAGESIZE), full))
+    GTEST_SKIP() << "cannot mount a small tmpfs here (unshare -rm and unshare -m both refused)";
+  EXPECT_EQ(full.status, 1) << full.err;
+  EXPECT_TRUE(test::mentions(full.err, {"radmesh: error: ", (tmp / "mnt" / "out" / "summary.json").string()}));
+  EXPECT_EQ(full.left, "") << "left on the full disk: " << full.left;
 }

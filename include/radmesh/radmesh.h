@@ -32,6 +32,7 @@
 #include "radmesh/probe_file.h"
 #include "radmesh/error_metric.h"
 
+#include "radmesh/output_batch.h"
 #include "radmesh/vtk_writer.h"
 #include "radmesh/summary.h"
 #include "radmesh/png_render.h"

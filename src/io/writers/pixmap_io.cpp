@@ -37,15 +37,15 @@ namespace {
 
 std::string pixmap_file(size_t k, const char* ext) { return "pixmap_" + std::to_string(k) + ext; }
 
-// Creates `dir` and removes the files matching `ours` that are not in `keep`.
+// Creates `dir` and removes the files matching `ours` that are not in `keep`
+// (inside an OutputBatch: once it is committed).
 void prepare_subdir(const fs::path& dir, const std::regex& ours, const std::vector<std::string>& keep) {
+  internal::create_output_directories(dir.string());
   std::error_code ec;
-  fs::create_directories(dir, ec);
-  if (ec) throw IoError(dir.string() + ": cannot create the directory: " + ec.message());
   for (const fs::directory_entry& e : fs::directory_iterator(dir, ec)) {
     const std::string name = e.path().filename().string();
     if (e.is_regular_file() && std::regex_match(name, ours) && std::find(keep.begin(), keep.end(), name) == keep.end())
-      fs::remove(e.path(), ec);
+      internal::remove_output_file(e.path().string());
   }
 }
 
@@ -100,7 +100,7 @@ std::vector<std::string> write_pixmap_state(const std::string& out_dir, const Pi
     image->GetCellData()->AddArray(float_cells("coverage", coverage, 1));
     image->GetCellData()->AddArray(float_cells("displayed", out.display[k], 3));
     const std::string path = (dir / names[k]).string();
-    vtkNew<vtkXMLImageDataWriter> writer;
+    vtkNew<internal::StreamXmlWriter<vtkXMLImageDataWriter>> writer;
     writer->SetInputData(image);
     writer->SetDataModeToBinary();
     writer->SetCompressorTypeToZLib();

@@ -64,14 +64,31 @@ void run_vtk_writer(Writer* writer, const std::string& path) {
   if (!why.empty()) throw IoError(path + ": " + why);
 }
 
+// A VTK XML writer (Base: vtkXMLUnstructuredGridWriter, vtkXMLImageDataWriter)
+// that writes into a stream it is given instead of a file it opens: VTK's
+// own file stream is unchecked at its close, and on a failed write VTK's
+// error path frees a pointer it never set (see CheckedFile).
+template <class Base>
+class StreamXmlWriter : public Base {
+public:
+  static StreamXmlWriter* New() {
+    auto* w = new StreamXmlWriter;
+    w->InitializeObjectBase();
+    return w;
+  }
+  // For the next Write() only: VTK forgets the stream when it is done.
+  void SetOutputStream(std::ostream* out) { this->Stream = out; }
+};
+
 // Runs an XML `writer` (its input connected) into a temporary file renamed
-// onto `path` once whole. Not through memory: the writer's string and the
-// copy it hands out would hold the file twice at once, at the peak of a
-// large pixmap run.
-template <class Writer>
-void write_xml_atomically(Writer* writer, const std::string& path) {
-  write_file_atomically_by_name(path, [&](const std::string& tmp) {
-    writer->SetFileName(tmp.c_str());
+// onto `path` once whole (write_file_atomically: every write checked; a
+// failure throws IoError naming `path` and leaves nothing). Not through
+// memory: the writer's string and the copy it hands out would hold the file
+// twice at once, at the peak of a large pixmap run.
+template <class Base>
+void write_xml_atomically(StreamXmlWriter<Base>* writer, const std::string& path) {
+  write_file_atomically(path, [&](std::ostream& out) {
+    writer->SetOutputStream(&out);
     run_vtk_writer(writer, path);
   });
 }

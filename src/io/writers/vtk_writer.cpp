@@ -148,7 +148,7 @@ void add_mesh_cell_data(const std::string& path, vtkCellData* cell_data, const S
 // larger files: docs/decisions.md), written to a temporary file renamed
 // into place.
 void write_grid(const std::string& path, vtkUnstructuredGrid* grid) {
-  vtkNew<vtkXMLUnstructuredGridWriter> writer;
+  vtkNew<internal::StreamXmlWriter<vtkXMLUnstructuredGridWriter>> writer;
   writer->SetInputData(grid);
   writer->SetDataModeToBinary();
   writer->SetCompressorTypeToLZ4();
