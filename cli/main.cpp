@@ -15,6 +15,7 @@
 #include "radmesh/probe.h"
 #include "radmesh/solve.h"
 #include "radmesh/version.h"
+#include "core/text_syntax.h"
 
 #include <CLI/CLI.hpp>
 
@@ -460,9 +461,9 @@ int quality(Params& p) {
 // with a message naming the option): otherwise a usage error.
 const CLI::Validator kNumber(
     [](std::string& text) {
-      char* end = nullptr;
-      std::strtod(text.c_str(), &end);
-      return !text.empty() && end != nullptr && *end == '\0' ? std::string() : "not a number: " + text;
+      double value = 0.0;
+      const std::string why = internal::read_number(text, &value);
+      return why.empty() ? std::string() : text + " " + why;
     },
     "NUMBER");
 

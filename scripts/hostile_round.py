@@ -371,8 +371,10 @@ def reader_cases(r, rnd, work):
     first_face = head_end + 12 * len(bverts)
     plyb[first_face] = 255
     mesh_run("plyb_list_huge", "reader: binary PLY face list of 255", "error", "plyb", bytes(plyb))
-    huge = ply_binary(bverts, btris)
-    huge = huge[:first_face] + struct.pack("<B", 3) + huge[first_face + 1:]
+    claim = ("ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+             "property float z\nelement face 1\nproperty list int int vertex_indices\nend_header\n").encode()
+    claim += struct.pack("<9f", 0, 0, 0, 1, 0, 0, 0, 1, 0) + struct.pack("<i", 1 << 26) + struct.pack("<3i", 0, 1, 2)
+    mesh_run("plyb_list_2_26", "reader: binary PLY face claiming 2^26 vertices", "error", "plyb", claim)
     mesh_run("plyb_zero_vertices", "reader: PLY with no vertices", "error", "ply",
              "ply\nformat ascii 1.0\nelement vertex 0\nproperty float x\nproperty float y\nproperty float z\n"
              "element face 0\nproperty list uchar int vertex_indices\nend_header\n")

@@ -185,6 +185,9 @@ TEST(OptionTable, ReadsChecksAndListsAStruct) {
   EXPECT_TRUE(test::thrown<InputError>([&] { table.parse({{"size", "1.5"}}); }).names("size"));
   EXPECT_TRUE(test::thrown<InputError>([&] { table.parse({{"count", "2.5"}}); }).names("count"));
   EXPECT_TRUE(test::thrown<InputError>([&] { table.parse({{"count", "many"}}); }).names("count"));
+  // One number syntax, the scene files' (0x2 is 2 to strtod).
+  EXPECT_TRUE(test::thrown<InputError>([&] { table.parse({{"count", "0x2"}}); }).says({"count 0x2", "hexadecimal"}));
+  EXPECT_TRUE(test::thrown<InputError>([&] { table.parse({{"size", "nan"}}); }).says({"size nan", "not finite"}));
   EXPECT_TRUE(test::thrown<InputError>([&] { table.parse({{"mode", "mean"}}); }).names("mode"));
   EXPECT_TRUE(test::thrown<InputError>([&] { table.parse({{"colour", "red"}}); }).names("colour"));
   Opts bad;

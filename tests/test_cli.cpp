@@ -351,7 +351,7 @@ INSTANTIATE_TEST_SUITE_P(
                       BadRun{"run DATA/cornell_box/cornell_box.obj --discontinuity some", "--discontinuity"},
                       BadRun{"run DATA/cornell_box/cornell_box.obj --method matrix --export-links", "--export-links"},
                       BadRun{"run DATA/cornell_box/cornell_box.obj --min-area 1e-20", "--min-area"},
-                      BadRun{"run DATA/cornell_box/cornell_box.obj --epsilon nan", "--epsilon nan"},
+                      BadRun{"run DATA/cornell_box/cornell_box.obj --epsilon nan", "--epsilon: nan is not finite"},
                       BadRun{"run DATA/cornell_box/cornell_box.obj --method matrix --epsilon 0.01", "--epsilon"},
                       BadRun{"run DATA/cornell_box/cornell_box.obj --max-memory 0.000001", "GiB allowed"},
                       BadRun{"mesh DATA/cornell_box/cornell_box.obj --max-shadow-lines -1", "--max-shadow-lines"},
@@ -498,6 +498,7 @@ TEST(Cli, ExitCodesAreZeroOneAndTwo) {
   EXPECT_EQ(run_cli("run").status, 2);
   EXPECT_EQ(run_cli("run " + kData + "/cornell_box/cornell_box.obj --bogus-flag").status, 2);
   EXPECT_EQ(run_cli("run " + kData + "/cornell_box/cornell_box.obj --rays many").status, 2);
+  EXPECT_EQ(run_cli("run " + kData + "/cornell_box/cornell_box.obj --rays 0x10").status, 2);  // the files' number syntax
   EXPECT_EQ(run_cli("frobnicate").status, 2);
   const fs::path out = tmp / "exit1";
   EXPECT_EQ(run_cli("run " + kData + "/bad/nan_coordinate.obj -o " + out.string()).status, 1);

@@ -3,6 +3,8 @@
 
 #include "radmesh/options.h"
 
+#include "core/text_syntax.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
@@ -78,9 +80,9 @@ double parse_option(const OptionSpec& s, const std::string& text, const std::str
     }
     case OptionSpec::Kind::integer:
     case OptionSpec::Kind::real: {
-      char* end = nullptr;
-      const double v = std::strtod(text.c_str(), &end);
-      if (text.empty() || end == nullptr || *end != '\0') bad_value(s, text, owner, "not a number");
+      double v = 0.0;
+      const std::string why = internal::read_number(text, &v);
+      if (!why.empty()) bad_value(s, text, owner, "the value " + why);
       check_number(s, v, text, owner);
       return v;
     }

@@ -13,7 +13,7 @@
 #include "io/readers/gltf_check.h"
 #include "io/readers/mesh_checks.h"
 #include "io/readers/scene_sources.h"
-#include "io/readers/text_syntax.h"
+#include "core/text_syntax.h"
 #include "radmesh/errors.h"
 
 #include <assimp/DefaultLogger.hpp>

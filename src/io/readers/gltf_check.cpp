@@ -3,7 +3,7 @@
 #include "io/readers/gltf_check.h"
 
 #include "io/readers/json_parse.h"
-#include "io/readers/text_syntax.h"
+#include "core/text_syntax.h"
 #include "radmesh/errors.h"
 
 #include <algorithm>

@@ -6,7 +6,7 @@
 #include "io/readers/json_parse.h"
 #include "radmesh/obj_reader.h"
 #include "io/readers/scene_sources.h"
-#include "io/readers/text_syntax.h"
+#include "core/text_syntax.h"
 #include "radmesh/errors.h"
 
 #include <nlohmann/json.hpp>

@@ -5,7 +5,7 @@
 
 #include "io/readers/mesh_checks.h"
 
-#include "io/readers/text_syntax.h"
+#include "core/text_syntax.h"
 #include "radmesh/errors.h"
 
 #include <assimp/defs.h>

@@ -8,7 +8,7 @@
 #include "radmesh/obj_reader.h"
 
 #include "io/readers/scene_sources.h"
-#include "io/readers/text_syntax.h"
+#include "core/text_syntax.h"
 #include "radmesh/errors.h"
 
 #include <tiny_obj_loader.h>

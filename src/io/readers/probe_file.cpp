@@ -5,7 +5,7 @@
 
 #include "io/writers/atomic_file.h"
 #include "io/readers/scene_sources.h"
-#include "io/readers/text_syntax.h"
+#include "core/text_syntax.h"
 #include "io/writers/json_file.h"
 #include "radmesh/errors.h"
 

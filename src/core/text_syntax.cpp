@@ -1,7 +1,7 @@
 // The number syntax of radmesh's text formats and the check that a
 // third-party parser read a number as its text means (text_syntax.h).
 
-#include "io/readers/text_syntax.h"
+#include "core/text_syntax.h"
 
 #include <cfloat>
 #include <cmath>

@@ -1,10 +1,10 @@
-// Internal to radmesh_io: the one number syntax of radmesh's text formats
-// (OBJ, MTL, ASCII PLY, OFF, ASCII STL, probe files), read by one parser,
-// and the check that a third-party parser (tinyobjloader, assimp) read a
-// number as its text means. A reader refuses, at its line, a token outside
-// the syntax, and a token that its format's parser reads otherwise; so the
-// value checked is the value used. docs/scenes.md lists what each format
-// takes.
+// Internal: the one number syntax of radmesh's text formats (OBJ, MTL,
+// ASCII PLY, OFF, ASCII STL, probe files) and of option values, read by one
+// parser, and the check that a third-party parser (tinyobjloader, assimp)
+// read a number as its text means. A reader refuses, at its line, a token
+// outside the syntax, and a token that its format's parser reads otherwise;
+// so the value checked is the value used. docs/scenes.md lists what each
+// format takes.
 #pragma once
 
 #include <string>
