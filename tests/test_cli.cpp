@@ -626,24 +626,8 @@ TEST(Cli, CtrlCStopsAPixmapRunWhichSavesItsStateAndSaysHowToResume) {
 
 namespace {
 
-// Every file under `dir` (relative name -> content); empty when there is no `dir`.
-std::map<std::string, std::string> folder(const fs::path& dir) {
-  std::map<std::string, std::string> out;
-  if (!fs::exists(dir)) return out;
-  for (const auto& e : fs::recursive_directory_iterator(dir)) {
-    if (!e.is_regular_file()) continue;
-    std::ifstream in(e.path(), std::ios::binary);
-    out[fs::relative(e.path(), dir).string()] =
-        std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  }
-  return out;
-}
-
-std::string names(const std::map<std::string, std::string>& files) {
-  std::string out;
-  for (const auto& [name, content] : files) out += (out.empty() ? "" : ", ") + name;
-  return "{" + out + "}";
-}
+using radmesh::test::folder;
+using radmesh::test::names;
 
 // Runs radmesh as run_cli does, but no file it writes may grow past `limit`
 // bytes (RLIMIT_FSIZE: a write past it fails with EFBIG, as one on a full

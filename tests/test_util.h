@@ -17,6 +17,8 @@
 #include <fstream>
 #include <functional>
 #include <initializer_list>
+#include <iterator>
+#include <map>
 #include <string>
 #include <system_error>
 #include <vector>
@@ -158,6 +160,27 @@ Thrown thrown(F f) {
 template <class E, class F>
 std::string message_of(F f) {
   return thrown<E>(f).message;
+}
+
+// Every file under `dir` (relative name -> content); empty when there is no `dir`.
+inline std::map<std::string, std::string> folder(const std::filesystem::path& dir) {
+  namespace fs = std::filesystem;
+  std::map<std::string, std::string> out;
+  if (!fs::exists(dir)) return out;
+  for (const auto& e : fs::recursive_directory_iterator(dir)) {
+    if (!e.is_regular_file()) continue;
+    std::ifstream in(e.path(), std::ios::binary);
+    out[fs::relative(e.path(), dir).string()] =
+        std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  }
+  return out;
+}
+
+// The names in a folder() listing, for a failure message.
+inline std::string names(const std::map<std::string, std::string>& files) {
+  std::string out;
+  for (const auto& [name, content] : files) out += (out.empty() ? "" : ", ") + name;
+  return "{" + out + "}";
 }
 
 // Index of the first patch named `name`, or -1.

@@ -36,26 +36,8 @@ using namespace radmesh;
 namespace {
 
 using test::kData;
-
-// Every file under `dir` (relative name -> content).
-std::map<std::string, std::string> folder(const fs::path& dir) {
-  std::map<std::string, std::string> out;
-  if (!fs::exists(dir)) return out;
-  for (const auto& e : fs::recursive_directory_iterator(dir)) {
-    if (!e.is_regular_file()) continue;
-    std::ifstream in(e.path(), std::ios::binary);
-    out[fs::relative(e.path(), dir).string()] =
-        std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  }
-  return out;
-}
-
-// The names in a folder listing, for a failure message.
-std::string names(const std::map<std::string, std::string>& files) {
-  std::string out;
-  for (const auto& [name, content] : files) out += (out.empty() ? "" : ", ") + name;
-  return "{" + out + "}";
-}
+using test::folder;
+using test::names;
 
 // How a child that ran a write ended.
 enum ChildExit { kWritten = 0, kIoErrorNamingTheFile = 10, kIoErrorNotNamingIt = 11, kOtherException = 12 };
