@@ -167,13 +167,24 @@ def room_obj():
 
 # ---------------------------------------------------------------- running
 
+def snapshot(folder):
+    """Every file under `folder`: relative name -> content."""
+    out = {}
+    for base, _, names in os.walk(folder):
+        for n in names:
+            p = os.path.join(base, n)
+            out[os.path.relpath(p, folder)] = read(p, "rb")
+    return out
+
+
 class Runner:
     def __init__(self, exe, out, timeout):
         self.exe, self.out, self.timeout = exe, out, timeout
         self.rows = []
         self.references = {}
 
-    def run(self, name, category, expect, args, scene_dir=None, limit_fsize=None, compare=None, tolerance=0.0):
+    def run(self, name, category, expect, args, scene_dir=None, limit_fsize=None, compare=None, tolerance=0.0,
+            unchanged=None):
         work = os.path.join(self.out, "runs", name)
         shutil.rmtree(work, ignore_errors=True)
         os.makedirs(work)
@@ -190,6 +201,7 @@ class Runner:
             if limit_fsize is not None:
                 resource.setrlimit(resource.RLIMIT_FSIZE, (limit_fsize, limit_fsize))
 
+        before = snapshot(unchanged) if unchanged else None
         env = dict(os.environ, DISPLAY="")
         try:
             p = subprocess.run(argv, capture_output=True, text=True, errors="replace", timeout=self.timeout,
@@ -198,6 +210,8 @@ class Runner:
         except subprocess.TimeoutExpired:
             rc, err = None, ""
         outcome, detail = self.classify(expect, rc, err, out_dir, compare, tolerance)
+        if before is not None and snapshot(unchanged) != before:
+            outcome, detail = "wrong", "changed the folder it only reads: " + unchanged
         self.rows.append({"case": name, "category": category, "expect": expect, "exit": "timeout" if rc is None else rc,
                           "outcome": outcome, "detail": detail[:300]})
         return out_dir
@@ -271,6 +285,9 @@ class Runner:
 NUMBER_TOKENS = ["0x1p0", "0x10", "1" + "0" * 330, "0." + "0" * 330 + "1", "1e400", "-1e400", "1e-400", "nan", "NaN",
                  "inf", "-inf", "+1", "1e", "1.2.3", "1,5", "--1", "", ".", "1_0", "1e+", "0e0", "1d0", "\u00a01",
                  "1x", "4.9e-324"]
+# Tokens of the syntax: read as the double nearest their value (below the
+# smallest double, 0), as docs/scenes.md says.
+READ_AS_WRITTEN = ("0e0", "1e-400", "4.9e-324")
 
 
 def reader_cases(r, rnd, work):
@@ -296,7 +313,7 @@ def reader_cases(r, rnd, work):
         mod[i] = " ".join(t)
         write(os.path.join(d, "box_on_floor.mtl"), BOX_MTL)
         write(os.path.join(d, "s.obj"), "\n".join(mod) + "\n")
-        expect = "ok" if tok in ("0e0",) else "error"
+        expect = "ok" if tok in READ_AS_WRITTEN else "error"
         r.run("obj_number_%d" % k, "reader: OBJ number syntax (%r)" % tok[:12], expect, ["run", d + "/s.obj"] + fast)
     mlines = BOX_MTL.splitlines()
     for k, tok in enumerate(NUMBER_TOKENS):
@@ -304,7 +321,7 @@ def reader_cases(r, rnd, work):
         mod = [(" ".join(l.split()[:1] + [tok] * 3) if l.startswith("Kd") else l) for l in mlines]
         write(os.path.join(d, "box_on_floor.mtl"), "\n".join(mod) + "\n")
         write(os.path.join(d, "s.obj"), BOX_OBJ)
-        expect = "ok" if tok in ("0e0",) else "error"
+        expect = "ok" if tok in READ_AS_WRITTEN else "error"
         r.run("mtl_number_%d" % k, "reader: MTL number syntax (%r)" % tok[:12], expect, ["run", d + "/s.obj"] + fast)
     for k in range(25):
         d = os.path.join(base, "cut%d" % k)
@@ -509,9 +526,99 @@ def output_cases(r, work):
                "matrix": ["--max-edge", "1", "--discontinuity", "contacts"],
                "pixmap": ["--hemicube-res", "32", "--shots", "30"]}
     for m, opts in methods.items():
-        for size in [0, 1000, 20000, 100000, 400000]:
-            r.run("output_full_%s_%d" % (m, size), "output: disk full after %d bytes, %s" % (size, m), "error",
-                  ["run", scene, "--method", m] + opts, limit_fsize=size)
+        # A file-size limit (ulimit -f) holds for each file: below the run's
+        # largest file the run fails and leaves nothing; at it, it succeeds.
+        whole = r.run("output_whole_%s" % m, "output: no limit, %s" % m, "ok", ["run", scene, "--method", m] + opts)
+        largest = max(os.path.getsize(os.path.join(b, n)) for b, _, ns in os.walk(whole) for n in ns)
+        for size in sorted({0, 1000, largest // 3, largest // 2, largest - 4096, largest - 1}):
+            if size >= 0:
+                r.run("output_full_%s_%d" % (m, size), "output: files limited to %d bytes, %s" % (size, m), "error",
+                      ["run", scene, "--method", m] + opts, limit_fsize=size)
+        r.run("output_fits_%s" % m, "output: files limited to the largest, %s" % m, "ok",
+              ["run", scene, "--method", m] + opts, limit_fsize=largest)
+
+
+def state_cases(r, rnd, work):
+    """--resume from a damaged, foreign or missing state, and hostile probe files."""
+    scene = os.path.join(DATA, "box_on_floor", "box_on_floor.obj")
+    opts = ["--method", "pixmap", "--hemicube-res", "32"]
+    saved = r.run("state_saved", "state: a pixmap run that saves its state", "ok", ["run", scene] + opts + ["--shots", "20"])
+    state = os.path.join(saved, "pixmaps", "state.json")
+    vti = os.path.join(saved, "pixmaps", "pixmap_0.vti")
+
+    def damaged(name, damage):
+        d = os.path.join(work, "state", name)
+        shutil.rmtree(d, ignore_errors=True)
+        shutil.copytree(saved, d)
+        damage(d)
+        return d
+
+    def flip(path, count):
+        def do(d):
+            p = os.path.join(d, os.path.relpath(path, saved))
+            data = bytearray(read(p, "rb"))
+            for _ in range(count):
+                data[rnd.randrange(len(data))] = rnd.randrange(256)
+            write(p, bytes(data))
+        return do
+
+    def cut(path, keep):
+        def do(d):
+            p = os.path.join(d, os.path.relpath(path, saved))
+            data = read(p, "rb")
+            write(p, data[:int(len(data) * keep)])
+        return do
+
+    def remove(path):
+        return lambda d: os.remove(os.path.join(d, os.path.relpath(path, saved)))
+
+    cases = [("state_json_cut_%d" % k, cut(state, f), "error") for k, f in enumerate([0.0, 0.3, 0.9])]
+    cases += [("state_json_flipped_%d" % k, flip(state, 2), "either") for k in range(12)]
+    cases += [("state_vti_cut_%d" % k, cut(vti, f), "error") for k, f in enumerate([0.0, 0.5, 0.99])]
+    cases += [("state_vti_flipped_%d" % k, flip(vti, 3), "either") for k in range(12)]
+    cases += [("state_vti_missing", remove(vti), "error"), ("state_json_missing", remove(state), "error")]
+
+    def edit(old, new):
+        def do(d):
+            p = os.path.join(d, "pixmaps", "state.json")
+            write(p, read(p).replace(old, new, 1))
+        return do
+
+    def swap(a, b):
+        def do(d):
+            pa, pb = (os.path.join(d, "pixmaps", "pixmap_%d.vti" % k) for k in (a, b))
+            data = read(pa, "rb")
+            write(pa, read(pb, "rb"))
+            write(pb, data)
+        return do
+    cases += [("state_json_shots_edited", edit('"shots": 20', '"shots": 21'), "error"),
+              ("state_json_power_edited", edit('"power_absorbed": [\n    0.', '"power_absorbed": [\n    1.'), "error"),
+              ("state_vti_swapped", swap(1, 2), "error")]
+    for name, damage, expect in cases:
+        d = damaged(name, damage)
+        r.run(name, "state: --resume from %s" % name[6:].replace("_", " "), expect,
+              ["run", scene] + opts + ["--shots", "40", "--resume", d], unchanged=d)
+    d = damaged("state_intact", lambda d: None)
+    r.run("state_other_scene", "state: --resume with another scene", "error",
+          ["run", os.path.join(DATA, "cornell_box", "cornell_box.obj")] + opts + ["--shots", "40", "--resume", d],
+          unchanged=d)
+    r.run("state_other_options", "state: --resume with another hemicube", "error",
+          ["run", scene, "--method", "pixmap", "--hemicube-res", "64", "--shots", "40", "--resume", d], unchanged=d)
+    r.run("state_fewer_shots", "state: --resume to fewer shots than made", "either",
+          ["run", scene] + opts + ["--shots", "10", "--resume", d], unchanged=d)
+    r.run("state_continued", "state: --resume intact", "ok", ["run", scene] + opts + ["--shots", "40", "--resume", d],
+          unchanged=d)
+
+    good = "a 1.5 0 1.5 0 1 0\n"  # on the floor, beside the box
+    probes = {"nan": "a nan 0 0 0 0 1\n", "short": "a 0 0 0 0 1\n", "zero_normal": "a 0 0 0 0 0 0\n",
+              "far": "a 1e300 0 0 0 1 0\n", "hex": "a 0x1p0 0 0 0 0 1\n", "empty": "",
+              "binary": "\x00\x01\x02\xff\n", "long_label": "x" * 100000 + " 1.5 0 1.5 0 1 0\n",
+              "many": good * 20000, "valid": good}
+    for name, text in probes.items():
+        f = write(os.path.join(work, "probes", name + ".txt"), text)
+        expect = "ok" if name in ("valid", "many", "long_label") else "either" if name == "empty" else "error"
+        r.run("probe_" + name, "state: probe file (%s)" % name.replace("_", " "), expect,
+              ["run", scene, "--method", "matrix", "--max-edge", "1", "--probe", f])
 
 
 def main():
@@ -519,7 +626,7 @@ def main():
     ap.add_argument("--radmesh", default=os.path.join(ROOT, "build", "cli", "radmesh"))
     ap.add_argument("--out", default=os.path.join(ROOT, "hostile-out"))
     ap.add_argument("--timeout", type=float, default=120.0)
-    ap.add_argument("--only", default="", help="only the case groups whose name contains this (reader, option, physics, output)")
+    ap.add_argument("--only", default="", help="only the case groups whose name contains this (reader, option, physics, output, state)")
     a = ap.parse_args()
     shutil.rmtree(a.out, ignore_errors=True)
     os.makedirs(a.out)
@@ -527,7 +634,8 @@ def main():
     rnd = random.Random(62)
     work = os.path.join(a.out, "inputs")
     for group, fn in [("reader", lambda: reader_cases(r, rnd, work)), ("option", lambda: option_cases(r, work)),
-                      ("physics", lambda: physics_cases(r, work)), ("output", lambda: output_cases(r, work))]:
+                      ("physics", lambda: physics_cases(r, work)), ("output", lambda: output_cases(r, work)),
+                      ("state", lambda: state_cases(r, rnd, work))]:
         if a.only in group:
             fn()
     with open(os.path.join(a.out, "cases.csv"), "w", newline="") as f:

@@ -16,10 +16,12 @@
 #include <array>
 #include <cmath>
 #include <filesystem>
+#include <filesystem>
 #include <fstream>
 #include <numeric>
 
 using namespace radmesh;
+namespace fs = std::filesystem;
 
 namespace {
 
@@ -807,6 +809,55 @@ TEST(PixmapSolver, AStateFromOtherOptionsOrAnotherSceneIsRefused) {
   broken.radiosity[0][0] = std::nanf("");
   EXPECT_TRUE(test::thrown<InputError>([&] { check_resumable(broken, scene, solver.layout(), o, "S"); })
                   .says({"S: ", "non-finite"}));
+}
+
+TEST(PixmapSolver, AStateDamagedEditedOrWithSwappedPixmapsIsRefusedByItsChecksum) {
+  // The box's faces have pixmaps of one size: swapped, every size check
+  // passes, as it does for a figure of state.json changed by hand.
+  const Scene scene = read_obj_scene(kData + "/box_on_floor/box_on_floor.obj");
+  PixmapOptions o;
+  o.hemicube_res = 32;
+  o.shots = 10;
+  const PixmapSolver solver(scene, o, threads(0));
+  const PixmapRun run = solver.run(solver.initial_state());
+  const test::TempDir tmp;
+  PixmapOutput out;
+  out.solver = std::shared_ptr<const PixmapSolver>(&solver, [](const PixmapSolver*) {});
+  out.state = run.state;
+  out.display = solver.display(run.state, solver.ambient(run.state));
+  auto fresh = [&](const std::string& name) {
+    const std::string dir = (tmp / name).string();
+    write_pixmap_state(dir, out);
+    return dir;
+  };
+  const std::string intact = fresh("intact");
+  expect_same_state(read_pixmap_state(intact), run.state);
+  const fs::path json = fs::path("pixmaps") / "state.json";
+  const std::string text = test::folder(intact).at(json.string());
+  auto with_json = [&](const std::string& name, const std::string& from, const std::string& to) {
+    const std::string dir = fresh(name);
+    std::string edited = text;
+    const size_t at = edited.find(from);
+    EXPECT_NE(at, std::string::npos) << from;
+    edited.replace(at, from.size(), to);
+    std::ofstream(fs::path(dir) / json) << edited;
+    return dir;
+  };
+  const std::string shots = with_json("shots", "\"shots\": 10", "\"shots\": 11");
+  EXPECT_TRUE(test::thrown<InputError>([&] { read_pixmap_state(shots); }).says({"state.json", "checksum", "edited"}));
+  const std::string swapped = fresh("swapped");
+  const fs::path p1 = fs::path(swapped) / "pixmaps" / "pixmap_1.vti", p2 = fs::path(swapped) / "pixmaps" / "pixmap_2.vti";
+  ASSERT_EQ(run.state.sizes[1], run.state.sizes[2]);
+  ASSERT_NE(run.state.radiosity[1], run.state.radiosity[2]);
+  fs::rename(p1, fs::path(swapped) / "pixmaps" / "t");
+  fs::rename(p2, p1);
+  fs::rename(fs::path(swapped) / "pixmaps" / "t", p2);
+  EXPECT_TRUE(test::thrown<InputError>([&] { read_pixmap_state(swapped); }).says({"checksum", "swapped"}));
+  // A state written before states had a checksum is read as it is.
+  const size_t line = text.find("  \"checksum\"");
+  ASSERT_NE(line, std::string::npos);
+  const std::string older = with_json("older", text.substr(line, text.find('\n', line) + 1 - line), "");
+  expect_same_state(read_pixmap_state(older), run.state);
 }
 
 TEST(PixmapSolver, DisplayMeshCoversEveryPatchAndEachTriangleLiesInItsTexel) {

@@ -251,6 +251,39 @@ TEST(Probe, FinalGatherMatchesTheFurnaceAndRejectsPointsOffSurfaces) {
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("probes.txt:4"), std::string::npos) << e.what();
   }
+  // Far off, with a long label: the distance is a number (its square
+  // passed double's range) and the label is cut short.
+  off.point = Vec3(1e300, 0.0, 0.5);
+  off.label = std::string(1000, 'x');
+  EXPECT_TRUE(test::thrown<InputError>([&] { evaluate_probes(s.scene, s.mesh, s.sol.element, {off}, so); })
+                  .says({"1e+300 away", "xxx...", "1000 characters"}));
+}
+
+TEST(Probe, EachProbeIsOnThePatchWhosePlaneAndFacingItShares) {
+  // A grid of probes on every face of the unit cube (its faces face in),
+  // corners and edges included: each on the patch of its plane that faces
+  // its way.
+  SolveOptions so;
+  const Solved s = solve_file("/furnace_cube/furnace_cube.obj", 0.3, so);
+  std::vector<Probe> probes;
+  std::vector<int> want;
+  for (int axis = 0; axis < 3; ++axis)
+    for (const double side : {0.0, 1.0})
+      for (int i = 0; i <= 10; ++i)
+        for (int j = 0; j <= 10; ++j) {
+          Probe p;
+          p.point[axis] = side;
+          p.point[(axis + 1) % 3] = 0.1 * i;
+          p.point[(axis + 2) % 3] = 0.1 * j;
+          p.normal[axis] = side == 0.0 ? 1.0 : -1.0;
+          probes.push_back(p);
+          int patch = -1;
+          for (size_t q = 0; q < s.scene.patches.size(); ++q)
+            if (glm::dot(s.scene.patches[q].normal, p.normal) > 0.99) patch = static_cast<int>(q);
+          want.push_back(patch);
+        }
+  const auto r = evaluate_probes(s.scene, s.mesh, s.sol.element, probes, so);
+  for (size_t k = 0; k < probes.size(); ++k) EXPECT_EQ(r[k].patch, want[k]) << k;
 }
 
 TEST(ErrorMetric, FurnaceFieldIsExactAndSamplesCoverTheArea) {

@@ -8,6 +8,7 @@
 #include "io/writers/json_file.h"
 #include "io/writers/vtk_file.h"
 #include "radmesh/errors.h"
+#include "core/fnv.h"
 
 #include <vtkCellData.h>
 #include <vtkFloatArray.h>
@@ -59,6 +60,24 @@ vtkNew<vtkFloatArray> float_cells(const char* name, const std::vector<float>& va
 }
 
 nlohmann::json vec(const Vec3& v) { return {v.x, v.y, v.z}; }
+
+// The state's checksum: its JSON (without the checksum) and every pixmap's
+// radiosity and unshot texels, so that a resume refuses a state whose
+// figures were damaged or edited, or whose pixmap files were swapped,
+// instead of continuing from it. (The texel files' zlib blocks carry their
+// own checks; state.json carries none.)
+std::string state_checksum(nlohmann::json doc, const std::vector<std::vector<float>>& radiosity,
+                           const std::vector<std::vector<float>>& unshot) {
+  doc.erase("checksum");
+  internal::Fnv1a h;
+  const std::string text = doc.dump();
+  h.add(text.data(), text.size());
+  for (size_t k = 0; k < radiosity.size(); ++k) {
+    h.add(radiosity[k].data(), radiosity[k].size() * sizeof(float));
+    h.add(unshot[k].data(), unshot[k].size() * sizeof(float));
+  }
+  return h.hex();
+}
 
 }  // namespace
 
@@ -118,6 +137,7 @@ std::vector<std::string> write_pixmap_state(const std::string& out_dir, const Pi
                               {"v", vec(pm.v)},
                               {"texel", {pm.texel_u, pm.texel_v}}});
   }
+  doc["checksum"] = state_checksum(doc, st.radiosity, st.unshot);
   const std::string json_path = (dir / "state.json").string();
   write_json(json_path, doc);
   written.push_back(json_path);
@@ -184,6 +204,10 @@ PixmapState read_pixmap_state(const std::string& dir) {
       st.unshot.push_back(array("unshot"));
       st.sizes.push_back({w, h});
     }
+    // A state written without a checksum (radmesh 0.2) is taken as it is.
+    if (doc.contains("checksum") && doc.at("checksum").get<std::string>() != state_checksum(doc, st.radiosity, st.unshot))
+      throw bad("its contents do not match its checksum (" + doc.at("checksum").get<std::string>() +
+                "): the state or one of its pixmap files was damaged, edited or swapped; run again without --resume");
   } catch (const nlohmann::json::exception& e) {
     throw bad(std::string("missing or wrong entry: ") + e.what());
   }

@@ -7,26 +7,19 @@
 #include "radiosity/pixmap/solver.h"
 
 #include "radmesh/errors.h"
+#include "core/fnv.h"
 
 #include <cmath>
-#include <cstdio>
 
 namespace radmesh {
 
 std::string scene_fingerprint(const Scene& scene) {
-  uint64_t h = 1469598103934665603ull;
-  auto mix = [&h](const void* data, size_t n) {
-    const unsigned char* p = static_cast<const unsigned char*>(data);
-    for (size_t i = 0; i < n; ++i) {
-      h ^= p[i];
-      h *= 1099511628211ull;
-    }
-  };
-  auto mix_int = [&](long long v) { mix(&v, sizeof v); };
+  internal::Fnv1a h;
+  auto mix_int = [&](long long v) { h.add(&v, sizeof v); };
   auto mix_vec = [&](const Vec3& v) {
     for (int c = 0; c < 3; ++c) {
       const double d = v[c] == 0.0 ? 0.0 : v[c];  // -0 and 0 alike
-      mix(&d, sizeof d);
+      h.add(&d, sizeof d);
     }
   };
   mix_int(static_cast<long long>(scene.vertices.size()));
@@ -47,9 +40,7 @@ std::string scene_fingerprint(const Scene& scene) {
       for (int v : hole) mix_int(v);
     }
   }
-  char text[17];
-  std::snprintf(text, sizeof text, "%016llx", static_cast<unsigned long long>(h));
-  return text;
+  return h.hex();
 }
 
 void check_resumable(const PixmapState& state, const Scene& scene, const PixmapLayout& layout,
