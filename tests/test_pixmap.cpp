@@ -760,6 +760,15 @@ void expect_same_state(const PixmapState& a, const PixmapState& b) {
   EXPECT_EQ(a.power_escaped, b.power_escaped);
 }
 
+// What write_pixmap_state takes for `state` of `solver` (which outlives it).
+PixmapOutput output_of(const PixmapSolver& solver, const PixmapState& state) {
+  PixmapOutput out;
+  out.solver = std::shared_ptr<const PixmapSolver>(&solver, [](const PixmapSolver*) {});
+  out.state = state;
+  out.display = solver.display(state, solver.ambient(state));
+  return out;
+}
+
 TEST(PixmapSolver, OneAndTwoThreadsAndAResumeGiveIdenticalStates) {
   const Scene scene = read_obj_scene(kData + "/box_on_floor/box_on_floor.obj");
   PixmapOptions o;
@@ -777,11 +786,7 @@ TEST(PixmapSolver, OneAndTwoThreadsAndAResumeGiveIdenticalStates) {
   const PixmapRun p = part.run(part.initial_state());
   const test::TempDir tmp;
   const std::string dir = (tmp / "state").string();
-  PixmapOutput out;
-  out.solver = std::shared_ptr<const PixmapSolver>(&part, [](const PixmapSolver*) {});
-  out.state = p.state;
-  out.display = part.display(p.state, part.ambient(p.state));
-  write_pixmap_state(dir, out);
+  write_pixmap_state(dir, output_of(part, p.state));
   PixmapState saved = read_pixmap_state(dir);
   expect_same_state(saved, p.state);
   check_resumable(saved, scene, one.layout(), o, saved.source);
@@ -821,10 +826,7 @@ TEST(PixmapSolver, AStateDamagedEditedOrWithSwappedPixmapsIsRefusedByItsChecksum
   const PixmapSolver solver(scene, o, threads(0));
   const PixmapRun run = solver.run(solver.initial_state());
   const test::TempDir tmp;
-  PixmapOutput out;
-  out.solver = std::shared_ptr<const PixmapSolver>(&solver, [](const PixmapSolver*) {});
-  out.state = run.state;
-  out.display = solver.display(run.state, solver.ambient(run.state));
+  const PixmapOutput out = output_of(solver, run.state);
   auto fresh = [&](const std::string& name) {
     const std::string dir = (tmp / name).string();
     write_pixmap_state(dir, out);
