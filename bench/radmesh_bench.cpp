@@ -55,6 +55,7 @@ struct Settings {
   std::string method = "matrix";  // a name in methods()
   OptionValues options = {};      // the method's options (the rest take defaults)
   FieldMode field = FieldMode::automatic;  // "field=MODE" in --settings; auto as in radmesh run
+  double display_tolerance = 0.0;          // "display_tolerance=T" in --settings
 };
 
 // "epsilon=0.001;tvertex=split": the options of a row, in the CSV and series names.
@@ -267,6 +268,7 @@ struct Row {
 // a curve sweeps).
 std::string series_key(const Settings& set) {
   std::string key = set.method + " field=" + to_string(set.field);
+  if (set.display_tolerance > 0.0) key += " display_tolerance=" + format_number(set.display_tolerance);
   for (const OptionSpec& spec : find_method(set.method).options) {
     const auto given = set.options.find(spec.name);
     if (given != set.options.end() && (spec.kind == OptionSpec::Kind::choice || spec.kind == OptionSpec::Kind::flag))
@@ -283,7 +285,7 @@ Settings parse_settings(const std::string& text) {
   auto bad = [&](const std::string& why) {
     return InputError("--settings '" + text + "': " + why +
                       " (expected EDGE:RAYS:QUAD_LEVEL[:off|contacts|full[:METHOD[:NAME=VALUE]...]]; NAME=VALUE a method option "
-                      "or field=gather|fit|mean)");
+                      "or field=gather|fit|mean or display_tolerance=T)");
   };
   if (f.size() < 3) throw bad("too few fields");
   Settings set{};
@@ -303,6 +305,8 @@ Settings parse_settings(const std::string& text) {
     std::replace(name.begin(), name.end(), '-', '_');
     if (name == "field")
       set.field = parse_field_mode(f[k].substr(eq + 1));
+    else if (name == "display_tolerance")
+      set.display_tolerance = std::stod(f[k].substr(eq + 1));
     else
       set.options[name] = f[k].substr(eq + 1);
   }
@@ -323,6 +327,7 @@ Row run_one(const Scenario& sc, const Scene& scene, const std::vector<SurfaceSam
   so.rays = set.rays;
   so.quadrature.max_level = set.quad_level;
   so.field = set.field;
+  so.display_tolerance = set.display_tolerance;
   const MethodResult r = run_method(method, scene, mesh, so, set.options);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   const Solution& sol = r.solution;

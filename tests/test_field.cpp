@@ -767,3 +767,69 @@ TEST(Field, TheClusteredGatherOfAPointDoesNotDependOnThePointsBeforeIt) {
     ASSERT_EQ(forward[i], parallel[i]) << i;
   }
 }
+
+// ---------------------------------------------------------------- the refined display
+
+TEST(DisplayRefinement, ThePlatesMeanMeetsTheClosedFormThatTheSolversMeshMisses) {
+  // Howell's C-11: two unit squares 1 apart, F = 0.199825, the receiver's
+  // B = rho E F = 0.0999124. The gather field on the solver's mesh
+  // integrates the vertex values' linear interpolation, which lies below
+  // this concave field (-0.17%); the refined display's means take each
+  // triangle's edge midpoints (a rule exact for quadratics).
+  const Scene scene = read_obj_scene(kData + "/parallel_plates/parallel_plates.obj");
+  SolveOptions so;
+  so.field = FieldMode::gather;
+  const int receiver = test::patch_named(scene, "receiver");
+  const double exact = 0.0999124;
+  const MethodResult plain = solve(scene, "matrix", 0.0, DiscontinuityMode::off, so);
+  EXPECT_GT(std::abs(patch_mean_radiosity(scene, plain.mesh, plain.solution.nodal)[receiver].x / exact - 1.0), 1e-3);
+  so.display_tolerance = 0.005;
+  const MethodResult shown = solve(scene, "matrix", 0.0, DiscontinuityMode::off, so);
+  EXPECT_NEAR(patch_mean_radiosity(scene, shown.mesh, shown.solution.nodal)[receiver].x / exact, 1.0, 1e-5);
+  EXPECT_GT(shown.field.display_splits, 0);
+  // The solver's element means are reported as they were.
+  EXPECT_EQ(element_patch_means(scene, shown.mesh, shown.solution)[receiver],
+            patch_mean_radiosity(scene, plain.mesh, plain.solution.element)[receiver]);
+  // The display covers each patch exactly, and its per-triangle fields follow it.
+  const auto areas = test::patch_areas(scene, shown.mesh);
+  for (size_t p = 0; p < scene.patches.size(); ++p)
+    EXPECT_NEAR(areas[p], scene.patch_area(static_cast<int>(p)), 1e-12);
+  EXPECT_EQ(shown.solution.element.size(), shown.mesh.triangles.size());
+  for (const auto& [name, values] : shown.cell_fields) EXPECT_EQ(values.size(), shown.mesh.triangles.size()) << name;
+}
+
+TEST(DisplayRefinement, AFurnaceStaysExactAndAShadowIsRefinedWhereItFalls) {
+  // In the furnace every point is E / (1 - rho): no midpoint misses, no
+  // split. Under the floating occluder the display splits along the
+  // penumbra, not in the lit floor far from it.
+  SolveOptions so;
+  so.field = FieldMode::gather;
+  so.display_tolerance = 0.002;
+  so.tolerance = 1e-10;
+  const Scene furnace = read_obj_scene(kData + "/furnace_cube/furnace_cube.obj");
+  const MethodResult f = solve(furnace, "matrix", 0.3, DiscontinuityMode::off, so);
+  EXPECT_EQ(f.field.display_splits, 0);
+  for (const Rgb& b : f.solution.nodal.radiosity) EXPECT_NEAR(b.x, 2.0, 1e-6);
+  const Scene occluded = read_obj_scene(kData + "/floating_occluder/floating_occluder.obj");
+  const MethodResult o = solve(occluded, "hierarchical", 0.0, DiscontinuityMode::off, so);
+  EXPECT_GT(o.field.display_splits, 0);
+  EXPECT_GT(o.field.display_rounds, 1);
+  // One and two threads give the same display and values.
+  so.threads = 1;
+  const MethodResult one = solve(occluded, "hierarchical", 0.0, DiscontinuityMode::off, so);
+  so.threads = 2;
+  const MethodResult two = solve(occluded, "hierarchical", 0.0, DiscontinuityMode::off, so);
+  EXPECT_EQ(one.mesh.triangles, two.mesh.triangles);
+  EXPECT_EQ(one.solution.nodal.radiosity, two.solution.nodal.radiosity);
+}
+
+TEST(DisplayRefinement, AFieldThatIsNotTheGatherIsNotRefinedAndTheRunSaysSo) {
+  const Scene scene = read_obj_scene(kData + "/parallel_plates/parallel_plates.obj");
+  SolveOptions so;
+  so.field = FieldMode::mean;
+  so.display_tolerance = 0.01;
+  const MethodResult r = solve(scene, "matrix", 0.0, DiscontinuityMode::off, so);
+  EXPECT_EQ(r.field.display_rounds, 0);
+  ASSERT_FALSE(r.solution.stats.skips.empty());
+  EXPECT_TRUE(test::contains(r.solution.stats.skips.back(), "display refinement")) << r.solution.stats.skips.back();
+}

@@ -34,6 +34,10 @@ struct FieldReport {
   long long rays_cast = 0;
   double seconds_direct = 0.0;
   double seconds_gather = 0.0;
+  // refine_display: its rounds, the midpoints it evaluated, the triangles it split.
+  int display_rounds = 0;
+  long long display_midpoints = 0;
+  long long display_splits = 0;
 };
 
 // Evaluates B = E + rho (direct + indirect irradiance) at points of the
@@ -155,6 +159,23 @@ NodalField compute_field(const Scene& scene, const Mesh& mesh, const std::vector
                          const SolveOptions& options, FieldReport* report = nullptr,
                          const ProgressFn& progress = {});
 
+// The gather field on a display of its own (SolveOptions::display_tolerance
+// > 0): `initial` (the mesh the solver started from, with its
+// discontinuity lines) refined by the field's own interpolation error.
+// `mesh` and `element` (the solver's, which the field gathers from) are
+// replaced by the display's, each display triangle taking the radiosity of
+// the solver's element its centroid lies in, whose index goes to `origin`.
+// Rounds: every display vertex gets its value (once); the field is
+// evaluated at the midpoints of the edges of every display triangle not yet
+// at kDisplayLevels; the triangles where a midpoint's value differs from
+// the mean of its edge's ends by more than the tolerance are split in four,
+// until none is. Triangles whose midpoints were evaluated carry their mean
+// by the midpoints (NodalField::triangle_mean).
+NodalField refine_display(const Scene& scene, const Mesh& initial, Mesh& mesh, std::vector<Rgb>& element,
+                          std::vector<int>& origin, const SolveOptions& options, FieldReport* report = nullptr,
+                          const ProgressFn& progress = {});
+inline constexpr int kDisplayLevels = 8;
+
 // Per patch: the mean of the per-vertex linear field over the patch (its
 // integral over the patch's triangles divided by their area). The summary's
 // patch means.
@@ -162,5 +183,8 @@ std::vector<Rgb> patch_mean_radiosity(const Scene& scene, const Mesh& mesh, cons
 // Per patch: the area-weighted mean of the element radiosity (what the
 // solver itself computed).
 std::vector<Rgb> patch_mean_radiosity(const Scene& scene, const Mesh& mesh, const std::vector<Rgb>& element);
+// The solver's per-patch element means: solution.element_patch_mean, or
+// computed over `mesh` where that is empty.
+std::vector<Rgb> element_patch_means(const Scene& scene, const Mesh& mesh, const Solution& solution);
 
 }  // namespace radmesh

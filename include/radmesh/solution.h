@@ -19,6 +19,12 @@ struct NodalField {
   std::vector<int> source_vertex;            // per display vertex: index into Mesh::positions
   std::vector<std::array<int, 3>> corners;   // per triangle: display vertex indices
   std::vector<Rgb> radiosity;                // per display vertex
+  // Per triangle, when the field was also sampled inside the triangles (a
+  // refined display: the midpoints of their edges), each triangle's mean
+  // by a rule exact for quadratic fields, which patch means integrate;
+  // empty otherwise (patch means integrate the vertex values' linear
+  // interpolation).
+  std::vector<Rgb> triangle_mean;
 };
 
 struct SolveStats {
@@ -59,6 +65,10 @@ struct Solution {
   std::vector<Rgb> element;  // per mesh triangle
   NodalField nodal;
   SolveStats stats;
+  // Per patch, where the mesh shown is not the solver's (a refined
+  // display): the area-weighted mean of the solver's elements; empty
+  // otherwise (element_patch_means computes it from `element`).
+  std::vector<Rgb> element_patch_mean;
 };
 
 }  // namespace radmesh

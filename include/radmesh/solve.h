@@ -59,6 +59,13 @@ struct SolveOptions {
   // scene of up to a few thousand patches: it gives a fraction of the
   // fit's error (docs/decisions.md).
   FieldMode field = FieldMode::automatic;
+  // With the gather field: 0 shows the field on the solver's mesh; t > 0
+  // refines the display by the field's own interpolation error, splitting
+  // a display triangle (into four, T-vertices closed by zero-area
+  // triangles) where the field at one of its edge midpoints differs from
+  // the mean of the edge's ends by more than t x the largest reflected
+  // radiosity (refine_display).
+  double display_tolerance = 0.0;
 };
 
 // The options a user sets (tolerance, threads, rays, max_memory, field),

@@ -439,6 +439,48 @@ Rgb FieldEvaluator::radiosity(const Vec3& x, int patch, uint64_t id, FieldReport
   return impl_->scene.material_of(patch).emission + direct(x, patch, report) + indirect(x, patch, id, report);
 }
 
+namespace internal {
+
+void display_sides(const Mesh& mesh, const NodalField& field, std::vector<int>& patch, std::vector<Vec3>& inward) {
+  const size_t nd = field.points.size();
+  patch.assign(nd, -1);
+  inward.assign(nd, Vec3(0.0));
+  std::vector<std::vector<std::pair<int, double>>> area(nd);  // (patch, area) per display vertex
+  for (int t = 0; t < mesh.triangle_count(); ++t)
+    for (int d : field.corners[static_cast<size_t>(t)]) {
+      auto& list = area[static_cast<size_t>(d)];
+      const int p = mesh.patch[static_cast<size_t>(t)];
+      auto it = std::find_if(list.begin(), list.end(), [&](const auto& e) { return e.first == p; });
+      if (it == list.end()) it = list.insert(list.end(), {p, 0.0});
+      it->second += mesh.area(t);
+    }
+  for (size_t d = 0; d < nd; ++d)
+    patch[d] = std::max_element(area[d].begin(), area[d].end(),
+                                [](const auto& a, const auto& b) { return a.second < b.second; })->first;
+  std::vector<Vec3> towards(nd, Vec3(0.0));
+  std::vector<double> weight(nd, 0.0);
+  for (int t = 0; t < mesh.triangle_count(); ++t)
+    for (int d : field.corners[static_cast<size_t>(t)])
+      if (mesh.patch[static_cast<size_t>(t)] == patch[static_cast<size_t>(d)]) {
+        towards[static_cast<size_t>(d)] += mesh.area(t) * mesh.centroid(t);
+        weight[static_cast<size_t>(d)] += mesh.area(t);
+      }
+  for (size_t d = 0; d < nd; ++d)
+    if (weight[d] > 0.0) inward[d] = towards[d] / weight[d] - field.points[d];
+}
+
+void add_counts(FieldReport& to, const FieldReport& from) {
+  to.direct += from.direct;
+  to.on_other_surface += from.on_other_surface;
+  to.gather_sources += from.gather_sources;
+  to.gather_nodes += from.gather_nodes;
+  to.gather_clusters += from.gather_clusters;
+  to.gather_triangles += from.gather_triangles;
+  to.rays_cast += from.rays_cast;
+}
+
+}  // namespace internal
+
 NodalField compute_field(const Scene& scene, const Mesh& mesh, const std::vector<Rgb>& element,
                          const SolveOptions& options, FieldReport* report, const ProgressFn& progress) {
   FieldReport rep;
@@ -452,35 +494,9 @@ NodalField compute_field(const Scene& scene, const Mesh& mesh, const std::vector
   NodalField field = compute_nodal(scene, mesh, element, options.crease_angle, NodalMethod::mean);
   const size_t nd = field.points.size();
   rep.display_vertices = static_cast<long long>(nd);
-  // Per display vertex: its patch (where a group spans coplanar patches of
-  // one material, the one with the most area around the vertex) and the
-  // direction into that patch's triangles around it.
-  std::vector<int> patch(nd, -1);
-  std::vector<Vec3> inward(nd, Vec3(0.0));
-  {
-    std::vector<std::vector<std::pair<int, double>>> area(nd);  // (patch, area) per display vertex
-    for (int t = 0; t < mesh.triangle_count(); ++t)
-      for (int d : field.corners[static_cast<size_t>(t)]) {
-        auto& list = area[static_cast<size_t>(d)];
-        const int p = mesh.patch[static_cast<size_t>(t)];
-        auto it = std::find_if(list.begin(), list.end(), [&](const auto& e) { return e.first == p; });
-        if (it == list.end()) it = list.insert(list.end(), {p, 0.0});
-        it->second += mesh.area(t);
-      }
-    for (size_t d = 0; d < nd; ++d)
-      patch[d] = std::max_element(area[d].begin(), area[d].end(),
-                                  [](const auto& a, const auto& b) { return a.second < b.second; })->first;
-    std::vector<Vec3> towards(nd, Vec3(0.0));
-    std::vector<double> weight(nd, 0.0);
-    for (int t = 0; t < mesh.triangle_count(); ++t)
-      for (int d : field.corners[static_cast<size_t>(t)])
-        if (mesh.patch[static_cast<size_t>(t)] == patch[static_cast<size_t>(d)]) {
-          towards[static_cast<size_t>(d)] += mesh.area(t) * mesh.centroid(t);
-          weight[static_cast<size_t>(d)] += mesh.area(t);
-        }
-    for (size_t d = 0; d < nd; ++d)
-      if (weight[d] > 0.0) inward[d] = towards[d] / weight[d] - field.points[d];
-  }
+  std::vector<int> patch;
+  std::vector<Vec3> inward;
+  internal::display_sides(mesh, field, patch, inward);
 
   const FieldEvaluator evaluator(scene, mesh, element, options);
   rep.clustered = evaluator.clustered();
@@ -512,13 +528,7 @@ NodalField compute_field(const Scene& scene, const Mesh& mesh, const std::vector
   });
   for (size_t d = 0; d < nd; ++d) {
     field.radiosity[d] = scene.material_of(patch[d]).emission + direct[d] + indirect[d];
-    rep.direct += per[d].direct;
-    rep.on_other_surface += per[d].on_other_surface;
-    rep.gather_sources += per[d].gather_sources;
-    rep.gather_nodes += per[d].gather_nodes;
-    rep.gather_clusters += per[d].gather_clusters;
-    rep.gather_triangles += per[d].gather_triangles;
-    rep.rays_cast += per[d].rays_cast;
+    internal::add_counts(rep, per[d]);
   }
   if (report) *report = rep;
   return field;
@@ -545,7 +555,9 @@ std::vector<Rgb> patch_means(const Scene& scene, const Mesh& mesh, Value&& value
 }  // namespace
 
 std::vector<Rgb> patch_mean_radiosity(const Scene& scene, const Mesh& mesh, const NodalField& field) {
+  const bool sampled = field.triangle_mean.size() == mesh.triangles.size();
   return patch_means(scene, mesh, [&](int t) {
+    if (sampled) return field.triangle_mean[static_cast<size_t>(t)];
     Rgb mean(0.0);
     for (int d : field.corners[static_cast<size_t>(t)]) mean += field.radiosity[static_cast<size_t>(d)] / 3.0;
     return mean;
@@ -554,6 +566,11 @@ std::vector<Rgb> patch_mean_radiosity(const Scene& scene, const Mesh& mesh, cons
 
 std::vector<Rgb> patch_mean_radiosity(const Scene& scene, const Mesh& mesh, const std::vector<Rgb>& element) {
   return patch_means(scene, mesh, [&](int t) { return element[static_cast<size_t>(t)]; });
+}
+
+std::vector<Rgb> element_patch_means(const Scene& scene, const Mesh& mesh, const Solution& solution) {
+  return solution.element_patch_mean.empty() ? patch_mean_radiosity(scene, mesh, solution.element)
+                                             : solution.element_patch_mean;
 }
 
 }  // namespace radmesh

@@ -25,6 +25,14 @@
 
 namespace radmesh::internal {
 
+// Per display vertex of `field` over `mesh`: its patch (where a group
+// spans coplanar patches of one material, the one with the most area around
+// the vertex) and the direction into that patch's triangles around it.
+void display_sides(const Mesh& mesh, const NodalField& field, std::vector<int>& patch, std::vector<Vec3>& inward);
+
+// Adds the counts of one evaluation's report to `to`.
+void add_counts(FieldReport& to, const FieldReport& from);
+
 // How many times a point of a source is drawn before it is given up, where
 // every draw so far fell where the kernel is 0 (facing away from the point,
 // or behind its tangent plane).

@@ -45,7 +45,7 @@ void add_objects_and_patches(nlohmann::json& doc, const Scene& scene, const Mesh
   std::vector<Rgb> mean, element_mean;
   if (solution) {
     mean = patch_mean_radiosity(scene, mesh, solution->nodal);
-    element_mean = patch_mean_radiosity(scene, mesh, solution->element);
+    element_mean = element_patch_means(scene, mesh, *solution);
   }
   // Objects: patches grouped by name, in order of first appearance.
   std::vector<std::string> names;
@@ -162,6 +162,9 @@ void add_field(nlohmann::json& doc, const FieldReport& f) {
                               {"rays_cast", f.rays_cast},
                               {"opening", FieldEvaluator::kOpening},
                               {"seconds", f.seconds_gather}};
+    if (f.display_rounds > 0)
+      doc["field"]["display_refinement"] = {
+          {"rounds", f.display_rounds}, {"midpoints", f.display_midpoints}, {"splits", f.display_splits}};
   }
 }
 
@@ -246,7 +249,7 @@ void write_patches_csv(const std::string& path, const Scene& scene, const Mesh& 
   std::vector<Rgb> mean, element_mean;
   if (solution) {
     mean = patch_mean_radiosity(scene, mesh, solution->nodal);
-    element_mean = patch_mean_radiosity(scene, mesh, solution->element);
+    element_mean = element_patch_means(scene, mesh, *solution);
   }
   write_file_atomically(path, [&](std::ostream& out) {
     out << "id,name,material,area";

@@ -107,7 +107,7 @@ MethodOptions method_options(const Method& method, const OptionValues& given) {
 void check_shared_options(const Method& method, const std::vector<std::string>& given, FieldMode field) {
   for (const std::string& name : given) {
     if (std::find(method.unused.begin(), method.unused.end(), name) == method.unused.end()) continue;
-    if (name == "rays" && field == FieldMode::gather) continue;  // the gather's shadow rays
+    if ((name == "rays" || name == "display_tolerance") && field == FieldMode::gather) continue;  // the gather's
     std::vector<std::string> users;
     for (const Method& m : methods())
       if (std::find(m.unused.begin(), m.unused.end(), name) == m.unused.end()) users.push_back(m.name);
@@ -186,7 +186,24 @@ MethodResult solve_and_field(const Method& method, const Scene& scene, const Mes
     r.field.mode = resolve_field_mode(options.field, scene, r.mesh, &r.field.why);
     if (!r.field.why.empty()) r.solution.stats.skips.push_back(r.field.why);
   }
-  if (r.field.mode == FieldMode::gather) {
+  if (options.display_tolerance > 0.0 && r.field.mode != FieldMode::gather)
+    r.solution.stats.skips.push_back("display refinement: the field is " +
+                                     (r.field.mode == FieldMode::own ? r.field.own_field : to_string(r.field.mode)) +
+                                     ", and only the gather field is refined; the display is the solver's mesh");
+  if (r.field.mode == FieldMode::gather && options.display_tolerance > 0.0) {
+    std::vector<int> origin;
+    r.solution.element_patch_mean = patch_mean_radiosity(scene, r.mesh, r.solution.element);
+    r.solution.nodal =
+        refine_display(scene, mesh, r.mesh, r.solution.element, origin, options, &r.field, callbacks.progress);
+    // The method's per-element fields follow the display's triangles.
+    for (auto& [name, values] : r.cell_fields) {
+      std::vector<int> shown(origin.size());
+      for (size_t t = 0; t < origin.size(); ++t) shown[t] = values[static_cast<size_t>(origin[t])];
+      values = std::move(shown);
+    }
+    r.seconds.emplace_back("direct", r.field.seconds_direct);
+    r.seconds.emplace_back("gather", r.field.seconds_gather);
+  } else if (r.field.mode == FieldMode::gather) {
     r.solution.nodal = compute_field(scene, r.mesh, r.solution.element, options, &r.field, callbacks.progress);
     r.seconds.emplace_back("direct", r.field.seconds_direct);
     r.seconds.emplace_back("gather", r.field.seconds_gather);

@@ -31,7 +31,7 @@ Result solve(const Scene& scene, const std::string& method, const OptionValues& 
 std::vector<Rgb> Result::patch_means() const { return patch_mean_radiosity(*scene, mesh, solution.nodal); }
 
 std::vector<Rgb> Result::element_patch_means() const {
-  return patch_mean_radiosity(*scene, mesh, solution.element);
+  return radmesh::element_patch_means(*scene, mesh, solution);
 }
 
 }  // namespace radmesh

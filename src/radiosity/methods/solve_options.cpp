@@ -32,6 +32,11 @@ const OptionTable<SolveOptions>& solve_option_table() {
              "a budget of (vertex, source) pairs, then fit; a method with a field of its own keeps it)",
              {{"auto", FieldMode::automatic}, {"gather", FieldMode::gather}, {"fit", FieldMode::fit},
               {"mean", FieldMode::mean}});
+    t.real("display_tolerance", &SolveOptions::display_tolerance, "",
+           "with the gather field: refine the display where the field at an edge midpoint differs from the "
+           "mean of the edge's ends by more than this fraction of the largest reflected radiosity (0: the "
+           "display is the solver's mesh)",
+           0.0, 1.0);
     return t;
   }();
   return table;

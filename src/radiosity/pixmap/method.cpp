@@ -148,7 +148,7 @@ Method make_pixmap_method() {
   // The meshing options, the solve's tolerance and its shadow rays (the
   // hemicubes see occlusion) are not its.
   m.meshing = pixmap_meshing_options;
-  m.unused = {"tolerance", "rays", "max_edge", "min_angle", "discontinuity", "max_shadow_lines"};
+  m.unused = {"tolerance", "rays", "display_tolerance", "max_edge", "min_angle", "discontinuity", "max_shadow_lines"};
   m.read_state = [](const std::string& out_dir) -> std::shared_ptr<const MethodState> {
     return std::make_shared<const PixmapState>(read_pixmap_state(out_dir));
   };
