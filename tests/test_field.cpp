@@ -798,10 +798,10 @@ TEST(DisplayRefinement, ThePlatesMeanMeetsTheClosedFormThatTheSolversMeshMisses)
   for (const auto& [name, values] : shown.cell_fields) EXPECT_EQ(values.size(), shown.mesh.triangles.size()) << name;
 }
 
-TEST(DisplayRefinement, AFurnaceStaysExactAndAShadowIsRefinedWhereItFalls) {
+TEST(DisplayRefinement, AFurnaceIsNotSplitAndAShadowIs) {
   // In the furnace every point is E / (1 - rho): no midpoint misses, no
-  // split. Under the floating occluder the display splits along the
-  // penumbra, not in the lit floor far from it.
+  // split. Under the floating occluder the field bends at the penumbra:
+  // the display splits there, over more than one round.
   SolveOptions so;
   so.field = FieldMode::gather;
   so.display_tolerance = 0.002;
