@@ -16,6 +16,7 @@
 #include "radmesh/solve.h"
 #include "radmesh/version.h"
 #include "core/text_syntax.h"
+#include "io/writers/atomic_file.h"
 
 #include <CLI/CLI.hpp>
 
@@ -26,7 +27,6 @@
 #include <iostream>
 #include <map>
 #include <optional>
-#include <regex>
 
 #include <atomic>
 #include <csignal>
@@ -150,24 +150,6 @@ extern "C" void on_interrupt(int) {
   }
 }
 const char* const kQualityOutputs = R"(quality\.csv|quality_(min_angle|aspect_ratio)\.png)";
-
-// Makes the output directory in `batch` (IoError naming it when that
-// fails) and has the batch remove, once committed, what an earlier run of
-// the same command left there (files whose names match `outputs`) that this
-// run does not write again (round files, links, probes, pictures), so the
-// directory holds one run's results. A run that fails leaves it as it was.
-void prepare_output_dir(OutputBatch& batch, const std::string& dir, const std::string& outputs,
-                        const std::vector<std::string>& will_write) {
-  batch.create_directories(dir);
-  const std::regex ours(outputs);
-  std::error_code ec;
-  for (const fs::directory_entry& e : fs::directory_iterator(dir, ec)) {
-    const std::string name = e.path().filename().string();
-    if (e.is_regular_file() && std::regex_match(name, ours) &&
-        std::find(will_write.begin(), will_write.end(), name) == will_write.end())
-      batch.remove_on_commit(e.path().string());
-  }
-}
 
 // The names given on the command line, of a table's options.
 std::vector<std::string> names_of(const OptionValues& given) {
@@ -307,7 +289,7 @@ std::vector<std::string> write_outputs(const Params& p, Computed& c, Reporter& r
   if (result)
     for (const std::string& name : result->files.names) outputs.push_back(name);
   OutputBatch batch;
-  prepare_output_dir(batch, p.out_dir, run_outputs(), outputs);
+  internal::prepare_output_dir(p.out_dir, run_outputs(), outputs);  // through the batch: removed at its commit
 
   rep.begin("write");
   std::vector<std::string> written;
@@ -436,8 +418,8 @@ int quality(Params& p) {
                 r.min_angle, r.max_angle, r.aspect_p50, r.aspect_p95, r.aspect_max, r.contact_segments,
                 r.d1_segments, r.d2_segments, r.zero_area);
   OutputBatch batch;  // all files or none, as for run
-  prepare_output_dir(batch, p.out_dir, kQualityOutputs,
-                     {"quality.csv", "quality_min_angle.png", "quality_aspect_ratio.png"});
+  internal::prepare_output_dir(p.out_dir, kQualityOutputs,
+                               {"quality.csv", "quality_min_angle.png", "quality_aspect_ratio.png"});
   const std::string csv = (fs::path(p.out_dir) / "quality.csv").string();
   write_quality_csv(csv, names, rows);
   std::vector<std::string> written = {csv};

@@ -44,15 +44,37 @@ struct Result {
   std::string err;
 };
 
-// Runs radmesh with `args`; captures stderr (in a folder of its own).
-Result run_cli(const std::string& args) {
+// Runs radmesh with `args`; captures stderr (in a folder of its own). A
+// status of 128 + N: killed by signal N.
+//
+// With a `file_limit` >= 0, no file it writes may grow past that many bytes
+// (RLIMIT_FSIZE: a write past it fails with EFBIG, as one on a full disk
+// fails with ENOSPC); SIGXFSZ keeps its default action (the program must
+// not be killed by it), and glibc fills what the program allocates with a
+// pattern (no thread cache, MALLOC_PERTURB_), so that reading memory never
+// set (VTK's XML writer freed such a pointer on a failed write) fails every
+// time.
+Result run_cli(const std::string& args, long file_limit = -1) {
   const test::TempDir tmp("stderr");
   const fs::path err = tmp / "stderr.txt";
-  const std::string cmd = "DISPLAY= " + kExe + " " + args + " >/dev/null 2>" + err.string();
-  const int rc = std::system(cmd.c_str());
+  const std::string cmd = std::string("DISPLAY= ") +
+                          (file_limit >= 0 ? "GLIBC_TUNABLES=glibc.malloc.tcache_count=0 MALLOC_PERTURB_=165 " : "") +
+                          "exec " + kExe + " " + args + " >/dev/null 2>" + err.string();
+  std::fflush(nullptr);
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    if (file_limit >= 0) {
+      const rlimit r{static_cast<rlim_t>(file_limit), static_cast<rlim_t>(file_limit)};
+      ::setrlimit(RLIMIT_FSIZE, &r);
+    }
+    ::execl("/bin/sh", "sh", "-c", cmd.c_str(), static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  int status = 0;
+  ::waitpid(pid, &status, 0);
   std::ifstream in(err);
   std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  return {WEXITSTATUS(rc), text};
+  return {WIFSIGNALED(status) ? 128 + WTERMSIG(status) : WEXITSTATUS(status), text};
 }
 
 // The summary.json a run wrote into `out`.
@@ -629,33 +651,6 @@ namespace {
 using radmesh::test::folder;
 using radmesh::test::names;
 
-// Runs radmesh as run_cli does, but no file it writes may grow past `limit`
-// bytes (RLIMIT_FSIZE: a write past it fails with EFBIG, as one on a full
-// disk fails with ENOSPC). SIGXFSZ keeps its default action (the program
-// must not be killed by it). glibc fills what the program allocates with a
-// pattern (no thread cache, MALLOC_PERTURB_), so that reading memory never
-// set (VTK's XML writer freed such a pointer on a failed write) fails every
-// time. A status of 128 + N: killed by signal N.
-Result run_cli_limited(const std::string& args, long limit) {
-  const test::TempDir tmp("stderr");
-  const fs::path err = tmp / "stderr.txt";
-  const std::string cmd = "DISPLAY= GLIBC_TUNABLES=glibc.malloc.tcache_count=0 MALLOC_PERTURB_=165 exec " + kExe +
-                          " " + args + " >/dev/null 2>" + err.string();
-  std::fflush(nullptr);
-  const pid_t pid = ::fork();
-  if (pid == 0) {
-    const rlimit r{static_cast<rlim_t>(limit), static_cast<rlim_t>(limit)};
-    ::setrlimit(RLIMIT_FSIZE, &r);
-    ::execl("/bin/sh", "sh", "-c", cmd.c_str(), static_cast<char*>(nullptr));
-    ::_exit(127);
-  }
-  int status = 0;
-  ::waitpid(pid, &status, 0);
-  std::ifstream in(err);
-  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  return {WIFSIGNALED(status) ? 128 + WTERMSIG(status) : WEXITSTATUS(status), text};
-}
-
 // A flat grid of n x n squares, two triangles each (one patch each), all
 // named `name`, in DIR/grid.obj.
 std::string write_grid(const fs::path& dir, int n, const std::string& name) {
@@ -730,7 +725,7 @@ TEST_P(CliFullDisk, TheLargestFileFailsAndTheFolderIsLeftAsItWas) {
   std::ofstream(out / "notes.txt") << "the user's notes\n";
   const auto before = folder(out);
 
-  const Result full = run_cli_limited(args + " -o " + out.string(), limit);
+  const Result full = run_cli(args + " -o " + out.string(), limit);
   EXPECT_EQ(full.status, 1) << full.err;
   EXPECT_EQ(std::count(full.err.begin(), full.err.end(), '\n'), 1) << full.err;
   EXPECT_TRUE(test::mentions(full.err, {"radmesh: error: ", (out / largest).string()}));
@@ -738,7 +733,7 @@ TEST_P(CliFullDisk, TheLargestFileFailsAndTheFolderIsLeftAsItWas) {
   EXPECT_TRUE(after == before) << "before: " << names(before) << "\nafter: " << names(after);
 
   // Into a folder the run makes: none left.
-  const Result into_new = run_cli_limited(args + " -o " + fresh.string(), limit);
+  const Result into_new = run_cli(args + " -o " + fresh.string(), limit);
   EXPECT_EQ(into_new.status, 1) << into_new.err;
   EXPECT_TRUE(test::mentions(into_new.err, {(fresh / largest).string()}));
   EXPECT_FALSE(fs::exists(fresh.parent_path())) << names(folder(fresh.parent_path()));
@@ -788,22 +783,18 @@ TEST(Cli, AFileSizeLimitInThePixmapVtuFailsTheRunWithoutACrash) {
   ASSERT_EQ(r.status, 0) << r.err;
   const long half = static_cast<long>(fs::file_size(whole / "radiosity.vtu") / 2);
   for (const long limit : {half, half / 8}) {
-    const Result full = run_cli_limited(args + " -o " + out.string(), limit);
+    const Result full = run_cli(args + " -o " + out.string(), limit);
     EXPECT_EQ(full.status, 1) << "limit " << limit << ": " << full.err;
     EXPECT_TRUE(test::mentions(full.err, {"radmesh: error: ", (out / "radiosity.vtu").string()}));
     EXPECT_FALSE(fs::exists(out.parent_path())) << names(folder(out.parent_path()));
   }
 }
 
-// A real full disk: a tmpfs of a few pages, mounted in a mount namespace of
-// the test's own (unshare; skipped where that is not allowed). Runs `args`
-// into it and returns what the run said on stderr, its exit status and what
-// it left on the disk (ls -A); false when no tmpfs could be mounted.
-struct OnFullDisk {
-  int status = -1;
-  std::string err, left;
-};
-bool run_on_tmpfs(const test::TempDir& tmp, const std::string& args, long bytes, OnFullDisk& out) {
+// A real full disk: a tmpfs of `bytes`, mounted in a mount namespace of the
+// test's own (unshare; the test is skipped where that is not allowed).
+// Runs `args` into it: exit 1 with a message naming `file` of its output
+// folder, and nothing left on the disk (ls -A).
+void expect_full_disk_fails_at(const test::TempDir& tmp, const std::string& args, long bytes, const std::string& file) {
   const fs::path mnt = tmp / "mnt", status = tmp / "status.txt", listing = tmp / "listing.txt", err = tmp / "err.txt";
   fs::create_directories(mnt);
   const std::string inside = "mount -t tmpfs -o size=" + std::to_string(bytes / 1024) + "k tmpfs " + mnt.string() +
@@ -819,12 +810,15 @@ bool run_on_tmpfs(const test::TempDir& tmp, const std::string& args, long bytes,
       break;
     }
   }
-  if (!mounted) return false;
+  if (!mounted) GTEST_SKIP() << "cannot mount a small tmpfs here (unshare -rm and unshare -m both refused)";
   std::ifstream s(status), l(listing), e(err);
-  s >> out.status;
-  out.left.assign(std::istreambuf_iterator<char>(l), std::istreambuf_iterator<char>());
-  out.err.assign(std::istreambuf_iterator<char>(e), std::istreambuf_iterator<char>());
-  return true;
+  int code = -1;
+  s >> code;
+  const std::string left((std::istreambuf_iterator<char>(l)), std::istreambuf_iterator<char>()),
+      said((std::istreambuf_iterator<char>(e)), std::istreambuf_iterator<char>());
+  EXPECT_EQ(code, 1) << said;
+  EXPECT_TRUE(test::mentions(said, {"radmesh: error: ", (mnt / "out" / file).string()}));
+  EXPECT_EQ(left, "") << "left on the full disk: " << left;
 }
 
 // Whole pages of a file of `size` bytes (what it takes of a tmpfs).
@@ -842,12 +836,7 @@ TEST(Cli, ADiskThatFillsInTheVtuFailsTheRunWhichLeavesNothingOfItsOwn) {
   const Result r = run_cli(args + " -o " + (tmp / "whole").string());
   ASSERT_EQ(r.status, 0) << r.err;
   const long half = pages(fs::file_size(tmp / "whole" / "radiosity.vtu")) / 2;
-  OnFullDisk full;
-  if (!run_on_tmpfs(tmp, args, half * ::sysconf(_SC_PAGESIZE), full))
-    GTEST_SKIP() << "cannot mount a small tmpfs here (unshare -rm and unshare -m both refused)";
-  EXPECT_EQ(full.status, 1) << full.err;
-  EXPECT_TRUE(test::mentions(full.err, {"radmesh: error: ", (tmp / "mnt" / "out" / "radiosity.vtu").string()}));
-  EXPECT_EQ(full.left, "") << "left on the full disk: " << full.left;
+  expect_full_disk_fails_at(tmp, args, half * ::sysconf(_SC_PAGESIZE), "radiosity.vtu");
 }
 
 // The disk fills while summary.json is written, after the .vtu, the round
@@ -862,10 +851,5 @@ TEST(Cli, ADiskThatFillsAtTheSummaryFailsTheRunWhichLeavesNothingOfItsOwn) {
   for (const auto& [name, content] : folder(tmp / "whole"))
     n += name == "summary.json" ? pages(content.size()) - 1 : pages(content.size());
   ASSERT_GE(pages(fs::file_size(tmp / "whole" / "summary.json")), 2);
-  OnFullDisk full;
-  if (!run_on_tmpfs(tmp, args, n * ::sysconf(_SC_PAGESIZE), full))
-    GTEST_SKIP() << "cannot mount a small tmpfs here (unshare -rm and unshare -m both refused)";
-  EXPECT_EQ(full.status, 1) << full.err;
-  EXPECT_TRUE(test::mentions(full.err, {"radmesh: error: ", (tmp / "mnt" / "out" / "summary.json").string()}));
-  EXPECT_EQ(full.left, "") << "left on the full disk: " << full.left;
+  expect_full_disk_fails_at(tmp, args, n * ::sysconf(_SC_PAGESIZE), "summary.json");
 }

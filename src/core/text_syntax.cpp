@@ -41,11 +41,8 @@ std::string read_number(std::string_view t, double* value) {
     return "is " + std::to_string(t.size()) + " characters long; radmesh reads numbers of at most " +
            std::to_string(kMaxNumberChars);
   if (t[0] == '+') return "starts with '+', which radmesh does not read (write the number without it)";
-  size_t i = t[0] == '-' ? 1 : 0;
-  if (contains_nocase(t, "nan") || contains_nocase(t, "inf")) return "is not finite";
-  if (t.size() > i + 1 && t[i] == '0' && (t[i + 1] == 'x' || t[i + 1] == 'X'))
-    return "is hexadecimal, which radmesh does not read (write it in decimal)";
-  size_t digits = 0;
+  const size_t sign = t[0] == '-' ? 1 : 0;
+  size_t i = sign, digits = 0;
   while (i < t.size() && digit(t[i])) ++i, ++digits;
   if (i < t.size() && t[i] == '.') {
     ++i;
@@ -59,7 +56,10 @@ std::string read_number(std::string_view t, double* value) {
     while (i < t.size() && digit(t[i])) ++i, ++exponent_digits;
     good = exponent_digits > 0;
   }
-  if (!good || i != t.size()) {
+  if (!good || i != t.size()) {  // outside the syntax: say which way
+    if (contains_nocase(t, "nan") || contains_nocase(t, "inf")) return "is not finite";
+    if (t.size() > sign + 1 && t[sign] == '0' && (t[sign + 1] == 'x' || t[sign + 1] == 'X'))
+      return "is hexadecimal, which radmesh does not read (write it in decimal)";
     if (t.find(',') != std::string_view::npos) return "is not a number (a comma is not a decimal point)";
     return "is not a number";
   }

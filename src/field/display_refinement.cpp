@@ -10,7 +10,6 @@
 #include "radmesh/field.h"
 #include "radmesh/hierarchy.h"
 
-#include "core/box_tree.h"
 #include "field/field_impl.h"
 
 #include <tbb/parallel_for.h>
@@ -66,12 +65,9 @@ public:
   Refinement(const Scene& scene, const Mesh& initial, const Mesh& mesh, const std::vector<Rgb>& element,
              const SolveOptions& options, FieldReport& report)
       : scene_(scene), transport_(mesh), element_(element), options_(options), report_(report),
-        evaluator_(scene, transport_, element_, options), tree_(initial) {
+        evaluator_(scene, transport_, element_, options), tree_(initial),
+        boxes_(internal::triangle_boxes(transport_)) {
     report_.clustered = evaluator_.clustered();
-    std::vector<Box3> boxes(transport_.triangles.size());
-    for (size_t t = 0; t < boxes.size(); ++t)
-      for (const int v : transport_.triangles[t]) boxes[t].add(transport_.positions[static_cast<size_t>(v)]);
-    boxes_ = BoxTree(boxes);
   }
 
   // The solver's element (of `patch`) that point x lies in: the first the
@@ -87,12 +83,9 @@ public:
     boxes_.overlapping(at, eps, [&](int t) {
       if (transport_.patch[static_cast<size_t>(t)] != patch || !(transport_.area(t) > 0.0)) return true;
       const auto& tri = transport_.triangles[static_cast<size_t>(t)];
-      const Vec3 &a = transport_.positions[static_cast<size_t>(tri[0])], &b = transport_.positions[static_cast<size_t>(tri[1])],
-                 &c = transport_.positions[static_cast<size_t>(tri[2])];
-      const Vec3 n = glm::cross(b - a, c - a);
-      const double nn = glm::dot(n, n);
-      const double u = glm::dot(glm::cross(c - b, x - b), n) / nn, v = glm::dot(glm::cross(a - c, x - c), n) / nn;
-      if (u >= -1e-9 && v >= -1e-9 && 1.0 - u - v >= -1e-9) {
+      if (internal::inside_triangle(x, transport_.positions[static_cast<size_t>(tri[0])],
+                                    transport_.positions[static_cast<size_t>(tri[1])],
+                                    transport_.positions[static_cast<size_t>(tri[2])], 1e-9)) {
         best = t;
         return false;
       }

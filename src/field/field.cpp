@@ -479,6 +479,22 @@ void add_counts(FieldReport& to, const FieldReport& from) {
   to.rays_cast += from.rays_cast;
 }
 
+BoxTree triangle_boxes(const Mesh& mesh) {
+  std::vector<Box3> boxes(mesh.triangles.size());
+  for (size_t t = 0; t < boxes.size(); ++t)
+    for (const int v : mesh.triangles[t]) boxes[t].add(mesh.positions[static_cast<size_t>(v)]);
+  return BoxTree(boxes);
+}
+
+bool inside_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c, double tol) {
+  const Vec3 n = glm::cross(b - a, c - a);
+  const double nn = glm::dot(n, n);
+  if (nn <= 0.0) return false;
+  const double u = glm::dot(glm::cross(c - b, p - b), n) / nn;
+  const double v = glm::dot(glm::cross(a - c, p - c), n) / nn;
+  return u >= -tol && v >= -tol && 1.0 - u - v >= -tol;
+}
+
 }  // namespace internal
 
 NodalField compute_field(const Scene& scene, const Mesh& mesh, const std::vector<Rgb>& element,

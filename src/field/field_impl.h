@@ -33,6 +33,13 @@ void display_sides(const Mesh& mesh, const NodalField& field, std::vector<int>& 
 // Adds the counts of one evaluation's report to `to`.
 void add_counts(FieldReport& to, const FieldReport& from);
 
+// A box tree over a mesh's triangles (item t: triangle t), for finding the
+// triangle a point lies on (probes, the refined display's elements).
+BoxTree triangle_boxes(const Mesh& mesh);
+// Whether p, in the plane of triangle (a, b, c), lies in it: its
+// barycentric coordinates all at least -tol. False for a zero-area triangle.
+bool inside_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c, double tol);
+
 // How many times a point of a source is drawn before it is given up, where
 // every draw so far fell where the kernel is 0 (facing away from the point,
 // or behind its tangent plane).

@@ -6,8 +6,8 @@
 
 #include "radmesh/errors.h"
 #include "radmesh/field.h"
-#include "core/box_tree.h"
 #include "core/text_syntax.h"
+#include "field/field_impl.h"
 #include "radiosity/transport/transport.h"
 
 #include <tbb/parallel_for.h>
@@ -20,17 +20,6 @@
 namespace radmesh {
 
 namespace {
-
-// Barycentric inside test with a relative tolerance.
-bool inside(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c, double tol) {
-  const Vec3 n = glm::cross(b - a, c - a);
-  const double nn = glm::dot(n, n);
-  if (nn <= 0.0) return false;
-  const double u = glm::dot(glm::cross(c - b, p - b), n) / nn;
-  const double v = glm::dot(glm::cross(a - c, p - c), n) / nn;
-  const double w = 1.0 - u - v;
-  return u >= -tol && v >= -tol && w >= -tol;
-}
 
 // |p - q|, without overflow where its square would pass double's range.
 double distance(const Vec3& p, const Vec3& q) {
@@ -47,12 +36,9 @@ std::vector<ProbeResult> evaluate_probes(const Scene& scene, const Mesh& mesh,
   check_solve_options(options);
   const double diag = scene.diagonal(), off_plane = 1e-6 * diag;
   const int n = mesh.triangle_count();
-  // The triangles' boxes, so that locating a probe costs O(log n), not a
-  // pass over the mesh (many probes on a large mesh).
-  std::vector<Box3> boxes(static_cast<size_t>(n));
-  for (int t = 0; t < n; ++t)
-    for (const int v : mesh.triangles[static_cast<size_t>(t)]) boxes[static_cast<size_t>(t)].add(mesh.positions[static_cast<size_t>(v)]);
-  const BoxTree tree(boxes);
+  // Locating a probe costs O(log n), not a pass over the mesh (many probes
+  // on a large mesh).
+  const BoxTree tree = internal::triangle_boxes(mesh);
   std::vector<ProbeResult> out(probes.size());
   // Locate every probe first, so that a bad one fails before any work.
   for (size_t k = 0; k < probes.size(); ++k) {
@@ -65,7 +51,8 @@ std::vector<ProbeResult> evaluate_probes(const Scene& scene, const Mesh& mesh,
       const Patch& patch = scene.patches[static_cast<size_t>(mesh.patch[static_cast<size_t>(t)])];
       const Vec3& a = mesh.positions[tri[0]];
       if (t < first && std::abs(glm::dot(pr.point - a, patch.normal)) <= off_plane &&
-          glm::dot(pr.normal, patch.normal) >= 0.99 && inside(pr.point, a, mesh.positions[tri[1]], mesh.positions[tri[2]], 1e-9))
+          glm::dot(pr.normal, patch.normal) >= 0.99 &&
+          internal::inside_triangle(pr.point, a, mesh.positions[tri[1]], mesh.positions[tri[2]], 1e-9))
         first = t;
       return true;
     });

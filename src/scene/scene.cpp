@@ -5,6 +5,7 @@
 
 #include "radmesh/scene.h"
 
+#include "core/box_tree.h"
 #include "scene/overlap.h"
 
 #include "radmesh/errors.h"
@@ -332,10 +333,7 @@ public:
       object_order_.back().second.line = f.line;
     }
     ObjectFaces& object = object_order_[slot->second].second;
-    for (const Vec3& p : f.points) {
-      object.lo = glm::min(object.lo, p);
-      object.hi = glm::max(object.hi, p);
-    }
+    for (const Vec3& p : f.points) object.extent.add(p);
     const size_t patches_before = scene_.patches.size();
     // Dropped, counted, and said for the first 5.
     auto drop_as_zero_area = [&](const std::string& why) {
@@ -441,10 +439,11 @@ public:
   // away) makes every other object a point.
   void refuse_vanished_objects(const std::string& source) const {
     for (const auto& [name, o] : object_order_) {
-      if (o.kept > 0 || o.welded == 0 || !(glm::length(o.hi - o.lo) < 1e3 * welder_.tolerance())) continue;
+      const double across = glm::length(o.extent.hi - o.extent.lo);
+      if (o.kept > 0 || o.welded == 0 || !(across < 1e3 * welder_.tolerance())) continue;
       throw InputError(where(o.file, o.line) + "object '" + name + "': " +
                        (o.welded == 1 ? std::string("its face is") : "all its " + std::to_string(o.welded) + " faces are") +
-                       " finer than the scene's resolution: it is " + format_number(glm::length(o.hi - o.lo)) +
+                       " finer than the scene's resolution: it is " + format_number(across) +
                        " across, and points closer than " + format_number(welder_.tolerance()) +
                        " (1e-9 of the scene's size) are one; the scene (" + source + ") spans " +
                        format_number(welder_.tolerance() / options_.weld_tolerance) +
@@ -498,7 +497,7 @@ private:
   // where it starts.
   struct ObjectFaces {
     int kept = 0, welded = 0;
-    Vec3 lo{std::numeric_limits<double>::infinity()}, hi{-std::numeric_limits<double>::infinity()};
+    Box3 extent;
     std::string file;
     int line = 0;
   };

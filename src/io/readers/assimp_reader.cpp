@@ -11,6 +11,7 @@
 // rounds factors to float).
 
 #include "io/readers/gltf_check.h"
+#include "io/readers/json_parse.h"
 #include "io/readers/mesh_checks.h"
 #include "io/readers/scene_sources.h"
 #include "core/text_syntax.h"
@@ -27,20 +28,12 @@
 
 #include <algorithm>
 #include <array>
-#include <cctype>
 #include <cmath>
 #include <cstdint>
-#include <cstdio>
-#include <cstring>
 #include <filesystem>
-#include <fstream>
 #include <mutex>
-#include <optional>
 #include <regex>
 #include <vector>
-#include <sstream>
-#include <string_view>
-#include <map>
 
 namespace radmesh::internal {
 
@@ -144,12 +137,6 @@ struct Affine {
   }
 };
 
-std::string dump(const Json& v) {
-  std::string s = v.dump();
-  if (s.size() > 60) s = s.substr(0, 57) + "...";
-  return s;
-}
-
 // ------------------------------------------------------------------ glTF materials
 
 // Up to n numbers at `key` of object `o`, or `fallback` when absent.
@@ -158,7 +145,7 @@ std::vector<double> numbers(const Json& o, const char* key, size_t n, std::vecto
   if (!o.contains(key)) return fallback;
   const Json& v = o.at(key);
   if (!v.is_array() || v.size() != n || !std::all_of(v.begin(), v.end(), [](const Json& x) { return x.is_number(); }))
-    throw InputError(at + key + ": expected " + std::to_string(n) + " numbers, got " + dump(v));
+    throw InputError(at + key + ": expected " + std::to_string(n) + " numbers, got " + dumped(v));
   std::vector<double> out;
   for (const Json& x : v) out.push_back(x.get<double>());
   return out;
@@ -177,20 +164,20 @@ GltfMaterials gltf_materials(const std::string& path, const Json& gltf) {
   const Json version = gltf.contains("asset") && gltf["asset"].is_object() ? gltf["asset"].value("version", Json())
                                                                            : Json();
   if (!version.is_string() || version.get<std::string>().rfind("2.", 0) != 0)
-    throw InputError(path + ": asset.version is " + dump(version) + "; radmesh reads glTF 2.0");
+    throw InputError(path + ": asset.version is " + dumped(version) + "; radmesh reads glTF 2.0");
   if (!gltf.contains("materials")) return out;
   const Json& mats = gltf["materials"];
-  if (!mats.is_array()) throw InputError(path + ": materials: expected an array, got " + dump(mats));
+  if (!mats.is_array()) throw InputError(path + ": materials: expected an array, got " + dumped(mats));
   for (size_t i = 0; i < mats.size(); ++i) {
     const Json& m = mats[i];
     const std::string key = "materials[" + std::to_string(i) + "]";
-    if (!m.is_object()) throw InputError(path + ": " + key + ": expected an object, got " + dump(m));
+    if (!m.is_object()) throw InputError(path + ": " + key + ": expected an object, got " + dumped(m));
     Material mat;
     mat.name = m.contains("name") && m["name"].is_string() ? m["name"].get<std::string>() : key;
     mat.file = path;
     const std::string at = path + ": " + key + " '" + shown(mat.name) + "': ";
     const Json pbr = m.value("pbrMetallicRoughness", Json::object());
-    if (!pbr.is_object()) throw InputError(at + "pbrMetallicRoughness: expected an object, got " + dump(pbr));
+    if (!pbr.is_object()) throw InputError(at + "pbrMetallicRoughness: expected an object, got " + dumped(pbr));
     const auto base = numbers(pbr, "baseColorFactor", 4, {1, 1, 1, 1}, at + "pbrMetallicRoughness.");
     const auto emissive = numbers(m, "emissiveFactor", 3, {0, 0, 0}, at);
     double strength = 1.0;
@@ -200,7 +187,7 @@ GltfMaterials gltf_materials(const std::string& path, const Json& gltf) {
       const Json s = ext.is_object() ? ext.value("emissiveStrength", Json(1.0)) : ext;
       if (!s.is_number())
         throw InputError(at + "extensions.KHR_materials_emissive_strength.emissiveStrength: expected a number, got " +
-                         dump(s));
+                         dumped(s));
       strength = s.get<double>();
     }
     mat.reflectance = Rgb(base[0], base[1], base[2]);
@@ -327,13 +314,6 @@ SceneSource read_assimp_source(const std::string& path, bool check_materials) {
   ErrorCapture errors;
   // Only validation: no step that triangulates, welds, reorders or splits.
   const aiScene* scene = importer.ReadFile(path, aiProcess_ValidateDataStructure);
-  // assimp 5.2's OFF reader says "Faces with zero indices aren't allowed" of
-  // a face of no vertex and of one of more than 9 alike (a round table top
-  // of 12), and drops it: the import then fails, or goes on without it.
-  const std::string logged = errors.messages().empty() ? "" : errors.messages().front();
-  if (logged == "OFF: Faces with zero indices aren't allowed")
-    throw InputError(path + ": OFF: a face has no vertex or more than 9, which assimp's OFF reader refuses (write "
-                            "the mesh as OBJ or PLY: they take faces of any size)");
   if (!scene) {
     std::string e = importer.GetErrorString();
     if (e.empty()) e = "assimp cannot read it";
@@ -343,7 +323,7 @@ SceneSource read_assimp_source(const std::string& path, bool check_materials) {
       e += " (a face with no vertices: fewer faces than the header states, a truncated file or a wrong count)";
     throw InputError(path + ": " + e);
   }
-  if (!logged.empty()) throw InputError(path + ": " + logged);
+  if (!errors.messages().empty()) throw InputError(path + ": " + errors.messages().front());
   if (const std::string dropped = errors.dropped(); !dropped.empty())
     throw InputError(path + ": assimp: " + dropped + " (radmesh reads a file whole or not at all)");
   if ((scene->mFlags & AI_SCENE_FLAGS_INCOMPLETE) || !scene->mRootNode)

@@ -24,12 +24,6 @@ namespace {
 namespace fs = std::filesystem;
 using Json = nlohmann::json;
 
-std::string dump(const Json& v) {
-  std::string s = v.dump();
-  if (s.size() > 60) s = s.substr(0, 57) + "...";
-  return s;
-}
-
 std::string count_of(uint64_t n, const std::string& one, const std::string& many) {
   return std::to_string(n) + " " + (n == 1 ? one : many);
 }
@@ -116,12 +110,12 @@ private:
   const Json& array(const char* key) const {
     static const Json empty = Json::array();
     if (!g_.contains(key)) return empty;
-    if (!g_[key].is_array()) fail(key, "expected an array, got " + dump(g_[key]));
+    if (!g_[key].is_array()) fail(key, "expected an array, got " + dumped(g_[key]));
     return g_[key];
   }
 
   const Json& object(const Json& v, const std::string& key) const {
-    if (!v.is_object()) fail(key, "expected an object, got " + dump(v));
+    if (!v.is_object()) fail(key, "expected an object, got " + dumped(v));
     return v;
   }
 
@@ -130,7 +124,7 @@ private:
   std::optional<uint64_t> whole(const Json& o, const char* name, const std::string& key) const {
     if (!o.contains(name)) return std::nullopt;
     const Json& v = o[name];
-    if (!v.is_number_unsigned()) fail(key + "." + name, "expected a whole number >= 0, got " + dump(v));
+    if (!v.is_number_unsigned()) fail(key + "." + name, "expected a whole number >= 0, got " + dumped(v));
     return v.get<uint64_t>();
   }
 
@@ -143,7 +137,7 @@ private:
   // An index into the array `of` (of `size` items), written as a whole number.
   uint64_t index(const Json& v, const std::string& key, const char* of, size_t size) const {
     if (!v.is_number_unsigned())
-      fail(key, std::string("expected the index of one of the file's ") + of + " (a whole number), got " + dump(v));
+      fail(key, std::string("expected the index of one of the file's ") + of + " (a whole number), got " + dumped(v));
     const uint64_t i = v.get<uint64_t>();
     const std::string many = of;
     const std::string one = many == "meshes" ? "mesh" : many.substr(0, many.size() - 1);
@@ -155,7 +149,7 @@ private:
     if (!node.contains(name)) return;
     const Json& v = node[name];
     if (!v.is_array() || v.size() != n || !std::all_of(v.begin(), v.end(), [](const Json& x) { return x.is_number(); }))
-      fail(key + "." + name, "expected " + std::to_string(n) + " numbers, got " + dump(v));
+      fail(key + "." + name, "expected " + std::to_string(n) + " numbers, got " + dumped(v));
   }
 
   // ---------------------------------------------------------------- nodes
@@ -173,7 +167,7 @@ private:
       const Json& node = object(ns[i], key);
       if (node.contains("children")) {
         const Json& c = node["children"];
-        if (!c.is_array()) fail(key + ".children", "expected an array of node indices, got " + dump(c));
+        if (!c.is_array()) fail(key + ".children", "expected an array of node indices, got " + dumped(c));
         for (size_t k = 0; k < c.size(); ++k) children_[i].push_back(index(c[k], key + ".children", "nodes", n));
       }
       if (node.contains("mesh")) index(node["mesh"], key + ".mesh", "meshes", meshes);
@@ -234,21 +228,21 @@ private:
   void scenes() {
     const Json& ss = array("scenes");
     const size_t n = children_.size();
+    std::vector<size_t> seen_in(n, SIZE_MAX);  // the last scene that listed each node
     for (size_t s = 0; s < ss.size(); ++s) {
       const std::string key = index_of("scenes", s);
       const Json& scene = object(ss[s], key);
       if (!scene.contains("nodes")) continue;
       const Json& roots = scene["nodes"];
-      if (!roots.is_array()) fail(key + ".nodes", "expected an array of node indices, got " + dump(roots));
-      std::vector<bool> seen(n, false);
+      if (!roots.is_array()) fail(key + ".nodes", "expected an array of node indices, got " + dumped(roots));
       for (const Json& r : roots) {
         const uint64_t i = index(r, key + ".nodes", "nodes", n);
         if (parent_[i] >= 0)
           fail(key + ".nodes", index_of("nodes", i) + " is a child of " +
                                    index_of("nodes", static_cast<uint64_t>(parent_[i])) +
                                    ", not a root (assimp would read it twice)");
-        if (seen[i]) fail(key + ".nodes", index_of("nodes", i) + " is listed twice");
-        seen[i] = true;
+        if (seen_in[i] == s) fail(key + ".nodes", index_of("nodes", i) + " is listed twice");
+        seen_in[i] = s;
       }
     }
     if (g_.contains("scene")) scene_ = index(g_["scene"], "scene", "scenes", ss.size());
@@ -278,7 +272,7 @@ private:
         buffer.held = &file_.bin;
         continue;
       }
-      if (!b["uri"].is_string()) fail(key + ".uri", "expected a string, got " + dump(b["uri"]));
+      if (!b["uri"].is_string()) fail(key + ".uri", "expected a string, got " + dumped(b["uri"]));
       const std::string uri = b["uri"].get<std::string>();
       if (uri.rfind("data:", 0) == 0) {
         const size_t comma = uri.find(',');
@@ -348,7 +342,7 @@ private:
       if (bytes == component_bytes.end()) fail(key + ".componentType", std::to_string(acc.component) + " is not a glTF component type");
       if (!a.contains("type") || !a["type"].is_string() || !components.count(a["type"].get<std::string>()))
         fail(key + ".type", "expected SCALAR, VEC2, VEC3, VEC4, MAT2, MAT3 or MAT4, got " +
-                                dump(a.value("type", Json())));
+                                dumped(a.value("type", Json())));
       acc.type = a["type"].get<std::string>();
       acc.element = bytes->second * components.at(acc.type);
       const uint64_t v = index(a["bufferView"], key + ".bufferView", "bufferViews", views_.size());

@@ -21,6 +21,14 @@ inline constexpr int kMaxJsonDepth = 256;
 
 namespace internal {
 
+// A JSON value as a message shows it: its text, cut at 60 characters.
+template <class Json>
+std::string dumped(const Json& v) {
+  std::string s = v.dump();
+  if (s.size() > 60) s = s.substr(0, 57) + "...";
+  return s;
+}
+
 // nlohmann's DOM builder, with the nesting counted and (with unique_keys)
 // the keys of each open object. Not nlohmann's parse callback: its
 // parser scans an array's elements at the end of each object in it, so

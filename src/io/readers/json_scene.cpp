@@ -24,13 +24,8 @@ namespace {
 
 namespace fs = std::filesystem;
 using Json = nlohmann::ordered_json;  // keeps the file's order of materials
+using internal::dumped;
 using internal::shown;
-
-std::string dump(const Json& v) {
-  std::string s = v.dump();
-  if (s.size() > 60) s = s.substr(0, 57) + "...";
-  return s;
-}
 
 std::string fmt(const Rgb& v) {
   return format_number(v.x) + " " + format_number(v.y) + " " + format_number(v.z);
@@ -53,7 +48,7 @@ struct Context {
   }
   Vec3 three(const Json& v, const std::string& key) const {
     if (!v.is_array() || v.size() != 3 || !std::all_of(v.begin(), v.end(), [](const Json& x) { return x.is_number(); }))
-      fail(key, "expected 3 numbers, got " + dump(v));
+      fail(key, "expected 3 numbers, got " + dumped(v));
     const Vec3 r(v[0].get<double>(), v[1].get<double>(), v[2].get<double>());
     if (!std::isfinite(r.x) || !std::isfinite(r.y) || !std::isfinite(r.z)) fail(key, "expected finite numbers");
     return r;
@@ -98,7 +93,7 @@ struct Transform {
 
 Transform parse_transform(const Context& ctx, const Json& t, const std::string& key) {
   Transform tr;
-  if (!t.is_object()) ctx.fail(key, "expected an object with \"scale\", \"rotate_deg\", \"translate\", got " + dump(t));
+  if (!t.is_object()) ctx.fail(key, "expected an object with \"scale\", \"rotate_deg\", \"translate\", got " + dumped(t));
   ctx.only_keys(t, key, {"scale", "rotate_deg", "translate"});
   if (t.contains("scale")) {
     const Json& s = t["scale"];
@@ -110,10 +105,10 @@ Transform parse_transform(const Context& ctx, const Json& t, const std::string& 
                std::all_of(s.begin(), s.end(), [](const Json& x) { return x.is_number(); })) {
       tr.scale = ctx.three(s, k);
     } else {
-      ctx.fail(k, "expected a number or 3 numbers, got " + dump(s));
+      ctx.fail(k, "expected a number or 3 numbers, got " + dumped(s));
     }
     if (tr.scale.x == 0.0 || tr.scale.y == 0.0 || tr.scale.z == 0.0)
-      ctx.fail(k, dump(s) + " would flatten the mesh; every scale factor must be non-zero");
+      ctx.fail(k, dumped(s) + " would flatten the mesh; every scale factor must be non-zero");
   }
   if (t.contains("rotate_deg")) tr.rotate_deg = ctx.three(t["rotate_deg"], key + ".rotate_deg");
   if (t.contains("translate")) tr.translate = ctx.three(t["translate"], key + ".translate");
@@ -161,7 +156,7 @@ private:
 
 Material parse_material(const Context& ctx, const std::string& name, const Json& m) {
   const std::string key = "materials." + shown(name);
-  if (!m.is_object()) ctx.fail(key, "expected an object with \"reflectance\" (and \"emission\"), got " + dump(m));
+  if (!m.is_object()) ctx.fail(key, "expected an object with \"reflectance\" (and \"emission\"), got " + dumped(m));
   ctx.only_keys(m, key, {"reflectance", "emission"});
   if (!m.contains("reflectance")) ctx.fail(key, "missing \"reflectance\" (3 numbers in [0, 1))");
   Material mat;
@@ -201,13 +196,13 @@ Scene read_json_scene(const std::string& path, const SceneOptions& options) {
   }
   const Context ctx{path};
   if (!doc.is_object())
-    throw InputError(path + ": expected an object with \"materials\" and \"objects\", got " + dump(doc));
+    throw InputError(path + ": expected an object with \"materials\" and \"objects\", got " + dumped(doc));
   ctx.only_keys(doc, "", {"materials", "objects"});
 
   Materials materials;
   if (doc.contains("materials")) {
     const Json& ms = doc["materials"];
-    if (!ms.is_object()) ctx.fail("materials", "expected an object of named materials, got " + dump(ms));
+    if (!ms.is_object()) ctx.fail("materials", "expected an object of named materials, got " + dumped(ms));
     for (auto it = ms.begin(); it != ms.end(); ++it)
       materials.add(parse_material(ctx, it.key(), it.value()), path + ": materials." + shown(it.key()), path + ": ");
   }
@@ -215,7 +210,7 @@ Scene read_json_scene(const std::string& path, const SceneOptions& options) {
   if (!doc.contains("objects")) throw InputError(path + ": missing \"objects\" (a list of {\"file\": ...})");
   const Json& objects = doc["objects"];
   if (!objects.is_array() || objects.empty())
-    ctx.fail("objects", "expected a non-empty list of {\"file\": ...}, got " + dump(objects));
+    ctx.fail("objects", "expected a non-empty list of {\"file\": ...}, got " + dumped(objects));
 
   const fs::path dir = fs::path(path).parent_path();
   std::vector<RawFace> faces;
@@ -223,16 +218,16 @@ Scene read_json_scene(const std::string& path, const SceneOptions& options) {
   for (size_t i = 0; i < objects.size(); ++i) {
     const Json& o = objects[i];
     const std::string key = "objects[" + std::to_string(i) + "]";
-    if (!o.is_object()) ctx.fail(key, "expected an object with \"file\", got " + dump(o));
+    if (!o.is_object()) ctx.fail(key, "expected an object with \"file\", got " + dumped(o));
     ctx.only_keys(o, key, {"file", "material", "transform"});
     if (!o.contains("file")) ctx.fail(key, "missing \"file\"");
     if (!o["file"].is_string() || o["file"].get<std::string>().empty())
-      ctx.fail(key + ".file", "expected a file name, got " + dump(o["file"]));
+      ctx.fail(key + ".file", "expected a file name, got " + dumped(o["file"]));
     const std::string name = o["file"].get<std::string>();
     // A control character, NUL included, is no part of a file name radmesh
     // opens (the system would read up to a NUL, and a message would end there).
     if (std::any_of(name.begin(), name.end(), [](char c) { return static_cast<unsigned char>(c) < 0x20; }))
-      ctx.fail(key + ".file", "a file name with a control character: " + dump(o["file"]));
+      ctx.fail(key + ".file", "a file name with a control character: " + dumped(o["file"]));
     const fs::path given(name);
     const std::string file = (given.is_absolute() ? given : dir / given).string();
     const std::string ext = lower_extension(name);
@@ -247,14 +242,14 @@ Scene read_json_scene(const std::string& path, const SceneOptions& options) {
     int override_material = -1;
     if (o.contains("material")) {
       const Json& m = o["material"];
-      if (!m.is_string()) ctx.fail(key + ".material", "expected a material name, got " + dump(m));
+      if (!m.is_string()) ctx.fail(key + ".material", "expected a material name, got " + dumped(m));
       override_material = materials.find(m.get<std::string>());
       if (override_material < 0 || !doc.contains("materials") || !doc["materials"].contains(m.get<std::string>())) {
         std::string known;
         if (doc.contains("materials"))
           for (auto it = doc["materials"].begin(); it != doc["materials"].end(); ++it)
             known += std::string(known.empty() ? "" : ", ") + shown(it.key());
-        ctx.fail(key + ".material", "unknown material " + dump(m) + " (\"materials\" defines " +
+        ctx.fail(key + ".material", "unknown material " + dumped(m) + " (\"materials\" defines " +
                                         (known.empty() ? std::string("none") : known) + ")");
       }
     }

@@ -288,7 +288,8 @@ void check_binary_ply_body(std::istream& in, const std::string& path, const PlyH
     }
     for (double k = 0.0; k < e.count; ++k)
       for (const PlyProperty& p : e.properties) {
-        const std::string which = e.name + " " + format_number(k);
+        // The element named in a message (built only when one is thrown).
+        auto which = [&] { return e.name + " " + format_number(k); };
         if (!p.list) {
           in.ignore(p.type.bytes);
           at += p.type.bytes;
@@ -296,7 +297,7 @@ void check_binary_ply_body(std::istream& in, const std::string& path, const PlyH
         }
         const int cb = p.count_type.bytes;
         if (at + cb > file_size || !in.read(reinterpret_cast<char*>(count), cb))
-          throw InputError(path + ": " + which + ": the file ends before its list count (truncated)");
+          throw InputError(path + ": " + which() + ": the file ends before its list count (truncated)");
         uint64_t raw = 0;
         for (int b = 0; b < cb; ++b)
           raw |= static_cast<uint64_t>(count[header.big_endian ? cb - 1 - b : b]) << (8 * b);
@@ -304,11 +305,11 @@ void check_binary_ply_body(std::istream& in, const std::string& path, const PlyH
         if (p.count_type.kind == Kind::signed_whole && (raw >> (8 * cb - 1)) != 0)
           items -= std::ldexp(1.0, 8 * cb);  // two's complement
         if (items < 0.0)
-          throw InputError(path + ": " + which + ": a list count of " + format_number(items) + " in property '" +
+          throw InputError(path + ": " + which() + ": a list count of " + format_number(items) + " in property '" +
                            shown(p.name) + "'");
         const double bytes = items * p.type.bytes, left = file_size - at - cb;
         if (bytes > left)
-          throw InputError(path + ": " + which + ": a list of " + format_number(items) + " values of " +
+          throw InputError(path + ": " + which() + ": a list of " + format_number(items) + " values of " +
                            std::to_string(p.type.bytes) + " bytes in property '" + shown(p.name) + "' needs " +
                            format_number(bytes) + " bytes, but the file has " + format_number(left) +
                            " bytes left (a wrong count, or a truncated file)");
@@ -385,8 +386,6 @@ void check_ascii_ply_body(std::istream& in, const std::string& path, const PlyHe
         if (const std::string why = ply_value(count, p.count_type, &n); !why.empty())
           bad("list count '" + shown(count) + "' of property '" + shown(p.name) + "' " + why);
         if (n < 0) bad("a list count of " + std::to_string(n) + " in property '" + shown(p.name) + "'");
-        if (static_cast<size_t>(n) > left)
-          bad("a list of '" + shown(count) + "' values, but the line has " + std::to_string(left) + " more");
         // A face's vertex indices name declared vertices (assimp's check
         // of them names no line).
         const bool indices = e.name == "face" && (p.name == "vertex_indices" || p.name == "vertex_index");

@@ -21,6 +21,7 @@
 #include <map>
 #include <set>
 #include <sstream>
+#include <string_view>
 
 namespace radmesh {
 
@@ -230,28 +231,31 @@ ObjScan scan_obj(const std::string& path) {
         // v, v/vt, v//vn or v/vt/vn: each a whole number (tinyobjloader
         // reads them with atoi, which takes "2x" as 2 and 4294967297 as 1).
         const std::string& corner = tok[k];
-        std::vector<std::string> parts(1);
-        for (const char c : corner) {
-          if (c == '/')
-            parts.emplace_back();
-          else
-            parts.back().push_back(c);
+        // Its parts between slashes (no copies: this runs per face corner).
+        std::string_view parts[3];
+        size_t count = 0;
+        for (size_t from = 0;; ++count) {
+          const size_t slash = corner.find('/', from);
+          if (count < 3) parts[count] = std::string_view(corner).substr(from, slash == std::string::npos ? slash : slash - from);
+          if (slash == std::string::npos) break;
+          from = slash + 1;
         }
-        const std::string& idx = parts[0];
+        ++count;
+        const std::string_view idx = parts[0];
         long long v = 0;
         std::string why = read_whole(idx, true, &v);
         if (why.empty() && v == 0) why = "is 0 (OBJ indices start at 1)";
-        if (why.empty() && parts.size() > 3) why = "has more than 3 parts";
-        for (size_t p = 1; why.empty() && p < parts.size(); ++p) {
+        if (why.empty() && count > 3) why = "has more than 3 parts";
+        for (size_t p = 1; why.empty() && p < count; ++p) {
           long long other = 0;
-          if (!(p == 1 && parts.size() == 3 && parts[1].empty())) why = read_whole(parts[p], true, &other);
+          if (!(p == 1 && count == 3 && parts[1].empty())) why = read_whole(parts[p], true, &other);
           if (why.empty() && other == 0 && !parts[p].empty()) why = "is 0 (OBJ indices start at 1)";
         }
         if (!why.empty())
           throw InputError(where(path, ln) + "face vertex index '" + shown(corner) + "' " + why);
         const long long abs = v > 0 ? v : vertices + v + 1;
         if (abs < 1 || abs > vertices)
-          throw InputError(where(path, ln) + "face vertex index " + idx + " is out of range (" +
+          throw InputError(where(path, ln) + "face vertex index " + std::string(idx) + " is out of range (" +
                            std::to_string(vertices) + " vertices defined so far)");
         if (long_face) indices.push_back(static_cast<long>(abs - 1));
       }

@@ -16,7 +16,9 @@
 #include <cerrno>
 #include <cstring>
 #include <filesystem>
+#include <regex>
 #include <stdexcept>
+#include <unordered_set>
 #include <utility>
 
 namespace radmesh {
@@ -29,7 +31,6 @@ namespace {
 // fills, renames left before one fails; -1: none.
 std::atomic<long long> g_bytes_left{-1};
 std::atomic<long long> g_renames_left{-1};
-std::atomic<long long> g_bytes_written{0};
 
 // Takes `n` bytes of the injected disk's room: all of them (true), or what
 // is left, in *allowed (false: the disk is full after those).
@@ -89,15 +90,14 @@ void make_directories(const std::string& dir, std::vector<fs::path>* made) {
 
 struct OutputBatch::State {
   std::vector<std::pair<std::string, std::string>> files;  // (temporary, final), in order written
+  std::unordered_set<std::string> finals;                  // the final names of `files`
   std::vector<std::string> removals;                       // at the commit
   std::vector<fs::path> made;                              // folders made, parents first
   bool open = true;
 
   // The temporary file `tmp` of `path` is finished.
   void add(const std::string& tmp, const std::string& path) {
-    for (const auto& f : files)
-      if (f.second == path) return;  // written again: the same temporary file
-    files.emplace_back(tmp, path);
+    if (finals.insert(path).second) files.emplace_back(tmp, path);  // written again: the same temporary file
   }
 
   // Removes the folders made, deepest first, those left empty.
@@ -145,8 +145,7 @@ void OutputBatch::commit() {
     throw IoError(s.files[k].second + ": cannot rename the finished file into place: " + why);
   }
   for (const std::string& path : s.removals)
-    if (std::none_of(s.files.begin(), s.files.end(), [&](const auto& f) { return f.second == path; }))
-      fs::remove(path, ec);
+    if (!s.finals.count(path)) fs::remove(path, ec);
 }
 
 std::vector<std::string> OutputBatch::files() const {
@@ -166,8 +165,8 @@ constexpr std::size_t kBufferBytes = std::size_t{1} << 20;
 CheckedFile::CheckedFile(const std::string& path, const std::string& name) : name_(name) {
   fd_ = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
   if (fd_ < 0) throw IoError(name + ": cannot open for writing: " + std::strerror(errno));
-  buffer_.resize(kBufferBytes);
-  setp(buffer_.data(), buffer_.data() + buffer_.size());
+  buffer_.reset(new char[kBufferBytes]);  // not zeroed: a small file fills only its start
+  setp(buffer_.get(), buffer_.get() + kBufferBytes);
 }
 
 CheckedFile::~CheckedFile() {
@@ -192,11 +191,7 @@ void CheckedFile::write_at(long long offset, const char* data, std::size_t n) {
     }
     done += static_cast<std::size_t>(w);
   }
-  const long long reached = offset + static_cast<long long>(done);
-  if (reached > end_) {
-    g_bytes_written += reached - end_;
-    end_ = reached;
-  }
+  end_ = std::max(end_, offset + static_cast<long long>(done));
   if (error_ == 0 && !fits) error_ = ENOSPC;
 }
 
@@ -204,7 +199,7 @@ void CheckedFile::flush_buffer() {
   const std::size_t n = static_cast<std::size_t>(pptr() - pbase());
   write_at(start_, pbase(), n);
   start_ += static_cast<long long>(n);
-  setp(buffer_.data(), buffer_.data() + buffer_.size());
+  setp(buffer_.get(), buffer_.get() + kBufferBytes);
 }
 
 CheckedFile::int_type CheckedFile::overflow(int_type c) {
@@ -224,7 +219,7 @@ std::streamsize CheckedFile::xsputn(const char* s, std::streamsize n) {
     return n;
   }
   flush_buffer();
-  if (count >= buffer_.size()) {
+  if (count >= kBufferBytes) {
     write_at(start_, s, count);
     start_ += static_cast<long long>(count);
   } else {
@@ -272,12 +267,22 @@ void remove_output_file(const std::string& path) {
   fs::remove(path, ec);
 }
 
+void prepare_output_dir(const std::string& dir, const std::string& pattern, const std::vector<std::string>& keep) {
+  create_output_directories(dir);
+  const std::regex ours(pattern);
+  std::error_code ec;
+  for (const fs::directory_entry& e : fs::directory_iterator(dir, ec)) {
+    const std::string name = e.path().filename().string();
+    if (e.is_regular_file() && std::regex_match(name, ours) && std::find(keep.begin(), keep.end(), name) == keep.end())
+      remove_output_file(e.path().string());
+  }
+}
+
 void inject_write_faults(long long bytes, long long renames) {
   g_bytes_left = bytes;
   g_renames_left = renames;
 }
 
-long long bytes_written() { return g_bytes_written.load(); }
 
 }  // namespace internal
 

@@ -5,6 +5,7 @@
 #pragma once
 
 #include <functional>
+#include <memory>
 #include <ostream>
 #include <streambuf>
 #include <string>
@@ -55,9 +56,9 @@ private:
   std::string name_;
   int fd_ = -1;
   int error_ = 0;             // errno of the first failure; 0 while none
-  std::vector<char> buffer_;  // the put area
-  long long start_ = 0;       // the file offset of buffer_[0]
-  long long end_ = 0;         // the file's size as written so far
+  std::unique_ptr<char[]> buffer_;  // the put area
+  long long start_ = 0;             // the file offset of buffer_[0]
+  long long end_ = 0;               // the file's size as written so far
 };
 
 // Creating a folder and removing an earlier run's file the way the writers
@@ -65,16 +66,17 @@ private:
 // removed only at the commit), otherwise at once.
 void create_output_directories(const std::string& dir);
 void remove_output_file(const std::string& path);
+// Makes `dir` and removes the files in it whose names match `pattern` (a
+// regular expression) and are not in `keep`: what an earlier run left that
+// this one does not write again, so that the folder holds one run's
+// results. Inside an OutputBatch through it, as above.
+void prepare_output_dir(const std::string& dir, const std::string& pattern, const std::vector<std::string>& keep);
 
 // Fault injection, for tests and fuzz targets only: the disk fills (a write
 // fails with ENOSPC) once `bytes` more bytes have been added to files, and
 // the rename after `renames` more renames fails (EIO). -1: never. For the
 // whole process; reset by the next call.
 void inject_write_faults(long long bytes, long long renames = -1);
-
-// Bytes added to files by the writers since the process started: a test
-// measures what a set of files takes to choose where a fault falls.
-long long bytes_written();
 
 }  // namespace internal
 }  // namespace radmesh

@@ -27,7 +27,6 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
-#include <regex>
 #include <sstream>
 
 namespace radmesh {
@@ -37,18 +36,6 @@ namespace fs = std::filesystem;
 namespace {
 
 std::string pixmap_file(size_t k, const char* ext) { return "pixmap_" + std::to_string(k) + ext; }
-
-// Creates `dir` and removes the files matching `ours` that are not in `keep`
-// (inside an OutputBatch: once it is committed).
-void prepare_subdir(const fs::path& dir, const std::regex& ours, const std::vector<std::string>& keep) {
-  internal::create_output_directories(dir.string());
-  std::error_code ec;
-  for (const fs::directory_entry& e : fs::directory_iterator(dir, ec)) {
-    const std::string name = e.path().filename().string();
-    if (e.is_regular_file() && std::regex_match(name, ours) && std::find(keep.begin(), keep.end(), name) == keep.end())
-      internal::remove_output_file(e.path().string());
-  }
-}
 
 vtkNew<vtkFloatArray> float_cells(const char* name, const std::vector<float>& values, int components) {
   vtkNew<vtkFloatArray> a;
@@ -89,7 +76,7 @@ std::vector<std::string> write_pixmap_state(const std::string& out_dir, const Pi
   std::vector<std::string> names;
   for (size_t k = 0; k < L.pixmaps.size(); ++k) names.push_back(pixmap_file(k, ".vti"));
   names.push_back("state.json");
-  prepare_subdir(dir, std::regex(R"(pixmap_[0-9]+\.vti|state\.json)"), names);
+  internal::prepare_output_dir(dir.string(), R"(pixmap_[0-9]+\.vti|state\.json)", names);
   std::vector<std::string> written;
   nlohmann::json doc;
   doc["format"] = "radmesh pixmap state";
@@ -220,7 +207,7 @@ std::vector<std::string> write_lightmaps(const std::string& out_dir, const Mesh&
   const fs::path dir = fs::path(out_dir) / "lightmaps";
   std::vector<std::string> names;
   for (size_t k = 0; k < L.pixmaps.size(); ++k) names.push_back(pixmap_file(k, ".png"));
-  prepare_subdir(dir, std::regex(R"(pixmap_[0-9]+\.png)"), names);
+  internal::prepare_output_dir(dir.string(), R"(pixmap_[0-9]+\.png)", names);
   // One exposure for all: the 99th percentile of the reflected radiosity
   // (emitters aside) maps to white.
   std::vector<float> reflected;

@@ -5,6 +5,8 @@
 
 #include "radiosity/hierarchical/solver.h"
 
+#include "core/power_of_two.h"
+
 #include <queue>
 
 namespace radmesh::internal {
@@ -29,11 +31,7 @@ Hierarchical::Hierarchical(const Scene& scene, const SolveOptions& opt, const Hi
     enclosed_warnings_ = enclosed_emitter_warnings(scene, el_, emitting_inside_objects(scene, el_, visibility_.rays()));
   for (int r = 0; r < out_.tree.root_count(); ++r) mean_root_area_ += tri_[static_cast<size_t>(r)].area;
   if (out_.tree.root_count() > 0) mean_root_area_ /= out_.tree.root_count();
-  if (mean_root_area_ > 0.0) {
-    int exponent = 0;
-    std::frexp(mean_root_area_, &exponent);
-    area_unit_ = std::ldexp(1.0, exponent);
-  }
+  area_unit_ = internal::power_of_two_above(mean_root_area_);
 }
 
 // The first linking (every pair of roots whose patches can see each

@@ -8,6 +8,7 @@
 
 #include "radiosity/pixmap/solver.h"
 
+#include "core/power_of_two.h"
 #include "radmesh/errors.h"
 #include "radiosity/pixmap/layout.h"
 #include "radiosity/transport/transport.h"
@@ -86,11 +87,7 @@ PixmapSolver::PixmapSolver(const Scene& input, const PixmapOptions& options, con
   }
   double top = 0.0;
   for (const Material& mat : scene.materials) top = std::max(top, max3(mat.emission));
-  if (top > 0.0 && (top > 0x1p60 || top < 0x1p-60)) {
-    int exponent = 0;
-    std::frexp(top, &exponent);
-    m.unit = std::ldexp(1.0, exponent);
-  }
+  if (top > 0.0 && (top > 0x1p60 || top < 0x1p-60)) m.unit = internal::power_of_two_above(top);
   for (const Pixmap& pm : m.layout.pixmaps) {
     m.rho.push_back(scene.materials[pm.material].reflectance);
     m.emission.push_back(scene.materials[pm.material].emission / m.unit);

@@ -2,6 +2,7 @@
 
 #include "radiosity/transport/visibility.h"
 
+#include "core/power_of_two.h"
 #include "radmesh/errors.h"
 #include "radmesh/mesh.h"
 #include "radiosity/transport/sampling.h"
@@ -85,11 +86,7 @@ Visibility::Visibility(const Scene& scene) : impl_(std::make_unique<Impl>()) {
     hi = glm::max(hi, p);
   }
   m.origin = mesh.positions.empty() ? Vec3(0.0) : 0.5 * (lo + hi);
-  if (!mesh.positions.empty()) {
-    int exponent = 0;
-    std::frexp(std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z}), &exponent);
-    m.scale = std::ldexp(1.0, -exponent);
-  }
+  if (!mesh.positions.empty()) m.scale = 1.0 / internal::power_of_two_above(std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z}));
   // About 17 float steps at the scene's edge: the lifted end lies off its
   // surface (and off a patch coinciding with it, as a two-sided panel's
   // back) in the float coordinates Embree traces in.
