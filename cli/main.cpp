@@ -4,7 +4,6 @@
 
 #include "radmesh/histogram.h"
 #include "radmesh/scene_reader.h"
-#include "radmesh/png_render.h"
 #include "radmesh/probe_file.h"
 #include "radmesh/summary.h"
 #include "radmesh/vtk_writer.h"
@@ -13,6 +12,7 @@
 #include "radmesh/method.h"
 #include "radmesh/output_batch.h"
 #include "radmesh/probe.h"
+#include "radmesh/result_files.h"
 #include "radmesh/solve.h"
 #include "radmesh/version.h"
 #include "core/text_syntax.h"
@@ -117,21 +117,6 @@ void check_output_dir(const std::string& dir) {
     throw InputError("-o " + dir + ": cannot be created or written (" + d.string() + " is not writable)");
 }
 
-// What run and mesh write (and every method's own files), and what quality writes.
-std::string run_outputs() {
-  std::string ours = R"((radiosity|mesh|links|discontinuities)\.vtu|radiosity_round_[0-9]+\.vtu|radiosity\.pvd|)"
-                     R"(probes\.csv|radiosity\.png|summary\.json|patches\.csv)";
-  for (const Method& m : methods())
-    for (const std::string& name : m.files) {
-      ours += '|';
-      for (char c : name) {
-        if (!std::isalnum(static_cast<unsigned char>(c)) && c != '_') ours += '\\';
-        ours += c;
-      }
-    }
-  return ours;
-}
-
 // Ctrl-C during a method that can stop early (Method::resumable): the first
 // one asks it to stop and save its state, a second one (half a second or
 // more later: a signal sent to the process and to its group arrives twice)
@@ -149,6 +134,7 @@ extern "C" void on_interrupt(int) {
     std::raise(SIGINT);
   }
 }
+// What quality writes.
 const char* const kQualityOutputs = R"(quality\.csv|quality_(min_angle|aspect_ratio)\.png)";
 
 // The names given on the command line, of a table's options.
@@ -270,85 +256,23 @@ Computed compute(const Params& p, const Method* method, Reporter& rep) {
 }
 
 // The files of a run, once everything is computed: only now is the output
-// directory touched. All of them are written under temporary names and
-// renamed at the end (OutputBatch): when one cannot be written, none is
-// left and the directory is as it was. Returns the paths written, in order.
+// directory touched (write_run_files: all of them or none). Returns the
+// paths written, in order.
 std::vector<std::string> write_outputs(const Params& p, Computed& c, Reporter& rep) {
-  const MethodResult* result = c.result ? &*c.result : nullptr;
-  const Mesh& out_mesh = c.out_mesh();
-  const TriangleQuality out_quality = compute_quality(out_mesh);
-  std::vector<std::string> outputs = {result ? "radiosity.vtu" : "mesh.vtu", "summary.json"};
-  if (!patches_in_summary(c.scene)) outputs.push_back("patches.csv");
-  if (!c.rounds.empty()) outputs.push_back("radiosity.pvd");
-  for (size_t r = 0; r < c.rounds.size(); ++r) outputs.push_back("radiosity_round_" + std::to_string(r) + ".vtu");
-  if (result)
-    for (const auto& ls : result->line_sets) outputs.push_back(ls.first + ".vtu");
-  if (!c.info.mesh_report.discontinuities.empty()) outputs.push_back("discontinuities.vtu");
-  if (!c.probes.empty()) outputs.push_back("probes.csv");
-  if (result && p.png) outputs.push_back("radiosity.png");
-  if (result)
-    for (const std::string& name : result->files.names) outputs.push_back(name);
-  OutputBatch batch;
-  internal::prepare_output_dir(p.out_dir, run_outputs(), outputs);  // through the batch: removed at its commit
-
+  RunFiles files;
+  files.info = c.info;
+  files.scene = &c.scene;
+  files.mesh = &c.mesh;
+  files.result = c.result ? &*c.result : nullptr;
+  files.rounds = std::move(c.rounds);
+  files.probes = c.probes;
+  files.probe_results = c.probe_results;
+  files.png = p.png;
   rep.begin("write");
-  std::vector<std::string> written;
-  auto path_in_out = [&](const std::string& name) { return (fs::path(p.out_dir) / name).string(); };
-  const std::string vtu = path_in_out(result ? "radiosity.vtu" : "mesh.vtu");
-  if (result)
-    write_vtu(vtu, c.scene, out_mesh, out_quality, result->solution, result->cell_fields);
-  else
-    write_mesh_vtu(vtu, c.scene, c.mesh, out_quality);
-  written.push_back(vtu);
-  if (!c.rounds.empty()) {
-    // One file per refinement round and a .pvd collection to step through them.
-    std::vector<std::string> names;
-    for (size_t r = 0; r < c.rounds.size(); ++r) {
-      const std::string name = "radiosity_round_" + std::to_string(r) + ".vtu";
-      const MethodResult& snap = c.rounds[r];
-      write_vtu(path_in_out(name), c.scene, snap.mesh, compute_quality(snap.mesh), snap.solution, snap.cell_fields);
-      names.push_back(name);
-    }
-    const std::string pvd = path_in_out("radiosity.pvd");
-    write_pvd(pvd, names);
-    written.push_back(pvd);
-  }
-  if (result)
-    for (const auto& [stem, lines] : result->line_sets) {
-      const std::string path = path_in_out(stem + ".vtu");
-      write_lines_vtu(path, lines);
-      written.push_back(path);
-    }
-  if (!c.info.mesh_report.discontinuities.empty()) {
-    const std::string lines = path_in_out("discontinuities.vtu");
-    write_discontinuities_vtu(lines, c.info.mesh_report.discontinuities);
-    written.push_back(lines);
-  }
-  if (result && result->files.write)
-    for (const std::string& f : result->files.write(p.out_dir, out_mesh)) written.push_back(f);
-  if (!c.probes.empty()) {
-    const std::string csv = path_in_out("probes.csv");
-    write_probe_csv(csv, c.scene, c.probes, c.probe_results);
-    written.push_back(csv);
-  }
-  if (result && p.png) {
-    const std::string png = path_in_out("radiosity.png");
-    std::string why;
-    if (render_png(png, c.scene, out_mesh, result->solution, RenderOptions{}, &why))
-      written.push_back(png);
-    else
-      rep.note("PNG skipped: " + why);
-  }
-  c.info.seconds.push_back({"write", rep.end()});
-  const std::string summary = path_in_out("summary.json");
-  write_summary(summary, c.info, c.scene, out_mesh, out_quality, result);
-  written.push_back(summary);
-  if (!patches_in_summary(c.scene)) {
-    const std::string csv = path_in_out("patches.csv");
-    write_patches_csv(csv, c.scene, out_mesh, result ? &result->solution : nullptr);
-    written.push_back(csv);
-  }
-  batch.commit();
+  std::vector<std::string> notes;
+  std::vector<std::string> written = write_run_files(p.out_dir, std::move(files), &notes);
+  rep.end();
+  for (const std::string& n : notes) rep.note(n);
   return written;
 }
 

@@ -51,8 +51,10 @@ Result solve(const Scene& scene, const PixmapOptions& options, const SolveOption
 Result solve(const Scene& scene, const std::string& method, const OptionValues& options = {},
              const SolveOptions& common = {}, const SolveCallbacks& callbacks = {});
 // Any method with options already read (Method::parse); what the typed
-// forms above call.
+// forms above call. `meshing`: meshing options by name, as text, applied
+// on top of the method's recommended meshing, as the radmesh program's
+// --max-edge, --discontinuity, ... are.
 Result solve(const Scene& scene, const Method& method, const MethodOptions& options, const SolveOptions& common,
-             const SolveCallbacks& callbacks);
+             const SolveCallbacks& callbacks, const OptionValues& meshing = {});
 
 }  // namespace radmesh

@@ -40,8 +40,12 @@ struct RunInfo {
 // write_patches_csv writes beside it.
 void write_summary(const std::string& path, const RunInfo& info, const Scene& scene, const Mesh& mesh,
                    const TriangleQuality& quality, const MethodResult* result);
-// The summary of radmesh::solve's result ("seconds": its phases).
+// What radmesh::solve's result says of its run ("seconds": its phases).
+RunInfo run_info(const Result& result);
+// The summary of radmesh::solve's result.
 void write_summary(const std::string& path, const Result& result);
+// The text write_summary(path, result) writes.
+std::string summary_text(const Result& result);
 
 inline constexpr size_t kSummaryPatches = 10000;
 bool patches_in_summary(const Scene& scene);

@@ -286,7 +286,7 @@ void write_summary(const std::string& path, const RunInfo& info, const Scene& sc
   write_json(path, make_summary(info, scene, mesh, quality, result));
 }
 
-void write_summary(const std::string& path, const Result& result) {
+RunInfo run_info(const Result& result) {
   RunInfo info;
   info.command = "run";
   info.scene_path = result.scene->source;
@@ -296,15 +296,29 @@ void write_summary(const std::string& path, const Result& result) {
   info.seconds = result.seconds;
   info.method = result.method;
   info.method_options = result.options;
-  write_summary(path, info, *result.scene, result.mesh, compute_quality(result.mesh), &result);
+  return info;
+}
+
+namespace {
+
+// Bytes that are not UTF-8 (a name from a file in another encoding) are
+// written as U+FFFD instead of failing.
+std::string json_text(const nlohmann::json& doc) {
+  return doc.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + '\n';
+}
+
+}  // namespace
+
+void write_summary(const std::string& path, const Result& result) {
+  write_summary(path, run_info(result), *result.scene, result.mesh, compute_quality(result.mesh), &result);
+}
+
+std::string summary_text(const Result& result) {
+  return json_text(make_summary(run_info(result), *result.scene, result.mesh, compute_quality(result.mesh), &result));
 }
 
 void write_json(const std::string& path, const nlohmann::json& doc) {
-  // Bytes that are not UTF-8 (a name from a file in another encoding) are
-  // written as U+FFFD instead of failing.
-  write_file_atomically(path, [&](std::ostream& out) {
-    out << doc.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) << '\n';
-  });
+  write_file_atomically(path, [&](std::ostream& out) { out << json_text(doc); });
 }
 
 }  // namespace radmesh

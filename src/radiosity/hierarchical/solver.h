@@ -90,8 +90,13 @@ private:
   // Progress from the calling thread: the phase (link, solve, refine) and,
   // for the first linking, the fraction of receivers linked.
   void report(const char* phase, double fraction) const {
+    reported_ = {phase, fraction};
     if (progress_) progress_(phase, fraction);
   }
+  // The last report again, after each block of work that cannot tell its
+  // own fraction (pairs linked, terms made): the caller hears from the
+  // solve often, and can stop it there (progress.h).
+  void report_again() const { report(reported_.first, reported_.second); }
 
   // ---- linking.cpp: element links and the oracle ---------------------------
   double form_factor_to(int p, int q) const;
@@ -154,6 +159,7 @@ private:
         for (size_t i = r.begin(); i != r.end(); ++i) make(static_cast<size_t>(todo[i]));
       });
       check_resident();
+      report_again();
     }
   }
   static constexpr double kLeafRaysBound = 0.1;  // see leaf_terms
@@ -287,6 +293,7 @@ private:
   HierarchicalOptions hopt_;
   HierarchicalSolution& out_;
   ProgressFn progress_;
+  mutable std::pair<const char*, double> reported_{"link", 0.0};
   VisibilityEstimator visibility_;
   double min_area_ = 0.0, max_emission_ = 0.0;
   double mean_root_area_ = 0.0;  // the oracle's area weight's reference (pw)
@@ -427,6 +434,7 @@ void Hierarchical::evaluate_pairs(const std::vector<std::pair<int, int>>& pairs,
       take(i, p, q, ev[i], split[i] != 0);
     }
     check_resident();
+    report_again();
   }
 }
 

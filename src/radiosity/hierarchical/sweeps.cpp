@@ -36,6 +36,8 @@ void Hierarchical::solve() {
     ++out_.stats.sweeps;
     if (!std::isfinite(change))
       throw NumericalError(scene_.source + ": hierarchical solve produced a non-finite radiosity");
+    if (change > 0.0 && top > 0.0)  // the decades of the tolerance reached
+      report("solve", std::clamp(std::log(change / top) / std::log(opt_.tolerance), 0.0, 1.0));
     const SweepMonitor::Action action = monitor.after_sweep(change, top);
     if (action == SweepMonitor::Action::stop) break;
     if (action == SweepMonitor::Action::extrapolate) {

@@ -8,15 +8,19 @@
 namespace radmesh {
 
 Result solve(const Scene& scene, const Method& method, const MethodOptions& options, const SolveOptions& common,
-             const SolveCallbacks& callbacks) {
+             const SolveCallbacks& callbacks, const OptionValues& meshing) {
   check_solve_options(common);
-  check_shared_options(method, solve_option_table().changed(common), common.field);
+  std::vector<std::string> given = solve_option_table().changed(common);
+  for (const auto& entry : meshing) given.push_back(entry.first);
+  check_shared_options(method, given, common.field);
   Result r;
   r.scene = std::make_shared<const Scene>(scene);
   r.method = method.name;
   r.options = options.values();
   r.solve_options = common;
-  r.meshing = resolve_meshing_options(scene, method.meshing(scene));
+  MeshingOptions recommended = method.meshing(scene);
+  meshing_option_table().apply(recommended, meshing);
+  r.meshing = resolve_meshing_options(scene, recommended);
   const Mesh mesh = mesh_scene(scene, r.meshing, &r.mesh_report);
   static_cast<MethodResult&>(r) = run_method(method, *r.scene, mesh, common, options, callbacks);
   return r;
