@@ -11,7 +11,7 @@ packages=(
   libtinyobjloader-dev libassimp-dev libcli11-dev nlohmann-json3-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   libx11-dev xvfb xauth
-  python3-dev pybind11-dev python3-numpy python3-pytest  # the Python module and its tests
+  python3-dev pybind11-dev python3-numpy python3-pytest python3-matplotlib  # the Python module, its tests and examples
   clang-14 libclang-rt-14-dev  # the sanitizer and fuzzing pass (scripts/sanitize.sh)
 )
 

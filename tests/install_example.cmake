@@ -44,3 +44,17 @@ list(LENGTH rows n)
 if(NOT n EQUAL 21)
   message(FATAL_ERROR "expected 21 patch rows from the example, got ${n}")
 endif()
+
+# The Python module, where it was built: imported from the prefix alone,
+# it solves and writes (its VTK part, _files, included).
+if(PYTHON)
+  set(ENV{PYTHONPATH} ${prefix}/${PYTHON_DIR})
+  # (No ';' in the code: CMake would split the argument there.)
+  step(${PYTHON} -c "import radmesh, sys
+assert radmesh.__file__.startswith(sys.argv[2]), radmesh.__file__
+r = radmesh.solve(radmesh.read_scene(sys.argv[1]), method='matrix', max_edge=300.0)
+print(len(r.write(sys.argv[3], png=False)), 'files')" ${SCENE} ${prefix} ${WORK_DIR}/python_out)
+  if(NOT EXISTS ${WORK_DIR}/python_out/radiosity.vtu)
+    message(FATAL_ERROR "the installed Python module wrote no radiosity.vtu")
+  endif()
+endif()

@@ -11,8 +11,8 @@ import sys
 
 import numpy as np
 from paraview import servermanager
-from paraview.simple import (ColorBy, GetActiveViewOrCreate, LoadPlugin, OpenDataFile, ResetCamera, SaveScreenshot,
-                             Show, TrivialProducer)
+from paraview.simple import (Clip, ColorBy, GetActiveViewOrCreate, GetColorTransferFunction, LoadPlugin, OpenDataFile,
+                             ResetCamera, SaveScreenshot, Show, TrivialProducer)
 from vtkmodules.numpy_interface import dataset_adapter as dsa
 from vtkmodules.util import numpy_support
 from vtkmodules.vtkCommonCore import vtkPoints
@@ -79,16 +79,25 @@ lit = radmeshRadiosity(Input=producer, Method="hierarchical", Epsilon=0.01, MaxE
 compare("radmesh Radiosity", arrays(lit), reference)
 
 if screenshot:
+    # The box from its open side, its front wall (z = 0) clipped away.
+    clip = Clip(Input=source)
+    clip.ClipType = "Plane"
+    clip.ClipType.Origin = [0, 0, 1]
+    clip.ClipType.Normal = [0, 0, 1]
+    clip.Invert = 0
     view = GetActiveViewOrCreate("RenderView")
-    display = Show(source, view)
+    display = Show(clip, view)
     ColorBy(display, ("POINTS", "radiosity", "Magnitude"))
-    display.RescaleTransferFunctionToDataRange(True, False)
+    lut = GetColorTransferFunction("radiosity")
+    lut.ApplyPreset("Inferno (matplotlib)", True)
+    lut.AutomaticRescaleRangeMode = "Never"
+    lut.RescaleTransferFunction(0.0, 1.2)  # the walls' range; the light saturates
     view.CameraPosition = [278, 273, -800]
     view.CameraFocalPoint = [278, 273, 280]
     view.CameraViewUp = [0, 1, 0]
     view.OrientationAxesVisibility = 0
     ResetCamera()
-    SaveScreenshot(screenshot, view, ImageResolution=[640, 640])
+    SaveScreenshot(screenshot, view, ImageResolution=[480, 480])
     print("screenshot:", screenshot)
 
 if failures:

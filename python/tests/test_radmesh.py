@@ -4,10 +4,12 @@ Run by ctest (test `python`), which sets RADMESH_CLI (the radmesh program),
 RADMESH_DATA (data/) and PYTHONPATH (build/python).
 """
 
+import csv
 import json
 import os
 import signal
 import subprocess
+import sys
 import threading
 import time
 
@@ -210,3 +212,30 @@ def test_a_pixmap_run_written_from_python_resumes(tmp_path):
     assert "state.json" in os.listdir(tmp_path / "pixmaps") and "lightmapped.obj" in written
     more = radmesh.solve(scene, method="pixmap", shots=60, hemicube_res=32, resume=tmp_path)
     assert more.summary()["solver"]["shots"] == 60
+
+
+EXAMPLES = os.path.join(os.path.dirname(__file__), "..", "..", "examples", "python")
+
+
+def run_example(name, *args):
+    env = dict(os.environ)
+    subprocess.run([sys.executable, os.path.join(EXAMPLES, name), *args, "--quick"], check=True, env=env,
+                   capture_output=True, text=True)
+
+
+def test_the_quality_study_example_writes_its_table_and_plot(tmp_path):
+    pytest.importorskip("matplotlib")
+    run_example("quality_study.py", CORNELL, str(tmp_path))
+    with open(tmp_path / "quality_study.csv") as f:
+        rows = list(csv.DictReader(f))
+    assert len(rows) == 9 and {r["discontinuity"] for r in rows} == {"off", "contacts", "full"}
+    assert all(float(r["min_angle"]) > 0 for r in rows)
+    assert (tmp_path / "quality_study.png").stat().st_size > 0
+
+
+def test_the_sweep_example_writes_a_row_per_setting(tmp_path):
+    run_example("time_error_sweep.py", CORNELL, str(tmp_path / "sweep.csv"))
+    with open(tmp_path / "sweep.csv") as f:
+        rows = list(csv.DictReader(f))
+    assert [r["method"] for r in rows] == ["hierarchical"] * 2 + ["matrix"] * 2 + ["pixmap"] * 2
+    assert all(float(r["worst_patch_error"]) >= float(r["rms_patch_error"]) >= 0 for r in rows)
