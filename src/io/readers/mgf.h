@@ -40,7 +40,8 @@ Chromaticity mix(const std::vector<Chromaticity>& colors, const std::vector<doub
 // B 0.150 0.060, white the equal-energy 1/3 1/3), of the colour with
 // chromaticity c and luminance Y. A chromaticity within 1e-12 of the
 // white is grey, (Y, Y, Y) exactly. Negative components (outside the
-// primaries' gamut) are set to 0 and *clipped says so.
+// primaries' gamut) are set to 0, and *clipped says so where one was more
+// than rounding (1e-12 of Y).
 Rgb to_rgb(const Chromaticity& c, double luminance, bool* clipped);
 
 // Radiance's luminous efficacy of white light (WHTEFFICACY), lm/W: MGF's
@@ -57,6 +58,18 @@ struct ShapeFace {
   std::vector<std::vector<Vec3>> holes;
 };
 using FaceSink = std::function<void(ShapeFace&&)>;
+
+// A face MGF writes as one loop with seams (f): around the outline, along
+// a seam edge into a hole, around it and back along the same edge. Each
+// pair of edges a -> b and b -> a is cut out, splitting the loop in two,
+// until none is left; of the loops of 3 or more vertices, the largest is
+// the outline, one inside it a hole (either way round), one outside it a
+// face of its own (an island). False when no loop is left.
+struct Seamed {
+  std::vector<Vec3> outer;
+  std::vector<std::vector<Vec3>> holes, islands;
+};
+bool split_at_seams(std::vector<Vec3> loop, Seamed* out);
 
 // Segments that cut a full circle (2 pi) into chords whose sagitta is at
 // most `deviation` times the radius (at least 3).

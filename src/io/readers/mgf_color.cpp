@@ -155,8 +155,10 @@ Rgb to_rgb(const Chromaticity& c, double luminance, bool* clipped) {
   Rgb rgb = xyz_to_rgb() * xyz;
   for (int k = 0; k < 3; ++k)
     if (rgb[k] < 0.0) {
+      // A primary's own chromaticity leaves the other channels at rounding
+      // noise: only more than that is outside the gamut.
+      if (rgb[k] < -1e-12 * luminance) *clipped = true;
       rgb[k] = 0.0;
-      *clipped = true;
     }
   return rgb;
 }

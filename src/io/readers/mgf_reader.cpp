@@ -178,7 +178,8 @@ public:
 
   SceneSource read(const std::string& path) {
     unnamed_material_.file = path;
-    run_file(path, 0);
+    check_input_file(path, "an MGF file");
+    run_file(path, file_key(path), 0);
     finish();
     return std::move(out_);
   }
@@ -186,11 +187,14 @@ public:
 private:
   // ---- files
 
-  void run_file(const std::string& path, int depth) {
-    check_input_file(path, "an MGF file");
+  // One name per file, however it is spelt (a.mgf, ./a.mgf, ../d/a.mgf).
+  static std::string file_key(const std::string& path) {
     std::error_code ec;
     const fs::path canonical = fs::weakly_canonical(path, ec);
-    const std::string key = ec ? fs::path(path).lexically_normal().string() : canonical.string();
+    return ec ? fs::path(path).lexically_normal().string() : canonical.string();
+  }
+
+  void run_file(const std::string& path, const std::string& key, int depth) {
     std::shared_ptr<const File>& cached = files_[key];
     if (!cached) cached = load_file(path);
     const File& f = *cached;
@@ -290,19 +294,20 @@ private:
     }
   }
 
+  // Splits the statement at white space (as MGF's parser does); any other
+  // control character is refused, not read as part of a name or number.
   void tokenize(const Statement& s) {
     tok_.clear();
     const std::string& t = file_->text;
+    auto blank = [](unsigned char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f'; };
     for (size_t k = s.begin; k < s.end;) {
-      const auto c = static_cast<unsigned char>(t[k]);
-      if (c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f') {
+      if (blank(static_cast<unsigned char>(t[k]))) {
         ++k;
         continue;
       }
       const size_t start = k;
-      for (; k < s.end; ++k) {
+      for (; k < s.end && !blank(static_cast<unsigned char>(t[k])); ++k) {
         const auto d = static_cast<unsigned char>(t[k]);
-        if (d == ' ' || d == '\t' || d == '\r' || d == '\v' || d == '\f') break;
         if (d < 0x20 || d == 0x7f) {
           char code[8];
           std::snprintf(code, sizeof code, "0x%02X", static_cast<unsigned>(d));
@@ -383,7 +388,10 @@ private:
     if (tok_.size() < 4) fail("a face needs at least 3 vertices, got '" + text() + "'");
     std::vector<Vec3> loop;
     for (size_t k = 1; k < tok_.size(); ++k) loop.push_back(vertex(k).p);
-    split_at_seams(std::move(loop));
+    mgf::Seamed parts;
+    if (!mgf::split_at_seams(std::move(loop), &parts)) fail("the face's seams leave no loop of 3 or more vertices");
+    emit(std::move(parts.outer), std::move(parts.holes));
+    for (auto& island : parts.islands) emit(std::move(island), {});
   }
 
   void face_with_holes() {
@@ -403,70 +411,6 @@ private:
     std::vector<Vec3> outer = std::move(loops.front());
     loops.erase(loops.begin());
     emit(std::move(outer), std::move(loops));
-  }
-
-  // MGF writes a face with holes as one loop: around the outline, along a
-  // seam edge into a hole, around it and back along the same edge. Each
-  // pair of edges a -> b and b -> a is cut out, splitting the loop in two,
-  // until none is left; a loop inside the largest one is its hole (either
-  // way round), one outside it a face of its own.
-  void split_at_seams(std::vector<Vec3> loop) {
-    std::vector<std::vector<Vec3>> done, work;
-    work.push_back(std::move(loop));
-    while (!work.empty()) {
-      std::vector<Vec3> l = std::move(work.back());
-      work.pop_back();
-      const size_t n = l.size();
-      std::map<std::pair<std::array<double, 3>, std::array<double, 3>>, size_t> edges;
-      auto key = [](const Vec3& p) { return std::array<double, 3>{p.x, p.y, p.z}; };
-      size_t cut_i = n, cut_j = n;
-      for (size_t k = 0; k < n && cut_i == n; ++k) {
-        const Vec3 &a = l[k], &b = l[(k + 1) % n];
-        if (a == b) continue;
-        const auto back = edges.find({key(b), key(a)});
-        if (back != edges.end()) {
-          cut_i = back->second;
-          cut_j = k;
-        }
-        edges.emplace(std::make_pair(key(a), key(b)), k);
-      }
-      if (cut_i == n) {
-        done.push_back(std::move(l));
-        continue;
-      }
-      // Edges i (a -> b) and j (b -> a), i < j: the loops b .. (before j+1)
-      // and a .. (around to i).
-      std::vector<Vec3> first(l.begin() + static_cast<long>(cut_i) + 1, l.begin() + static_cast<long>(cut_j) + 1);
-      std::vector<Vec3> second(l.begin() + static_cast<long>(cut_j) + 1, l.end());
-      second.insert(second.end(), l.begin(), l.begin() + static_cast<long>(cut_i) + 1);
-      for (auto* part : {&first, &second}) {
-        part->pop_back();  // it ends where it starts
-        if (part->size() >= 3) work.push_back(std::move(*part));
-      }
-    }
-    if (done.empty()) fail("the face's seams leave no loop of 3 or more vertices");
-    auto area = [](const std::vector<Vec3>& p) { return glm::length(newell_normal(p)); };
-    const auto largest = std::max_element(done.begin(), done.end(),
-                                          [&](const auto& x, const auto& y) { return area(x) < area(y); });
-    std::vector<Vec3> outer = std::move(*largest);
-    done.erase(largest);
-    std::vector<std::vector<Vec3>> holes, islands;
-    for (auto& l : done) (inside(l.front(), outer) ? holes : islands).push_back(std::move(l));
-    emit(std::move(outer), std::move(holes));
-    for (auto& l : islands) emit(std::move(l), {});
-  }
-
-  // Whether p lies inside `loop`, in the loop's plane.
-  static bool inside(const Vec3& p, const std::vector<Vec3>& loop) {
-    const Vec3 n = newell_normal(loop);
-    const int drop = std::abs(n.x) >= std::abs(n.y) && std::abs(n.x) >= std::abs(n.z) ? 0 : (std::abs(n.y) >= std::abs(n.z) ? 1 : 2);
-    const int u = (drop + 1) % 3, v = (drop + 2) % 3;
-    bool in = false;
-    for (size_t k = 0, j = loop.size() - 1; k < loop.size(); j = k++) {
-      const Vec3 &a = loop[k], &b = loop[j];
-      if ((a[v] > p[v]) != (b[v] > p[v]) && p[u] < (b[u] - a[u]) * (p[v] - a[v]) / (b[v] - a[v]) + a[u]) in = !in;
-    }
-    return in;
   }
 
   // A face in the current object space: transformed, given the current
@@ -598,8 +542,7 @@ private:
     if (!fs::exists(path, ec)) fail("'" + shown(name) + "' not found (looked for " + shown(path, 200) + ")");
     if (depth + 1 > limits_.include_depth)
       fail("'" + shown(name) + "': includes nested more than " + std::to_string(limits_.include_depth) + " deep");
-    const fs::path canonical = fs::weakly_canonical(path, ec);
-    const std::string key = ec ? fs::path(path).lexically_normal().string() : canonical.string();
+    const std::string key = file_key(path);
     if (std::find(including_.begin(), including_.end(), key) != including_.end()) {
       std::string chain;
       for (const std::string& f : including_) chain += fs::path(f).filename().string() + " -> ";
@@ -610,12 +553,12 @@ private:
     } catch (const IoError& e) {
       fail(e.what());
     }
-    if (tok_.size() == 2) return run_file(path, depth + 1);
+    if (tok_.size() == 2) return run_file(path, key, depth + 1);
     // As if enclosed in xf ARGS ... xf, every array instance in turn.
     begin_xf(2, 0);
     do {
       count_statement();
-      run_file(path, depth + 1);
+      run_file(path, key, depth + 1);
       tokenize(*statement_);
     } while (end_xf(1) == 0);
   }

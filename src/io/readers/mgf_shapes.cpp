@@ -1,11 +1,15 @@
-// MGF's curved primitives and prisms as planar faces (mgf.h). Every face is
-// planar by construction: a band between two parallel circles is cut into
-// isosceles trapezoids, whose four corners lie in one plane.
+// MGF's geometry as planar faces (mgf.h): faces with seams split into an
+// outline and holes, and the curved primitives and prisms. Every face of a
+// curved primitive is planar by construction: a band between two parallel
+// circles is cut into isosceles trapezoids, whose four corners lie in one
+// plane.
 
 #include "io/readers/mgf.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <map>
 
 namespace radmesh::internal::mgf {
 
@@ -39,12 +43,72 @@ void unit_circle(int k, int n, double* c, double* s) {
 // a face's plane stays within (1 - cos a)(1 - cos b) <= tolerance of it.
 int curved_segments(double tolerance) { return circle_segments(1.0 - std::sqrt(1.0 - tolerance)); }
 
+// Whether p lies inside `loop`, in the loop's plane (seen along the axis
+// nearest its normal).
+bool inside(const Vec3& p, const std::vector<Vec3>& loop) {
+  const Vec3 n = glm::abs(newell_normal(loop));
+  const int drop = n.x >= n.y && n.x >= n.z ? 0 : (n.y >= n.z ? 1 : 2);
+  const int u = (drop + 1) % 3, v = (drop + 2) % 3;
+  bool in = false;
+  for (size_t k = 0, j = loop.size() - 1; k < loop.size(); j = k++) {
+    const Vec3 &a = loop[k], &b = loop[j];
+    if ((a[v] > p[v]) != (b[v] > p[v]) && p[u] < (b[u] - a[u]) * (p[v] - a[v]) / (b[v] - a[v]) + a[u]) in = !in;
+  }
+  return in;
+}
+
 void emit(std::vector<Vec3> outer, bool inward, const FaceSink& sink) {
   if (inward) std::reverse(outer.begin() + 1, outer.end());
   sink({std::move(outer), {}});
 }
 
 }  // namespace
+
+bool split_at_seams(std::vector<Vec3> loop, Seamed* out) {
+  using Key = std::array<double, 3>;
+  auto key = [](const Vec3& p) { return Key{p.x, p.y, p.z}; };
+  std::vector<std::vector<Vec3>> done, work;
+  work.push_back(std::move(loop));
+  while (!work.empty()) {
+    std::vector<Vec3> l = std::move(work.back());
+    work.pop_back();
+    const size_t n = l.size();
+    // The first edge whose reverse came before it, and that one.
+    std::map<std::pair<Key, Key>, size_t> edges;
+    size_t first = n, second = n;
+    for (size_t k = 0; k < n && first == n; ++k) {
+      const Vec3 &a = l[k], &b = l[(k + 1) % n];
+      if (a == b) continue;
+      const auto back = edges.find({key(b), key(a)});
+      if (back != edges.end()) {
+        first = back->second;
+        second = k;
+      }
+      edges.emplace(std::make_pair(key(a), key(b)), k);
+    }
+    if (first == n) {
+      done.push_back(std::move(l));
+      continue;
+    }
+    // Cutting edges `first` and `second` leaves the loops from just after
+    // each to the other, each ending where it starts.
+    std::vector<Vec3> one(l.begin() + static_cast<long>(first) + 1, l.begin() + static_cast<long>(second) + 1);
+    std::vector<Vec3> two(l.begin() + static_cast<long>(second) + 1, l.end());
+    two.insert(two.end(), l.begin(), l.begin() + static_cast<long>(first) + 1);
+    for (auto* part : {&one, &two}) {
+      part->pop_back();
+      if (part->size() >= 3) work.push_back(std::move(*part));
+    }
+  }
+  if (done.empty()) return false;
+  auto area = [](const std::vector<Vec3>& p) { return glm::length(newell_normal(p)); };
+  const auto largest =
+      std::max_element(done.begin(), done.end(), [&](const auto& x, const auto& y) { return area(x) < area(y); });
+  out->outer = std::move(*largest);
+  done.erase(largest);
+  for (auto& l : done) (inside(l.front(), out->outer) ? out->holes : out->islands).push_back(std::move(l));
+  return true;
+}
 
 int circle_segments(double deviation) {
   // A chord of angle a lies r (1 - cos(a / 2)) from its arc at most.
