@@ -597,7 +597,7 @@ void cut_out_coplanar_faces(Scene& scene, const std::string& source, const Scene
 const OptionTable<SceneOptions>& scene_option_table() {
   static const OptionTable<SceneOptions> table = [] {
     OptionTable<SceneOptions> t("scene");
-    t.real("curve_tolerance", &SceneOptions::curve_tolerance, "fraction of the radius",
+    t.real("curve_tolerance", &SceneOptions::curve_tolerance, "radii",
            "how far the planar faces cut from a curved MGF primitive (sph, cyl, cone, ring, torus) may lie from "
            "its surface", 1e-5, 0.5);
     return t;
