@@ -149,6 +149,7 @@ struct Mtl {
   Chromaticity rd_color, ed_color;
   std::string file;  // where it was begun (m NAME =, or m)
   int line = 0, rd_line = 0, ed_line = 0;
+  std::string rd_at, ed_at;  // "file:line" of its rd and ed (an include's, maybe)
   bool changed = false;  // set since MGF's default (a two-sided black absorber)
   int index = -1;        // in SceneSource::materials, while unchanged since
 };
@@ -641,11 +642,13 @@ private:
         material_->rd = v;
         material_->rd_color = *color_;
         material_->rd_line = line_;
+        material_->rd_at = at_line();
       } else {
         if (v < 0.0) fail(format_number(v) + " is negative");
         material_->ed = v;
         material_->ed_color = *color_;
         material_->ed_line = line_;
+        material_->ed_at = at_line();
       }
     }
   }
@@ -677,10 +680,10 @@ private:
     bool clipped_rd = false, clipped_ed = false;
     mat.reflectance = mgf::to_rgb(m.rd_color, m.rd, &clipped_rd);
     mat.emission = mgf::to_rgb(m.ed_color, m.ed / mgf::kWhiteEfficacy, &clipped_ed);
-    if (clipped_rd) clipped_.add(where(m.file, m.rd_line) + "rd");
-    if (clipped_ed) clipped_.add(where(m.file, m.ed_line) + "ed");
+    if (clipped_rd) clipped_.add(m.rd_at + " rd");
+    if (clipped_ed) clipped_.add(m.ed_at + " ed");
     if (max3(mat.reflectance) >= 1.0)
-      throw InputError(where(m.file, m.rd_line) + "rd " + format_number(m.rd) + " with the colour x " +
+      throw InputError(m.rd_at + ": rd " + format_number(m.rd) + " with the colour x " +
                        format_number(m.rd_color.x) + " y " + format_number(m.rd_color.y) + " is the RGB reflectance " +
                        format_number(mat.reflectance.x) + " " + format_number(mat.reflectance.y) + " " +
                        format_number(mat.reflectance.z) +
