@@ -57,8 +57,9 @@ struct Params {
   bool png = true;
   std::string nodal;  // --nodal fit|mean: the older name of --field fit|mean
   std::string method = methods().front().name;
-  GivenOptions meshing_given, solve_given, method_given;
+  GivenOptions scene_given, meshing_given, solve_given, method_given;
   // Read and checked by check_params.
+  SceneOptions scene_options;
   MeshingOptions meshing;  // the defaults with what was given on top (mesh, quality)
   SolveOptions solve;
   MethodOptions method_options;
@@ -153,6 +154,7 @@ void check_params(Params& p, bool solving) {
                        {"nodal", "field"});
     p.solve_given.given["field"] = p.nodal;
   }
+  p.scene_options = scene_option_table().parse(p.scene_given.given);
   p.meshing = meshing_option_table().parse(p.meshing_given.given);
   if (solving) {
     p.solve = solve_option_table().parse(p.solve_given.given);
@@ -231,7 +233,7 @@ Computed compute(const Params& p, const Method* method, Reporter& rep) {
   c.info.scene_path = p.scene;
   c.info.solve = p.solve;
   rep.begin("read");
-  c.scene = read_scene(p.scene);
+  c.scene = read_scene(p.scene, p.scene_options);
   c.info.seconds.push_back({"read", rep.end()});
   for (const std::string& w : c.scene.report.warnings) rep.note("warning: " + w);
   if (!p.probe_file.empty()) c.probes = read_probes(p.probe_file);
@@ -323,7 +325,7 @@ int quality(Params& p) {
     for (int q : mesh.patch) np = std::max(np, q + 1);
     for (int q = 0; q < np; ++q) names.push_back("patch_" + std::to_string(q));
   } else {
-    const Scene scene = read_scene(p.scene);
+    const Scene scene = read_scene(p.scene, p.scene_options);
     const MeshingOptions mo = resolve_meshing_options(scene, meshing_for(p, scene, nullptr));
     MeshReport report;
     mesh = mesh_scene(scene, mo, &report);
@@ -394,9 +396,12 @@ void add_table_option(CLI::App* cmd, const OptionSpec& spec, GivenOptions& to, c
 }
 
 void add_common(CLI::App* cmd, Params& p, bool solving,
-                const char* scene_help = "scene file: .obj (+ .mtl), .ply, .stl, .off, .gltf, .glb, or a .json scene") {
+                const char* scene_help =
+                    "scene file: .obj (+ .mtl), .ply, .stl, .off, .gltf, .glb, .mgf, or a .json scene") {
   cmd->add_option("SCENE", p.scene, scene_help)->required()->check(CLI::ExistingFile);
   cmd->add_option("-o,--output", p.out_dir, "output directory (created; default radmesh-out)");
+  for (const OptionSpec& spec : scene_option_table().specs())
+    add_table_option(cmd, spec, p.scene_given, "", spec.default_text());
   for (const OptionSpec& spec : meshing_option_table().specs())
     add_table_option(cmd, spec, p.meshing_given, "",
                      solving && (spec.name == "max_edge" || spec.name == "discontinuity")
@@ -429,6 +434,7 @@ void collect_given(CLI::App* cmd, const std::vector<OptionSpec>& specs, GivenOpt
 }
 
 void collect_given(CLI::App* cmd, Params& p) {
+  collect_given(cmd, scene_option_table().specs(), p.scene_given);
   collect_given(cmd, meshing_option_table().specs(), p.meshing_given);
   collect_given(cmd, solve_option_table().specs(), p.solve_given);
   std::vector<OptionSpec> method_specs;
@@ -463,7 +469,8 @@ int main(int argc, char** argv) {
   std::signal(SIGXFSZ, SIG_IGN);
   CLI::App app{"radmesh: exact-geometry meshing and radiosity.\n"
                "Lengths are in the scene file's units; emission (Ke) is radiant exitance, and\n"
-               "radiosity comes out in the same unit (per unit area of the file's unit)."};
+               "radiosity comes out in the same unit (per unit area of the file's unit). MGF's\n"
+               "emission (ed, lux) is divided by 179 lm/W, Radiance's white efficacy."};
   app.require_subcommand(1);
   app.set_version_flag("--version", RADMESH_VERSION);
   Params run_p, mesh_p, quality_p;
@@ -492,7 +499,7 @@ int main(int argc, char** argv) {
   CLI::App* quality_cmd = app.add_subcommand(
       "quality", "mesh the scene; print per-patch and total mesh quality and write quality.csv");
   add_common(quality_cmd, quality_p, false,
-             "scene file (.obj, .ply, .stl, .off, .gltf, .glb, .json), or a mesh written by radmesh (.vtu)");
+             "scene file (.obj, .ply, .stl, .off, .gltf, .glb, .mgf, .json), or a mesh written by radmesh (.vtu)");
 
   try {
     app.parse(argc, argv);

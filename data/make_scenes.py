@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Generate radmesh's bundled scenes (OBJ + MTL) with provenance.
+"""Generate radmesh's bundled scenes (OBJ + MTL, and the Cornell box in MGF too) with provenance.
 
 Run from the repository root:
 
@@ -193,6 +193,85 @@ def write_scene(scene, directory, basename):
                 f.write(f"usemtl {mat}\n")
                 current = (obj, mat)
             f.write("f " + " ".join(str(index[p]) for p in poly) + "\n")
+
+
+# ---------------------------------------------------------------- MGF
+
+# Radiance's standard RGB primaries, whose white is the equal-energy (1/3, 1/3):
+# radmesh's MGF reader turns a chromaticity and a luminance into RGB in them, so
+# writing a Kd as its chromaticity (cxy) and luminance (rd) reads back as that Kd.
+PRIMARIES = ((0.640, 0.330), (0.290, 0.600), (0.150, 0.060))
+# Radiance's luminous efficacy of white light (lm/W): MGF's ed is lux, read
+# back as ed / 179 W/m^2.
+WHITE_EFFICACY = 179.0
+
+
+def rgb_to_xyz():
+    """The matrix (rows) taking RGB in PRIMARIES to XYZ, (1, 1, 1) the white of luminance 1."""
+    cols = [(x / y, 1.0, (1.0 - x - y) / y) for x, y in PRIMARIES]
+
+    def det(m):
+        return (m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
+                + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]))
+
+    rows = [[cols[c][r] for c in range(3)] for r in range(3)]
+    d = det(rows)
+    scale = []
+    for c in range(3):  # Cramer's rule for rows . scale = (1, 1, 1)
+        m = [[1.0 if k == c else rows[r][k] for k in range(3)] for r in range(3)]
+        scale.append(det(m) / d)
+    return [[rows[r][c] * scale[c] for c in range(3)] for r in range(3)]
+
+
+def mgf_colour(rgb):
+    """(chromaticity or None for grey, luminance) of an RGB triple."""
+    if rgb[0] == rgb[1] == rgb[2]:
+        return None, float(rgb[1])
+    xyz = [sum(row[c] * rgb[c] for c in range(3)) for row in rgb_to_xyz()]
+    total = sum(xyz)
+    return (xyz[0] / total, xyz[1] / total), xyz[1]
+
+
+def mgf_number(x):
+    """The shortest text that reads back as the same double (0 for 0)."""
+    return fmt(x) if x == int(x) else repr(float(x))
+
+
+def write_mgf(scene, directory, basename):
+    """The scene as MGF: one-sided materials (cxy, rd, ed), one named vertex per
+    point, the faces in the OBJ's order under the OBJ's object names."""
+    with open(os.path.join(directory, basename + ".mgf"), "w", newline="\n") as f:
+        f.write(HEADER)
+        f.write("# The scene of %s.obj in MGF: lengths as there (radmesh keeps the numbers), Kd as its\n"
+                "# chromaticity (cxy) and luminance (rd) in Radiance's primaries, ed = Ke x %g lm/W.\n"
+                % (basename, WHITE_EFFICACY))
+        for name, kd, ke, comment in scene.materials:
+            f.write("\n")
+            if comment:
+                for c in comment.splitlines():
+                    f.write(f"# {c}\n")
+            f.write(f"m {name} =\n\tsides 1\n")
+            for rgb, what, scale in ((kd, "rd", 1.0), (ke, "ed", WHITE_EFFICACY)):
+                if rgb is None:
+                    continue
+                xy, luminance = mgf_colour(rgb)
+                f.write("\tc\n" + ("" if xy is None else "\t\tcxy %s %s\n" % (mgf_number(xy[0]), mgf_number(xy[1]))))
+                f.write("\t%s %s\n" % (what, mgf_number(luminance * scale)))
+        index = {}
+        f.write("\n")
+        for _, _, poly in scene.faces:
+            for p in poly:
+                if p not in index:
+                    index[p] = len(index) + 1
+                    f.write(f"v v{index[p]} =\n\tp " + " ".join(fmt(c) for c in p) + "\n")
+        current = None
+        for obj, mat, poly in scene.faces:
+            if obj != current:
+                f.write(("o\n" if current is not None else "\n") + f"o {obj}\n")
+                current = obj
+            f.write(f"\tm {mat}\n\tf " + " ".join(f"v{index[p]}" for p in poly) + "\n")
+        if current is not None:
+            f.write("o\n")
 
 
 # ---------------------------------------------------------------- scenes
@@ -403,6 +482,9 @@ def main(argv):
     ]
     for scene, sub_dir, base in scenes:
         write_scene(scene, os.path.join(data, sub_dir), base)
+        if base == "cornell_box":
+            write_mgf(scene, os.path.join(data, sub_dir), base)
+            print(f"wrote data/{sub_dir}/{base}.mgf")
         print(f"wrote data/{sub_dir}/{base}.obj (+ .mtl): {len(scene.faces)} faces; "
               f"order reversed: {', '.join(scene.reversed) if scene.reversed else 'none'}")
 

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Writes the fuzzers' seed corpora (fuzz/corpus/<target>/) and the files the
 JSON-scene target may name (fuzz/files/), from the bundled scenes, small
-hand-made meshes and, for the writers, fault points. Run from anywhere; the
+hand-made meshes and MGF files and, for the writers, fault points. Run from anywhere; the
 output is committed."""
 import base64
 import json
@@ -24,6 +24,28 @@ def obj_with_mtl(obj_path):
     mtl = (obj_path.parent / mtl_name).read_bytes()
     obj = re.sub(rb"^mtllib\s+\S+", b"mtllib scene.mtl", obj, flags=re.M)
     return obj.rstrip(b"\n") + MARK + mtl
+
+
+# MGF seeds: every entity the reader knows, a face with a hole both ways,
+# transforms with arrays and a mirror, the curved primitives, and the
+# includes a single input can make (a missing file, itself).
+MGF_SQUARE = b"v a =\n p 0 0 0\nv b =\n p 1 0 0\nv c =\n p 1 1 0\nv d =\n p 0 1 0\n"
+MGF_LAMP = b"m lamp =\n c\n  cct 3000\n ed 1790\n sides 1\n"
+MGF_SEEDS = {
+    "holes": MGF_SQUARE + MGF_LAMP +
+    b"v e =\n p .25 .25 0\nv f =\n p .75 .25 0\nv g =\n p .75 .75 0\nv h =\n p .25 .75 0\n"
+    b"o wall\nf a b c d h g f e h d\no\nxf -t 0 0 1\nfh a b c d - e h g f\nxf\n",
+    "primitives": b"v c =\n p 0 0 0\n n 0 0 1\nv t =\n p 0 0 2\n n 0 0 1\n" + MGF_LAMP +
+    b"m paint =\n c\n  cspec 400 700 1 2 3 2 1\n rd .4\n rs .1 .05\n"
+    b"sph c 3\ncyl c .5 t\ncone t .5 c -0\nring t .5 1\ntorus c .2 .4\nsph t -.1\n",
+    "arrays": MGF_SQUARE + MGF_LAMP +
+    b"c R =\n cxy .64 .33\nc B =\n cxy .15 .06\nm violet =\n c\n  cmix 1 R 1 B\n rd .1\n"
+    b"o grid\nxf -t 2 0 0 -a 3 -t 0 2 0 -a 2 -t 0 0 5 -mz -rz 90\nprism a b c d .5\nxf\no\n"
+    b"xf -s .5 -i 2 -t 0 0 3\nf a b c d\n",
+    "includes": MGF_SQUARE + MGF_LAMP + b"f a b c d \\\n\n# comment \\\nf a b c\ni missing.mgf -t 1 0 0\n",
+    "self_include": MGF_SQUARE + b"f a b c d\ni scene.mgf\n",
+    "unknown_and_unused": MGF_SQUARE + MGF_LAMP + b"ts .1 .1\nir 1.5 0\ntd .1\nies lamp.ies -m 2\nfrob\nf a b c d\n",
+}
 
 
 def write(target, name, content):
@@ -192,6 +214,10 @@ def main():
     for selector, name, content in formats:
         write("fuzz_assimp_reader", name, bytes([selector]) + content)
 
+    write("fuzz_mgf_reader", "cornell_box", (data / "cornell_box" / "cornell_box.mgf").read_bytes())
+    for name, content in MGF_SEEDS.items():
+        write("fuzz_mgf_reader", name, content)
+
     # Hostile files of the reader classes (docs/scenes.md, "File checks"):
     # node trees deep, wide and cyclic; data past the declared counts;
     # strides that overlap; a GLB with bytes past its declared length.
@@ -258,6 +284,7 @@ def main():
     (files / "tet.stl").write_bytes(stl_binary())
     (files / "tet.off").write_bytes(off())
     (files / "tet.gltf").write_bytes(gltf())
+    (files / "tiles.mgf").write_bytes(MGF_SEEDS["arrays"])
     write("fuzz_json_scene", "room_and_tet", json.dumps({
         "materials": {"clay": {"reflectance": [0.6, 0.5, 0.4]}},
         "objects": [{"file": "room.obj"},
@@ -269,7 +296,8 @@ def main():
                       "lamp": {"reflectance": [0, 0, 0], "emission": [10, 10, 10]}},
         "objects": [{"file": "tet.stl", "material": "lamp", "transform": {"scale": [1, 2, -1]}},
                     {"file": "tet.off", "material": "grey", "transform": {"translate": [3, 0, 0]}},
-                    {"file": "tet.gltf", "transform": {"translate": [0, 3, 0]}}]}, indent=1).encode())
+                    {"file": "tet.gltf", "transform": {"translate": [0, 3, 0]}},
+                    {"file": "tiles.mgf", "transform": {"translate": [0, 0, 10]}}]}, indent=1).encode())
 
 
 main()

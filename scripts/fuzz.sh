@@ -16,12 +16,13 @@ root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 seconds="${1:-}"
 # Inputs per target in the CI run: sized so that each target ends well inside
 # -max_total_time on a slow machine (docs/testing.md).
-declare -A ci_runs=([fuzz_obj_reader]=20000 [fuzz_assimp_reader]=5000 [fuzz_json_scene]=40000 [fuzz_mesh]=2000
+declare -A ci_runs=([fuzz_obj_reader]=20000 [fuzz_assimp_reader]=5000 [fuzz_json_scene]=40000
+                   [fuzz_mgf_reader]=10000 [fuzz_mesh]=2000
                    [fuzz_gltf_nodes]=2000 [fuzz_numbers]=10000 [fuzz_writers]=1000)
 build="${RADMESH_FUZZ_BUILD:-$root/build-sanitize}"
 work="$build/fuzz-work"
 # RADMESH_FUZZ_TARGETS="a b" runs only those targets.
-read -r -a targets <<< "${RADMESH_FUZZ_TARGETS:-fuzz_obj_reader fuzz_assimp_reader fuzz_json_scene fuzz_mesh fuzz_gltf_nodes fuzz_numbers fuzz_writers}"
+read -r -a targets <<< "${RADMESH_FUZZ_TARGETS:-fuzz_obj_reader fuzz_assimp_reader fuzz_json_scene fuzz_mgf_reader fuzz_mesh fuzz_gltf_nodes fuzz_numbers fuzz_writers}"
 status=0
 for t in "${targets[@]}"; do
   rm -rf "${work:?}/$t"

@@ -125,6 +125,23 @@ TEST(Cli, RunWritesVtuSummaryAndProbes) {
   EXPECT_NE(r.err.find("PNG skipped"), std::string::npos) << r.err;  // no display here
 }
 
+TEST(Cli, AnMgfSceneIsCutToTheCurveToleranceAndItsNotesReachTheSummary) {
+  const test::TempDir tmp;
+  const fs::path scene = tmp / "ball.mgf";
+  std::ofstream(scene) << "v c =\n p 0 0 0\nm lamp =\n ed 179\n sides 1\nsph c 1\n";
+  const fs::path out = tmp / "ball";
+  const Result r = run_cli("mesh " + scene.string() + " --curve-tolerance 0.1 -q -o " + out.string());
+  ASSERT_EQ(r.status, 0) << r.err;
+  const nlohmann::json s = read_summary(out);
+  EXPECT_EQ(s["counts"]["patches"], 50);  // 10 x 5 faces at 0.1
+  const std::string warnings = s["warnings"].dump();
+  EXPECT_NE(warnings.find("within curve_tolerance 0.1"), std::string::npos) << warnings;
+  EXPECT_NE(warnings.find("179 lm/W"), std::string::npos) << warnings;
+  const Result bad = run_cli("mesh " + scene.string() + " --curve-tolerance 0.7 -o " + out.string());
+  EXPECT_EQ(bad.status, 1);
+  EXPECT_NE(bad.err.find("--curve-tolerance 0.7"), std::string::npos) << bad.err;
+}
+
 TEST(Cli, DefaultMethodIsHierarchicalAndMatchesHowellOnThePlates) {
   const test::TempDir tmp;
   const fs::path out = tmp / "plates_default";

@@ -2,6 +2,7 @@
 #pragma once
 
 #include "radmesh/geometry.h"
+#include "radmesh/options.h"
 
 #include <string>
 #include <utility>
@@ -82,7 +83,15 @@ struct SceneOptions {
   double weld_tolerance = 1e-9;
   // Faces with area below area_tolerance * diameter^2 are dropped as zero-area.
   double area_tolerance = 1e-12;
+  // Curved primitives (MGF sph, cyl, cone, ring, torus) are cut into planar
+  // faces that lie no farther than curve_tolerance * radius from the true
+  // surface (docs/scenes.md, "Curved primitives").
+  double curve_tolerance = 0.01;
 };
+
+// The options of SceneOptions a user sets (the radmesh program's flags):
+// curve_tolerance. build_scene checks them.
+const OptionTable<SceneOptions>& scene_option_table();
 
 // Validates raw faces and materials and builds a Scene: checks every value
 // (finite coordinates, reflectance in [0,1), emission >= 0, >= 3 distinct

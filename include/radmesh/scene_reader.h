@@ -14,6 +14,11 @@ namespace radmesh {
 // .gltf .glb      glTF 2.0 (through assimp): baseColorFactor (rgb) is the
 //                 reflectance, emissiveFactor times KHR_materials_emissive_strength
 //                 the emission; node transforms applied.
+// .mgf            MGF 2.0 (Greg Ward's Materials and Geometry Format): rd and
+//                 ed (lux, divided by 179 lm/W) with their colours as RGB in
+//                 Radiance's primaries; includes, transforms and arrays
+//                 applied; curved primitives cut into planar faces within
+//                 options.curve_tolerance (docs/scenes.md, "MGF").
 // .json           a scene file placing meshes and assigning materials:
 //   {"materials": {"white": {"reflectance": [0.5, 0.5, 0.5]},
 //                  "lamp":  {"reflectance": [0, 0, 0], "emission": [10, 10, 10]}},

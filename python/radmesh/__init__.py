@@ -10,7 +10,7 @@
 
 Options go by the radmesh program's names with '_' for '-' (max_edge,
 display_tolerance, epsilon, ...); radmesh.methods(), solve_options() and
-meshing_options() list them with their units and ranges. Errors are
+meshing_options() (and scene_options(), which read_scene takes) list them with their units and ranges. Errors are
 radmesh.InputError (a ValueError), GeometryError, NumericalError and IoError
 (an OSError), all radmesh.Error, with the file, line and value in the message.
 
@@ -23,12 +23,12 @@ import warnings as _warnings
 
 from . import _core
 from ._core import (Error, GeometryError, InputError, IoError, Mesh, NumericalError, Result, Scene, mesh,
-                    meshing_options, methods, quality, read_scene, solve_options)
+                    meshing_options, methods, quality, read_scene, scene_options, solve_options)
 
 __version__ = _core.__version__
 
 __all__ = ["Error", "GeometryError", "InputError", "IoError", "Mesh", "NumericalError", "Result", "Scene", "mesh",
-           "meshing_options", "methods", "quality", "read_scene", "solve", "solve_options"]
+           "meshing_options", "methods", "quality", "read_scene", "scene_options", "solve", "solve_options"]
 
 
 def solve(scene, method=None, progress=None, resume=None, **options):

@@ -452,10 +452,16 @@ PYBIND11_MODULE(_core, m) {
                " triangles>";
       });
 
-  m.def("read_scene", [](const std::string& path) {
+  m.def("read_scene", [](const std::string& path, const py::kwargs& kwargs) {
+    OptionValues given;
+    for (const auto& [key, value] : kwargs) {
+      const std::string name = key.cast<std::string>();
+      given[name] = option_text(name, value);
+    }
+    const SceneOptions options = scene_option_table().parse(given);
     PyScene s;
     py::gil_scoped_release release;
-    s.scene = std::make_shared<const Scene>(read_scene(path));
+    s.scene = std::make_shared<const Scene>(read_scene(path, options));
     return s;
   }, py::arg("path"));
   m.def("mesh", &mesh_of, py::arg("scene"));
@@ -482,4 +488,5 @@ PYBIND11_MODULE(_core, m) {
   });
   m.def("solve_options", [] { return spec_list(solve_option_table().specs()); });
   m.def("meshing_options", [] { return spec_list(meshing_option_table().specs()); });
+  m.def("scene_options", [] { return spec_list(scene_option_table().specs()); });
 }

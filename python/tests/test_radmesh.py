@@ -239,3 +239,20 @@ def test_the_sweep_example_writes_a_row_per_setting(tmp_path):
         rows = list(csv.DictReader(f))
     assert [r["method"] for r in rows] == ["hierarchical"] * 2 + ["matrix"] * 2 + ["pixmap"] * 2
     assert all(float(r["worst_patch_error"]) >= float(r["rms_patch_error"]) >= 0 for r in rows)
+
+
+def test_an_mgf_scene_reads_as_its_obj_and_takes_the_curve_tolerance(tmp_path):
+    mgf = radmesh.read_scene(os.path.join(DATA, "cornell_box", "cornell_box.mgf"))
+    obj = radmesh.read_scene(CORNELL)
+    assert mgf.patch_count == obj.patch_count
+    def per_patch(scene):
+        return [scene.materials[m]["reflectance"] for m in scene.patch_materials]
+    assert np.allclose(per_patch(mgf), per_patch(obj), rtol=0, atol=1e-12)
+    ball = tmp_path / "ball.mgf"
+    ball.write_text("m white =\n\tc\n\trd 0.5\nv c =\n\tp 0 0 0\nsph c 1\n")
+    coarse = radmesh.read_scene(str(ball), curve_tolerance=0.05).patch_count
+    fine = radmesh.read_scene(str(ball), curve_tolerance=0.001).patch_count
+    assert fine > coarse > 0
+    with pytest.raises(radmesh.InputError) as e:
+        radmesh.read_scene(str(ball), curve_tolerance=2.0)
+    assert e.value.options == ["curve_tolerance"]

@@ -594,8 +594,20 @@ void cut_out_coplanar_faces(Scene& scene, const std::string& source, const Scene
 
 }  // namespace
 
+const OptionTable<SceneOptions>& scene_option_table() {
+  static const OptionTable<SceneOptions> table = [] {
+    OptionTable<SceneOptions> t("scene");
+    t.real("curve_tolerance", &SceneOptions::curve_tolerance, "radii",
+           "how far the planar faces cut from a curved MGF primitive (sph, cyl, cone, ring, torus) may lie from "
+           "its surface", 1e-5, 0.5);
+    return t;
+  }();
+  return table;
+}
+
 Scene build_scene(const std::vector<RawFace>& faces, std::vector<Material> materials,
                   const std::string& source, const SceneOptions& options) {
+  scene_option_table().check(options);
   Scene scene;
   scene.source = source;
   for (const Material& m : materials) check_material(m);

@@ -6,6 +6,7 @@
 #include "io/readers/json_parse.h"
 #include "radmesh/obj_reader.h"
 #include "io/readers/scene_sources.h"
+#include "core/degrees.h"
 #include "core/text_syntax.h"
 #include "radmesh/errors.h"
 
@@ -24,6 +25,7 @@ namespace {
 
 namespace fs = std::filesystem;
 using Json = nlohmann::ordered_json;  // keeps the file's order of materials
+using internal::cos_sin_degrees;
 using internal::dumped;
 using internal::shown;
 
@@ -56,21 +58,6 @@ struct Context {
 };
 
 // ------------------------------------------------------------------ transform
-
-// cos and sin of an angle in degrees, exact at multiples of 90.
-void cos_sin(double deg, double* c, double* s) {
-  const double r = std::fmod(deg, 360.0);
-  if (r == std::trunc(r) && std::fmod(r, 90.0) == 0.0) {
-    const int q = ((static_cast<int>(r) / 90) % 4 + 4) % 4;
-    static const double cs[4][2] = {{1, 0}, {0, 1}, {-1, 0}, {0, -1}};
-    *c = cs[q][0];
-    *s = cs[q][1];
-    return;
-  }
-  const double rad = r * (3.14159265358979323846 / 180.0);
-  *c = std::cos(rad);
-  *s = std::sin(rad);
-}
 
 struct Transform {
   Vec3 scale{1.0};
@@ -112,9 +99,9 @@ Transform parse_transform(const Context& ctx, const Json& t, const std::string& 
   }
   if (t.contains("rotate_deg")) tr.rotate_deg = ctx.three(t["rotate_deg"], key + ".rotate_deg");
   if (t.contains("translate")) tr.translate = ctx.three(t["translate"], key + ".translate");
-  cos_sin(tr.rotate_deg.x, &tr.cx, &tr.sx);
-  cos_sin(tr.rotate_deg.y, &tr.cy, &tr.sy);
-  cos_sin(tr.rotate_deg.z, &tr.cz, &tr.sz);
+  cos_sin_degrees(tr.rotate_deg.x, &tr.cx, &tr.sx);
+  cos_sin_degrees(tr.rotate_deg.y, &tr.cy, &tr.sy);
+  cos_sin_degrees(tr.rotate_deg.z, &tr.cz, &tr.sz);
   tr.identity = tr.scale == Vec3(1.0) && tr.rotate_deg == Vec3(0.0) && tr.translate == Vec3(0.0);
   return tr;
 }
@@ -232,9 +219,9 @@ Scene read_json_scene(const std::string& path, const SceneOptions& options) {
     const std::string file = (given.is_absolute() ? given : dir / given).string();
     const std::string ext = lower_extension(name);
     if (ext == ".json") ctx.fail(key + ".file", "'" + name + "' is a JSON scene; a scene cannot include another");
-    if (ext != ".obj" && !is_assimp_extension(ext))
+    if (ext != ".obj" && ext != ".mgf" && !is_assimp_extension(ext))
       ctx.fail(key + ".file", "'" + name + "': unknown extension '" + ext +
-                                  "'; objects can be .obj, .ply, .stl, .off, .gltf or .glb files");
+                                  "'; objects can be .obj, .ply, .stl, .off, .gltf, .glb or .mgf files");
     std::error_code ec;  // a name the system cannot look up (too long, ...) is not found, not an exception
     if (!fs::exists(file, ec))
       throw IoError(path + ": " + key + ".file: '" + name + "' not found (looked for " + file + ")");
@@ -256,7 +243,9 @@ Scene read_json_scene(const std::string& path, const SceneOptions& options) {
     Transform tr;
     if (o.contains("transform")) tr = parse_transform(ctx, o["transform"], key + ".transform");
 
-    SceneSource src = ext == ".obj" ? read_obj_source(file) : read_assimp_source(file, override_material < 0);
+    SceneSource src = ext == ".obj"   ? read_obj_source(file)
+                      : ext == ".mgf" ? read_mgf_source(file, options)
+                                      : read_assimp_source(file, override_material < 0);
     std::vector<int> remap(src.materials.size(), -1);
     if (override_material < 0) {
       if (!src.missing_material.empty())

@@ -48,7 +48,7 @@ bool is_assimp_extension(const std::string& ext) {
 
 namespace {
 
-const char* const kAccepted = ".obj, .ply, .stl, .off, .gltf, .glb and .json (a JSON scene)";
+const char* const kAccepted = ".obj, .ply, .stl, .off, .gltf, .glb, .mgf and .json (a JSON scene)";
 
 // Builds the scene from one file's faces, passing build_scene only the
 // materials some face uses (so that an unused one cannot fail the check).
@@ -74,6 +74,7 @@ Scene read_scene(const std::string& path, const SceneOptions& options) {
   const std::string ext = internal::lower_extension(path);
   if (ext == ".obj") return read_obj_scene(path, options);
   if (ext == ".json") return internal::read_json_scene(path, options);
+  if (ext == ".mgf") return build_from_source(internal::read_mgf_source(path, options), path, options);
   if (internal::is_assimp_extension(ext)) {
     internal::SceneSource source = internal::read_assimp_source(path, /*check_materials=*/true);
     if (!source.missing_material.empty()) {

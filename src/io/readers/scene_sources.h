@@ -28,6 +28,18 @@ SceneSource read_obj_source(const std::string& path);
 // without, the caller replaces them.
 SceneSource read_assimp_source(const std::string& path, bool check_materials);
 
+// MGF 2.0 (mgf_reader.cpp; docs/scenes.md, "MGF"): its includes read
+// relative to it, its curved primitives cut into planar faces within
+// options.curve_tolerance. The bounds on the work an MGF file may ask for
+// (arrays and includes repeat statements); a file past one is refused,
+// naming it.
+struct MgfLimits {
+  long long faces = 10'000'000;        // faces made: f, fh, prisms, the faces of curved primitives
+  long long statements = 100'000'000;  // statements executed, each array instance and include counted
+  int include_depth = 32;              // includes nested in includes
+};
+SceneSource read_mgf_source(const std::string& path, const SceneOptions& options, const MgfLimits& limits = {});
+
 // The JSON scene file (radmesh/scene_reader.h describes its keys).
 Scene read_json_scene(const std::string& path, const SceneOptions& options);
 
