@@ -1,7 +1,9 @@
 """radmesh in ParaView (5.11): a source that solves a scene file, and a filter
 that lights any polygonal data. Load it with Tools > Manage Plugins > Load New
 (this file), or LoadPlugin("radmesh_paraview.py", ns=globals()) in pvpython or
-pvbatch; the radmesh Python module must be importable (PYTHONPATH).
+pvbatch; the radmesh Python module must be importable (PYTHONPATH). Debian 12's
+ParaView 5.11 loads no Python plugin under Python 3.11 until, in its Python
+Shell or script, `import inspect; inspect.getargspec = inspect.getfullargspec`.
 
 Both output the solved mesh with the arrays of radmesh's radiosity.vtu: point
 array "radiosity" (RGB), cell arrays "radiosity", "patch_id", "area",
@@ -28,16 +30,20 @@ _KINDS = {"real": "DoubleVectorProperty", "integer": "IntVectorProperty", "flag"
           "choice": "StringVectorProperty"}
 
 
-def _option_tables():
-    """(owner, spec) for every option a solve takes: the method's own (owner its name), then the shared ones."""
+def _option_tables(scene=False):
+    """(owner, spec) for every option a solve takes: the method's own (owner its name), then the shared
+    ones (owner None), then with `scene` those of reading the scene file (owner "scene")."""
     out = []
     for m in radmesh.methods():
         out += [(m["name"], o) for o in m["options"]]
-    seen = {o["name"] for _, o in out}
-    for o in radmesh.solve_options() + radmesh.meshing_options():
-        if o["name"] not in seen:
-            out.append((None, o))
-            seen.add(o["name"])
+    shared = [(None, o) for o in radmesh.solve_options() + radmesh.meshing_options()]
+    if scene:
+        shared += [("scene", o) for o in radmesh.scene_options()]
+    out += shared
+    names = [o["name"] for _, o in out]
+    twice = sorted({n for n in names if names.count(n) > 1})
+    if twice:  # one property per name: a second would hide the first
+        raise RuntimeError(f"radmesh plugin: options declared twice: {', '.join(twice)}")
     return out
 
 
@@ -64,7 +70,7 @@ def _property_xml(owner, spec):
         entries = "".join(f'<String value="{c}"/>' for c in spec["choices"])
         domain = f'<StringListDomain name="list">{entries}</StringListDomain>'
     hints = ""
-    if owner:
+    if owner and owner != "scene":
         hints = ('<Hints><PropertyWidgetDecorator type="GenericDecorator" mode="visibility" property="Method" '
                  f'value="{owner}"/></Hints>')
     help_text = (spec["help"] + unit).replace("&", "&amp;").replace("<", "&lt;").replace('"', "&quot;")
@@ -81,9 +87,10 @@ def _method_xml():
 
 
 def _add_options(cls):
-    """Gives the class a setter and a property per option, and the Method property."""
+    """Gives the class a setter and a property per option (the scene file's too where it reads one), and the
+    Method property."""
     xmls = [_method_xml()]
-    for owner, spec in _option_tables():
+    for owner, spec in _option_tables(cls._reads_scene):
         def setter(self, value, _spec=spec):
             self._set_option(_spec, value)
         setattr(cls, "SetOption_" + spec["name"], setter)
@@ -118,11 +125,13 @@ def to_grid(result):
 class _Solving(VTKPythonAlgorithmBase):
     """What the source and the filter share: the method, its options, the solve."""
 
+    _reads_scene = False
+
     def __init__(self, inputs, output):
         VTKPythonAlgorithmBase.__init__(self, nInputPorts=inputs, nOutputPorts=1, outputType=output)
         self._method = radmesh.methods()[0]["name"]
         self._options = {}
-        self._owners = {spec["name"]: owner for owner, spec in _option_tables()}
+        self._owners = {spec["name"]: owner for owner, spec in _option_tables(self._reads_scene)}
 
     def SetMethod(self, method):
         if method != self._method:
@@ -142,10 +151,12 @@ class _Solving(VTKPythonAlgorithmBase):
             self._options[spec["name"]] = value
         self.Modified()
 
+    def _given(self, owners):
+        return {k: v for k, v in self._options.items() if self._owners[k] in owners}
+
     def _solve(self, scene):
         # Options of another method are left out: their properties are hidden.
-        given = {k: v for k, v in self._options.items() if self._owners[k] in (None, self._method)}
-        return radmesh.solve(scene, method=self._method, **given)
+        return radmesh.solve(scene, method=self._method, **self._given((None, self._method)))
 
 
 @smproxy.source(name="radmeshScene", label="radmesh Scene")
@@ -153,6 +164,8 @@ class _Solving(VTKPythonAlgorithmBase):
 @_add_options
 class RadmeshScene(_Solving):
     """Reads a scene file (OBJ, PLY, STL, OFF, glTF, JSON, MGF) and solves it."""
+
+    _reads_scene = True
 
     def __init__(self):
         _Solving.__init__(self, 0, "vtkUnstructuredGrid")
@@ -170,7 +183,7 @@ class RadmeshScene(_Solving):
     def RequestData(self, request, inInfo, outInfo):
         if not self._file:
             raise RuntimeError("radmesh Scene: no file name")
-        result = self._solve(radmesh.read_scene(self._file))
+        result = self._solve(radmesh.read_scene(self._file, **self._given(("scene",))))
         vtkUnstructuredGrid.GetData(outInfo).ShallowCopy(to_grid(result))
         return 1
 

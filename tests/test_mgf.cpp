@@ -444,6 +444,21 @@ TEST(Mgf, WorkPastTheBoundsIsRefusedNamingTheBound) {
   write(tmp / "d5.mgf", "\n");
   EXPECT_TRUE(mentions(message_of<InputError>([&] { internal::read_mgf_source((tmp / "d0.mgf").string(), {}, limits); }),
                        {"d3.mgf:1: i: 'd4.mgf': includes nested more than 3 deep"}));
+  // A face of too many vertices (splitting at seams grows as their square),
+  // too many vertices in all, objects nested too deep.
+  limits.face_vertices = 5;
+  const std::string wide = write(tmp / "wide.mgf", with_square("f a b c d a b\n"));
+  EXPECT_TRUE(mentions(message_of<InputError>([&] { internal::read_mgf_source(wide, {}, limits); }),
+                       {"wide.mgf:9: f: a face of 6 vertices; radmesh reads faces of at most 5"}));
+  limits.face_vertices = 10000;
+  limits.points = 30;
+  const std::string many = write(tmp / "many.mgf", with_square("xf -a 10\nf a b c d\nxf\n"));
+  EXPECT_TRUE(mentions(message_of<InputError>([&] { internal::read_mgf_source(many, {}, limits); }),
+                       {"many.mgf:10: f: more than 30 face vertices"}));
+  limits.object_depth = 2;
+  const std::string deep = write(tmp / "deep.mgf", "o a\no b\no c\n");
+  EXPECT_TRUE(mentions(message_of<InputError>([&] { internal::read_mgf_source(deep, {}, limits); }),
+                       {"deep.mgf:3: o: objects nested more than 2 deep"}));
   // A sphere at the finest tolerance is within the default bound.
   SceneOptions fine;
   fine.curve_tolerance = 1e-5;

@@ -19,16 +19,22 @@ Result.write and resuming the pixmap method load radmesh._files, which does.
 """
 
 import json as _json
+import os as _os
 import warnings as _warnings
 
 from . import _core
 from ._core import (Error, GeometryError, InputError, IoError, Mesh, NumericalError, Result, Scene, mesh,
-                    meshing_options, methods, quality, read_scene, scene_options, solve_options)
+                    meshing_options, methods, quality, scene_options, solve_options)
 
 __version__ = _core.__version__
 
 __all__ = ["Error", "GeometryError", "InputError", "IoError", "Mesh", "NumericalError", "Result", "Scene", "mesh",
            "meshing_options", "methods", "quality", "read_scene", "scene_options", "solve", "solve_options"]
+
+
+def read_scene(path, **scene_options):
+    """Reads a scene file (a str or os.PathLike) of any format `radmesh run` reads."""
+    return _core.read_scene(_os.fspath(path), **scene_options)
 
 
 def solve(scene, method=None, progress=None, resume=None, **options):
@@ -43,7 +49,7 @@ def solve(scene, method=None, progress=None, resume=None, **options):
         method = methods()[0]["name"]
     if resume is not None:
         from . import _files  # noqa: F401  (the pixmap state is a set of VTK images)
-    return _core.solve(scene, method, progress, None if resume is None else str(resume), **options)
+    return _core.solve(scene, method, progress, None if resume is None else _os.fspath(resume), **options)
 
 
 def _summary(self):
@@ -57,7 +63,7 @@ def _write(self, out_dir, png=True):
     png: radiosity.png too, where a display can be had (else a warning says why not).
     """
     from . import _files
-    written, notes = _files.write(self, str(out_dir), png)
+    written, notes = _files.write(self, _os.fspath(out_dir), png)
     for note in notes:
         _warnings.warn(note, stacklevel=2)
     return written

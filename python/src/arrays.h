@@ -72,6 +72,17 @@ inline py::array numeric_array(const py::object& value, const std::string& name)
   return a;
 }
 
+// The array as contiguous doubles (a copy where it is not); InputError when
+// numpy cannot make one (a broadcast view far larger than memory).
+inline py::array_t<double, py::array::c_style> as_doubles(const py::array& a, const std::string& name) {
+  auto d = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(a);
+  if (!d) {
+    PyErr_Clear();
+    throw InputError(name + ": cannot be read as " + std::to_string(a.size()) + " numbers (not enough memory for them)");
+  }
+  return d;
+}
+
 struct Matrix {
   std::vector<double> values;
   size_t rows = 0, columns = 0;
@@ -87,7 +98,7 @@ inline Matrix real_matrix(const py::object& value, const std::string& name, size
   if (a.ndim() != 2 || static_cast<size_t>(a.shape(1)) != columns)
     throw InputError(name + ": shape (n, " + std::to_string(columns) + ") wanted, got " +
                      py::str(py::tuple(a.attr("shape"))).cast<std::string>());
-  const auto d = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(a);
+  const auto d = as_doubles(a, name);
   Matrix m;
   m.rows = static_cast<size_t>(a.shape(0));
   m.columns = columns;
@@ -105,7 +116,7 @@ inline std::vector<long long> integer_vector(const py::object& value, const std:
   const py::array a = numeric_array(value, name);
   if (a.ndim() != 1)
     throw InputError(name + ": a one-dimensional array wanted, got " + std::to_string(a.ndim()) + " dimensions");
-  const auto d = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(a);
+  const auto d = as_doubles(a, name);
   std::vector<long long> out(static_cast<size_t>(a.shape(0)));
   for (size_t k = 0; k < out.size(); ++k) {
     const double x = d.data()[k];
@@ -133,9 +144,11 @@ inline Polygons polygons(const py::object& value, const std::string& name, long 
   } else {
     const py::array a = numeric_array(value, name);
     if (a.ndim() != 2) throw InputError(name + ": (offsets, indices) or an (F, k) array wanted");
+    const long long k = a.shape(1);
+    if (k < 3 && a.shape(0) > 0)
+      throw InputError(name + ": faces of " + std::to_string(k) + " vertices; a face needs at least 3");
     const py::object flat = a.attr("reshape")(-1);
     p.indices = integer_vector(flat, name);
-    const long long k = a.shape(1);
     for (long long f = 0; f <= a.shape(0); ++f) p.offsets.push_back(f * k);
   }
   if (p.offsets.empty() || p.offsets.front() != 0)

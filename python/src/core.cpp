@@ -60,9 +60,9 @@ void register_errors(py::module_& m) {
 std::string option_text(const std::string& name, const py::handle& value) {
   if (py::isinstance<py::bool_>(value)) return value.cast<bool>() ? "true" : "false";
   if (py::isinstance<py::str>(value)) return value.cast<std::string>();
-  if (py::isinstance<py::int_>(value) || py::isinstance<py::float_>(value) ||
-      py::hasattr(value, "__index__") || py::hasattr(value, "__float__"))
-    return py::repr(value).cast<std::string>();
+  // As a Python int or float first: a numpy scalar's own repr may name its type.
+  if (py::hasattr(value, "__index__")) return py::str(py::int_(py::reinterpret_borrow<py::object>(value)));
+  if (py::hasattr(value, "__float__")) return py::repr(py::float_(py::reinterpret_borrow<py::object>(value)));
   throw InputError(name + "=" + py::repr(value).cast<std::string>() + ": not a number, a bool or a string", {name});
 }
 
@@ -163,33 +163,49 @@ T run_interruptible(const py::object& progress, const std::function<T(const Solv
       done = true;
       cv.notify_all();
     });
+    // Whatever leaves this loop, the worker is stopped and joined first.
+    struct Joiner {
+      std::thread& t;
+      std::atomic<bool>& stop;
+      ~Joiner() {
+        stop = true;
+        t.join();
+      }
+    } joiner{worker, stop};
+    using Clock = std::chrono::steady_clock;
+    Clock::time_point last = Clock::now() - std::chrono::seconds(1);
     for (;;) {
       std::unique_lock<std::mutex> lock(mu);
-      cv.wait_for(lock, std::chrono::milliseconds(100), [&] { return done || fresh; });
+      cv.wait_for(lock, std::chrono::milliseconds(100), [&] { return done; });
       if (done) break;
-      const bool report = fresh;
+      // At most ten calls a second, with the last report.
+      const bool report = fresh && Clock::now() - last >= std::chrono::milliseconds(100);
       const std::string ph = phase;
       const double f = fraction;
-      fresh = false;
+      if (report) fresh = false;
       lock.unlock();
       if (raised) continue;
       py::gil_scoped_acquire acquire;
       try {
         if (PyErr_CheckSignals() != 0) throw py::error_already_set();
-        if (report && !progress.is_none()) progress(ph, f);
+        if (report && !progress.is_none()) {
+          last = Clock::now();
+          progress(ph, f);
+        }
       } catch (py::error_already_set& e) {
         raised.emplace(std::move(e));
         stop = true;
       }
     }
-    worker.join();
   }
   if (raised) throw std::move(*raised);
   if (failure) {
     try {
       std::rethrow_exception(failure);
     } catch (const Stopped&) {
-      throw py::error_already_set();  // unreachable: a stop is always raised
+      // Stopped only when asked, and asking raised: kept as a guard.
+      PyErr_SetNone(PyExc_KeyboardInterrupt);
+      throw py::error_already_set();
     }
   }
   return std::move(*out);
@@ -199,13 +215,15 @@ T run_interruptible(const py::object& progress, const std::function<T(const Solv
 
 py::dict material_dict(const Material& mat) {
   py::dict d;
-  d["name"] = mat.name;
+  d["name"] = text(mat.name);
   d["reflectance"] = py::make_tuple(mat.reflectance.x, mat.reflectance.y, mat.reflectance.z);
   d["emission"] = py::make_tuple(mat.emission.x, mat.emission.y, mat.emission.z);
   return d;
 }
 
 Rgb rgb_of(const py::handle& value, const std::string& what) {
+  if (!py::isinstance<py::sequence>(value) || py::isinstance<py::str>(value))
+    throw InputError(what + ": 3 values (r, g, b) wanted, got " + py::repr(value).cast<std::string>());
   const py::sequence s = value.cast<py::sequence>();
   if (s.size() != 3) throw InputError(what + ": 3 values (r, g, b) wanted, got " + std::to_string(s.size()));
   Rgb c;
@@ -251,7 +269,11 @@ PyScene scene_from_arrays(const py::object& vertices, const py::object& faces, c
   std::vector<Material> mats = materials_of(materials);
   std::vector<std::string> face_names;
   if (!names.is_none()) {
-    face_names = names.cast<std::vector<std::string>>();
+    try {
+      face_names = names.cast<std::vector<std::string>>();
+    } catch (const py::cast_error&) {
+      throw InputError("names: a list of strings wanted, one per face");
+    }
     if (face_names.size() != polys.count())
       throw InputError("names: " + std::to_string(face_names.size()) + " for " + std::to_string(polys.count()) +
                        " faces");
@@ -275,6 +297,7 @@ PyScene scene_from_arrays(const py::object& vertices, const py::object& faces, c
 
 PyMesh mesh_of(const PyScene& s, const py::kwargs& kwargs) {
   const SortedOptions o = sort_options(nullptr, kwargs);
+  if (!o.solve.empty()) unknown_option(o.solve.begin()->first, "meshing");
   PyMesh m;
   m.scene = s.scene;
   m.options = resolve_meshing_options(*s.scene, meshing_option_table().parse(o.meshing));
@@ -381,13 +404,13 @@ PYBIND11_MODULE(_core, m) {
   py::class_<PyScene>(m, "Scene", "A validated scene: welded vertices, planar patches, materials.")
       .def_static("from_arrays", &scene_from_arrays, py::arg("vertices"), py::arg("faces"),
                   py::arg("patch_materials"), py::arg("materials"), py::arg("names") = py::none())
-      .def_property_readonly("source", [](const PyScene& s) { return s.scene->source; })
+      .def_property_readonly("source", [](const PyScene& s) { return text(s.scene->source); })
       .def_property_readonly("vertices", [](const PyScene& s) { return view_rows(s.scene->vertices, s.scene); })
       .def_property_readonly("patch_count", [](const PyScene& s) { return s.scene->patches.size(); })
       .def_property_readonly("patch_names",
                              [](const PyScene& s) {
-                               std::vector<std::string> n;
-                               for (const Patch& p : s.scene->patches) n.push_back(p.name);
+                               py::list n;
+                               for (const Patch& p : s.scene->patches) n.append(text(p.name));
                                return n;
                              })
       .def_property_readonly("patch_materials",
@@ -413,9 +436,9 @@ PYBIND11_MODULE(_core, m) {
                                for (const Material& mat : s.scene->materials) l.append(material_dict(mat));
                                return l;
                              })
-      .def_property_readonly("warnings", [](const PyScene& s) { return s.scene->report.warnings; })
+      .def_property_readonly("warnings", [](const PyScene& s) { return texts(s.scene->report.warnings); })
       .def("__repr__", [](const PyScene& s) {
-        return "<radmesh.Scene " + s.scene->source + ": " + std::to_string(s.scene->patches.size()) + " patches>";
+        return text("<radmesh.Scene " + s.scene->source + ": " + std::to_string(s.scene->patches.size()) + " patches>");
       });
 
   py::class_<PyMesh>(m, "Mesh", "A scene's all-triangle mesh.")
@@ -423,7 +446,7 @@ PYBIND11_MODULE(_core, m) {
       .def_property_readonly("triangles", [](const PyMesh& me) { return view_rows(me.mesh->triangles, me.mesh); })
       .def_property_readonly("patch", [](const PyMesh& me) { return view(me.mesh->patch, me.mesh); })
       .def_property_readonly("zero_area", [](const PyMesh& me) { return zero_area_flags(*me.mesh); })
-      .def_property_readonly("warnings", [](const PyMesh& me) { return me.report.warnings; })
+      .def_property_readonly("warnings", [](const PyMesh& me) { return texts(me.report.warnings); })
       .def_property_readonly("max_edge", [](const PyMesh& me) { return me.options.max_edge; })
       .def_property_readonly("contact_segments", [](const PyMesh& me) { return me.report.contact_segments; })
       .def_property_readonly("shadow_segments", [](const PyMesh& me) { return me.report.shadow_segments; })
@@ -446,7 +469,7 @@ PYBIND11_MODULE(_core, m) {
       .def("patch_means", [](const PyResult& r) { return means_array(r.result->patch_means()); })
       .def("element_patch_means", [](const PyResult& r) { return means_array(r.result->element_patch_means()); })
       .def("summary_text", [](const PyResult& r) { return summary_text(*r.result); })
-      .def_property_readonly("warnings", [](const PyResult& r) { return r.result->warnings; })
+      .def_property_readonly("warnings", [](const PyResult& r) { return texts(r.result->warnings); })
       .def("__repr__", [](const PyResult& r) {
         return "<radmesh.Result " + r.result->method + ": " + std::to_string(r.result->mesh.triangles.size()) +
                " triangles>";
@@ -484,6 +507,8 @@ PYBIND11_MODULE(_core, m) {
     return l;
   });
   m.def("_install_pixmap_files", [](const py::capsule& c) {
+    if (c.name() == nullptr || std::string(c.name()) != kPixmapFilesCapsule)
+      throw InputError("_install_pixmap_files: not radmesh._files's capsule");
     g_pixmap_files = *c.get_pointer<PixmapFiles>();
   });
   m.def("solve_options", [] { return spec_list(solve_option_table().specs()); });

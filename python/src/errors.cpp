@@ -15,12 +15,22 @@ namespace {
 // radmesh.solve takes.
 void raise(const char* name, const Error& e) {
   const py::object type = py::module_::import("radmesh._core").attr(name);
-  py::object err = type(e.what());
+  py::object err = type(text(e.what()));
   err.attr("options") = py::cast(e.options());
   PyErr_SetObject(type.ptr(), err.ptr());
 }
 
 }  // namespace
+
+py::str text(const std::string& s) {
+  return py::reinterpret_steal<py::str>(PyUnicode_DecodeUTF8(s.data(), static_cast<Py_ssize_t>(s.size()), "replace"));
+}
+
+py::list texts(const std::vector<std::string>& v) {
+  py::list l;
+  for (const std::string& s : v) l.append(text(s));
+  return l;
+}
 
 void translate_errors(py::module_) {
   py::register_exception_translator([](std::exception_ptr p) {

@@ -47,6 +47,11 @@ struct PixmapFiles {
 };
 inline constexpr const char* kPixmapFilesCapsule = "radmesh._files.PixmapFiles";
 
+// Text from the library as a Python str: bytes that are not UTF-8 (a name
+// read from a file in another encoding) become U+FFFD, as in summary.json.
+py::str text(const std::string& s);
+py::list texts(const std::vector<std::string>& v);
+
 // radmesh's typed errors as the Python exceptions of radmesh._core
 // (InputError, GeometryError, NumericalError, IoError, all radmesh.Error):
 // each extension module registers this once.

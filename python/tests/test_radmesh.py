@@ -128,6 +128,23 @@ def test_bad_arrays_are_input_errors_naming_the_argument(change, words):
     assert isinstance(e.value, ValueError)
 
 
+def test_arrays_too_large_to_read_are_input_errors_not_crashes():
+    huge = np.broadcast_to(np.zeros(3), (2**42, 3))  # a view of 24 bytes standing for 96 TiB
+    with pytest.raises(radmesh.InputError, match="vertices: cannot be read"):
+        radmesh.Scene.from_arrays(huge, GOOD_FACES, [0], GREY)
+    with pytest.raises(radmesh.InputError, match="faces: faces of 0 vertices"):
+        radmesh.Scene.from_arrays(GOOD_VERTICES, np.empty((10**12, 0)), [0], GREY)
+    with pytest.raises(radmesh.InputError, match="reflectance: 3 values"):
+        radmesh.Scene.from_arrays(GOOD_VERTICES, GOOD_FACES, [0], [{"reflectance": 0.5}])
+
+
+def test_names_that_are_not_utf8_come_back_replaced(tmp_path):
+    scene = tmp_path / "latin1.obj"
+    scene.write_bytes(b"mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\no caf\xe9\nusemtl grey\nf 1 2 3\n")
+    (tmp_path / "m.mtl").write_text("newmtl grey\nKd 0.5 0.5 0.5\n")
+    assert radmesh.read_scene(scene).patch_names == ["caf\ufffd"]  # a pathlib.Path is a path too
+
+
 def test_errors_carry_the_file_and_the_option(tmp_path):
     with pytest.raises(radmesh.IoError) as e:
         radmesh.read_scene(str(tmp_path / "missing.obj"))
@@ -149,6 +166,11 @@ def test_errors_carry_the_file_and_the_option(tmp_path):
     assert "max_edge is not used by method pixmap" in str(e.value)
     with pytest.raises(radmesh.InputError):
         radmesh.solve(scene, method="nonesuch")
+    with pytest.raises(radmesh.InputError) as e:
+        radmesh.mesh(scene, threads=1)  # a solve's option, not the meshing's
+    assert "threads" in str(e.value)
+    # numpy scalars are numbers like any other
+    assert radmesh.mesh(scene, max_edge=np.float64(300.0)).max_edge == 300.0
 
 
 def test_methods_list_their_options_with_units_and_ranges():

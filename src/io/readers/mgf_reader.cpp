@@ -272,6 +272,8 @@ private:
     } else if (key == "o") {
       if (tok_.size() > 2) fail("expected 'o NAME' or 'o', got '" + text() + "'");
       if (tok_.size() == 2) {
+        if (static_cast<int>(objects_.size()) >= limits_.object_depth)
+          fail("objects nested more than " + std::to_string(limits_.object_depth) + " deep");
         objects_.emplace_back(tok_[1]);
       } else {
         if (objects_.size() == o_base) fail("no object begun in this file to end");
@@ -387,6 +389,9 @@ private:
 
   void face() {
     if (tok_.size() < 4) fail("a face needs at least 3 vertices, got '" + text() + "'");
+    if (static_cast<long long>(tok_.size()) - 1 > limits_.face_vertices)
+      fail("a face of " + std::to_string(tok_.size() - 1) + " vertices; radmesh reads faces of at most " +
+           std::to_string(limits_.face_vertices));
     std::vector<Vec3> loop;
     for (size_t k = 1; k < tok_.size(); ++k) loop.push_back(vertex(k).p);
     mgf::Seamed parts;
@@ -396,6 +401,9 @@ private:
   }
 
   void face_with_holes() {
+    if (static_cast<long long>(tok_.size()) - 1 > limits_.face_vertices)
+      fail("a face of " + std::to_string(tok_.size() - 1) + " vertices; radmesh reads faces of at most " +
+           std::to_string(limits_.face_vertices));
     std::vector<std::vector<Vec3>> loops(1);
     for (size_t k = 1; k < tok_.size(); ++k) {
       if (tok_[k] == "-") {
@@ -420,6 +428,11 @@ private:
     if (static_cast<long long>(out_.faces.size()) >= limits_.faces)
       fail("more than " + std::to_string(limits_.faces) +
            " faces (arrays, includes and curved primitives counted): radmesh reads at most that many");
+    points_ += static_cast<long long>(outer.size());
+    for (const auto& h : holes) points_ += static_cast<long long>(h.size());
+    if (points_ > limits_.points)
+      fail("more than " + std::to_string(limits_.points) +
+           " face vertices (arrays, includes and curved primitives counted): radmesh reads at most that many");
     const Xf& xf = xfs_.empty() ? identity_ : xfs_.back().total;
     RawFace f;
     for (Vec3& p : outer) p = xf.apply(p);
@@ -785,6 +798,7 @@ private:
   const Statement* statement_ = nullptr;
   int line_ = 0;
   long long statements_ = 0;
+  long long points_ = 0;
   std::vector<std::string_view> tok_;
 
   Named<Vertex> vertices_;

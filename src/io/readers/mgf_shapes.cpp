@@ -6,6 +6,8 @@
 
 #include "io/readers/mgf.h"
 
+#include "core/degrees.h"
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -24,18 +26,10 @@ void frame(const Vec3& w, Vec3* u, Vec3* v) {
   *v = glm::cross(w, *u);
 }
 
-// cos and sin of 2 pi k / n, exact at the quarter turns.
+// cos and sin of 2 pi k / n, exact at the quarter turns (360 k / n is then
+// a whole multiple of 90, exactly).
 void unit_circle(int k, int n, double* c, double* s) {
-  if ((4 * k) % n == 0) {
-    static const double cs[4][2] = {{1, 0}, {0, 1}, {-1, 0}, {0, -1}};
-    const int q = (4 * k / n) % 4;
-    *c = cs[q][0];
-    *s = cs[q][1];
-    return;
-  }
-  const double a = 2.0 * kPi * k / n;
-  *c = std::cos(a);
-  *s = std::sin(a);
+  cos_sin_degrees(360.0 * k / n, c, s);
 }
 
 // Segments per full turn for a surface bent two ways (sphere, torus): each

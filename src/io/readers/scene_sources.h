@@ -37,6 +37,11 @@ struct MgfLimits {
   long long faces = 10'000'000;        // faces made: f, fh, prisms, the faces of curved primitives
   long long statements = 100'000'000;  // statements executed, each array instance and include counted
   int include_depth = 32;              // includes nested in includes
+  // Vertices of one face statement: splitting a face at its seams rescans
+  // it after each cut, so a face's work grows as its vertices squared.
+  long long face_vertices = 10'000;
+  long long points = 100'000'000;      // face vertices made in all (memory: 24 bytes each)
+  int object_depth = 64;               // o groups nested (a face's name joins them all)
 };
 SceneSource read_mgf_source(const std::string& path, const SceneOptions& options, const MgfLimits& limits = {});
 
