@@ -131,6 +131,26 @@ TEST(EnergyBalance, CornellBoxEmittedEqualsAbsorbedPlusEscaped) {
     }
 }
 
+TEST(EnergyBalance, TheCornellBoxAMillionUnitsFromTheOriginBalancesAsAtIt) {
+  // Far from the origin the coplanar elements of a wall are off each other's
+  // plane by their coordinates' rounding (1e-10 mm at 1e6 mm), more than
+  // 1e-12 of an element: taken for a facing pair, their form factor was NaN
+  // and every radiosity with it.
+  const Scene at = read_obj_scene(kData + "/cornell_box/cornell_box.obj");
+  const Scene moved = test::transformed(at, [](const Vec3& v) { return v + Vec3(1e6, 1e6, 1e6); });
+  const MeshingOptions mo;  // the matrix method's: scene diagonal / 12, contact and shadow lines
+  const Mesh mesh_at = mesh_scene(at, mo), mesh_moved = mesh_scene(moved, mo);
+  const Solution a = solve_matrix(at, mesh_at, {}), b = solve_matrix(moved, mesh_moved, {});
+  for (int c = 0; c < 3; ++c) {
+    const double e = b.stats.power_emitted[c];
+    EXPECT_NEAR((b.stats.power_absorbed[c] + b.stats.power_escaped[c]) / e, 1.0, 1e-3);
+  }
+  const auto ma = patch_mean_radiosity(at, mesh_at, a.element), mb = patch_mean_radiosity(moved, mesh_moved, b.element);
+  for (size_t p = 0; p < ma.size(); ++p)
+    for (int c = 0; c < 3; ++c)
+      if (ma[p][c] > 0.0) EXPECT_NEAR(mb[p][c] / ma[p][c], 1.0, 0.02) << at.patches[p].name;  // meshes differ by rounding
+}
+
 TEST(EnergyBalance, ABoxCloseUnderTheCeilingNeitherMakesNorLosesLight) {
   // A box's top 5 cm under the ceiling: the ceiling's elements are large
   // next to the box's and close to them, where a form factor integrated at

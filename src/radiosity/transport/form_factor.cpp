@@ -68,7 +68,14 @@ Triangle make_triangle(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& 
 bool facing_away(const Triangle& r, const Triangle& s) {
   auto any_in_front = [](const Triangle& plane, const Triangle& t) {
     const double scale = std::max(plane.radius, t.radius);
-    const double eps = 1e-12 * scale;
+    // Coplanar up to the elements' size and to their coordinates' rounding:
+    // far from the origin (a scene moved by 1e6) a vertex of the plane is
+    // off it by units in the last place of its coordinates, more than
+    // 1e-12 of a small element.
+    double magnitude = 0.0;
+    for (const Triangle* x : {&plane, &t})
+      for (const Vec3& p : x->v) magnitude = std::max(magnitude, std::max({std::abs(p.x), std::abs(p.y), std::abs(p.z)}));
+    const double eps = 1e-12 * scale + 64.0 * std::numeric_limits<double>::epsilon() * magnitude;
     for (const Vec3& p : t.v)
       if (glm::dot(p - plane.v[0], plane.normal) > eps) return true;
     return false;
