@@ -12,6 +12,7 @@
 
 #include "tests/test_util.h"
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -479,6 +480,19 @@ TEST(Mgf, AJsonSceneNamesAnMgfFile) {
   EXPECT_EQ(s.material_of(0).name, "grey");
   EXPECT_EQ(s.material_of(0).reflectance, Rgb(0.5));
   EXPECT_EQ(s.material_of(6).name, "lamp");
+  // An object given a material of its own keeps what its file says of its
+  // faces (curves cut, entities ignored), not of its materials.
+  write(tmp / "ball.mgf", "m white =\n rd .5\nv c =\n p 0 0 0\nsph c 1\nbogus 1 2\n");
+  const Scene lit = read_scene(write(tmp / "lit.json",
+                                     "{\"materials\": {\"grey\": {\"reflectance\": [0.5, 0.5, 0.5]}},\n"
+                                     " \"objects\": [{\"file\": \"ball.mgf\", \"material\": \"grey\"}]}\n"));
+  const std::vector<std::string>& w = lit.report.warnings;
+  auto has = [&](const std::string& text) {
+    return std::any_of(w.begin(), w.end(), [&](const std::string& x) { return x.find(text) != std::string::npos; });
+  };
+  EXPECT_TRUE(has("MGF curved primitives: 1 cut into"));
+  EXPECT_TRUE(has("unknown MGF entities, ignored as the format asks (1, first at"));
+  EXPECT_FALSE(has("two-sided"));
 }
 
 TEST(Mgf, TheCornellBoxInMgfSolvesAsItsObjDoes) {

@@ -247,6 +247,7 @@ Scene read_json_scene(const std::string& path, const SceneOptions& options) {
                       : ext == ".mgf" ? read_mgf_source(file, options)
                                       : read_assimp_source(file, override_material < 0);
     std::vector<int> remap(src.materials.size(), -1);
+    warnings.insert(warnings.end(), src.geometry_warnings.begin(), src.geometry_warnings.end());
     if (override_material < 0) {
       if (!src.missing_material.empty())
         ctx.fail(key, "'" + name + "': " + src.missing_material + "; give the object a \"material\"");

@@ -770,18 +770,21 @@ private:
   // ---- the report
 
   void finish() {
-    auto say = [&](const Tally& t, const std::string& what) {
-      if (t.count > 0) out_.warnings.push_back(what + " (" + std::to_string(t.count) + ", first at " + t.first + ")");
+    auto say = [&](const Tally& t, const std::string& what, std::vector<std::string>& to) {
+      if (t.count > 0) to.push_back(what + " (" + std::to_string(t.count) + ", first at " + t.first + ")");
     };
-    for (const auto& [what, t] : unused_) say(t, what);
-    say(unknown_, "unknown MGF entities, ignored as the format asks");
-    say(open_at_end_, "contexts left open at the end of their file, ended there");
-    say(default_material_, "faces without a material: MGF's default, a two-sided black absorber (reflectance 0)");
+    std::vector<std::string>& materials = out_.warnings;
+    std::vector<std::string>& geometry = out_.geometry_warnings;
+    for (const auto& [what, t] : unused_) say(t, what, materials);
+    say(unknown_, "unknown MGF entities, ignored as the format asks", geometry);
+    say(open_at_end_, "contexts left open at the end of their file, ended there", geometry);
+    say(default_material_, "faces without a material: MGF's default, a two-sided black absorber (reflectance 0)",
+        materials);
     say(two_sided_, "faces of two-sided materials (MGF's default, sides 2): radmesh lights each face on its front only, "
-                    "the side its vertices run counter-clockwise around");
-    say(clipped_, "colours outside the gamut of Radiance's RGB primaries: negative components set to 0");
+                    "the side its vertices run counter-clockwise around", materials);
+    say(clipped_, "colours outside the gamut of Radiance's RGB primaries: negative components set to 0", materials);
     if (curved_ > 0)
-      out_.warnings.push_back("MGF curved primitives: " + std::to_string(curved_) + " cut into " +
+      geometry.push_back("MGF curved primitives: " + std::to_string(curved_) + " cut into " +
                               std::to_string(curved_faces_) + " planar faces within curve_tolerance " +
                               format_number(options_.curve_tolerance) + " of their radius");
     if (emits_)

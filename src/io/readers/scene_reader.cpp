@@ -64,7 +64,9 @@ Scene build_from_source(internal::SceneSource source, const std::string& path, c
     f.material = r;
   }
   Scene scene = build_scene(source.faces, std::move(used), path, options);
-  scene.report.warnings.insert(scene.report.warnings.begin(), source.warnings.begin(), source.warnings.end());
+  std::vector<std::string> warnings = std::move(source.geometry_warnings);
+  warnings.insert(warnings.end(), source.warnings.begin(), source.warnings.end());
+  scene.report.warnings.insert(scene.report.warnings.begin(), warnings.begin(), warnings.end());
   return scene;
 }
 

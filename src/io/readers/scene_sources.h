@@ -17,7 +17,13 @@ struct SceneSource {
   // Why some face has no material (e.g. "PLY files carry no materials"); empty
   // when every face has one.
   std::string missing_material;
-  std::vector<std::string> warnings;  // things read but not used (textures, ...)
+  // About the file's materials (textures read but not used, MGF's colour
+  // conversions, ...): dropped where a JSON scene gives the object a
+  // material of its own.
+  std::vector<std::string> warnings;
+  // About the faces themselves (MGF's curves cut, entities ignored): kept
+  // whatever material the faces are given.
+  std::vector<std::string> geometry_warnings;
 };
 
 // OBJ + MTL (tinyobjloader, with our own line-numbered checks).
