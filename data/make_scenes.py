@@ -158,16 +158,21 @@ def fmt4(x):
     return f"{x:.4f}"
 
 
+def write_comment(f, comment):
+    """A blank line, then the material's comment (if any) as '#' lines: the same in MTL and MGF."""
+    f.write("\n")
+    if comment:
+        for c in comment.splitlines():
+            f.write(f"# {c}\n")
+
+
 def write_scene(scene, directory, basename):
     os.makedirs(directory, exist_ok=True)
     mtl_name = basename + ".mtl"
     with open(os.path.join(directory, mtl_name), "w", newline="\n") as f:
         f.write(HEADER)
         for name, kd, ke, comment in scene.materials:
-            f.write("\n")
-            if comment:
-                for c in comment.splitlines():
-                    f.write(f"# {c}\n")
+            write_comment(f, comment)
             f.write(f"newmtl {name}\n")
             f.write("Kd " + " ".join(fmt(v) for v in kd) + "\n")
             if ke is not None:
@@ -246,10 +251,7 @@ def write_mgf(scene, directory, basename):
                 "# chromaticity (cxy) and luminance (rd) in Radiance's primaries, ed = Ke x %g lm/W.\n"
                 % (basename, WHITE_EFFICACY))
         for name, kd, ke, comment in scene.materials:
-            f.write("\n")
-            if comment:
-                for c in comment.splitlines():
-                    f.write(f"# {c}\n")
+            write_comment(f, comment)
             f.write(f"m {name} =\n\tsides 1\n")
             for rgb, what, scale in ((kd, "rd", 1.0), (ke, "ed", WHITE_EFFICACY)):
                 if rgb is None:

@@ -333,8 +333,12 @@ TEST(Mgf, CylindersConesRingsToriAndPrismsFaceOutwardWithTheirAreas) {
     const std::string prism = "v c =\n p 1 0 0\n";
     const Scene s = read_text(tmp, ends + prism + lamp + k.body, o);
     const bool torus = k.body.rfind("torus", 0) == 0;
-    if (k.area > 0.0) EXPECT_NEAR(total_area(s), k.area, 2 * t * k.area);
-    if (k.area > 0.0 && !torus) EXPECT_LE(total_area(s), k.area);  // inscribed
+    if (k.area > 0.0) {
+      EXPECT_NEAR(total_area(s), k.area, 2 * t * k.area);
+    }
+    if (k.area > 0.0 && !torus) {
+      EXPECT_LE(total_area(s), k.area);  // inscribed
+    }
     if (torus) {
       // Outward from the tube's core circle, not from one point.
       for (size_t p = 0; p < s.patches.size(); ++p) {

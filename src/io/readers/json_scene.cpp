@@ -265,15 +265,7 @@ Scene read_json_scene(const std::string& path, const SceneOptions& options) {
         }
         f.material = r;
       }
-      if (!tr.identity) {
-        for (Vec3& p : f.points) p = tr.apply(p);
-        for (auto& h : f.holes)
-          for (Vec3& p : h) p = tr.apply(p);
-        if (mirror) {
-          std::reverse(f.points.begin() + 1, f.points.end());
-          for (auto& h : f.holes) std::reverse(h.begin() + 1, h.end());
-        }
-      }
+      if (!tr.identity) transform_face(f, [&](const Vec3& p) { return tr.apply(p); }, mirror);
       faces.push_back(std::move(f));
     }
   }

@@ -435,15 +435,9 @@ private:
            " face vertices (arrays, includes and curved primitives counted): radmesh reads at most that many");
     const Xf& xf = xfs_.empty() ? identity_ : xfs_.back().total;
     RawFace f;
-    for (Vec3& p : outer) p = xf.apply(p);
-    for (auto& h : holes)
-      for (Vec3& p : h) p = xf.apply(p);
-    if (xf.mirrors()) {  // faces keep facing the same side of the surface
-      std::reverse(outer.begin() + 1, outer.end());
-      for (auto& h : holes) std::reverse(h.begin() + 1, h.end());
-    }
     f.points = std::move(outer);
     f.holes = std::move(holes);
+    transform_face(f, [&](const Vec3& p) { return xf.apply(p); }, xf.mirrors());
     for (const std::string& o : objects_) {
       if (!f.name.empty()) f.name += '.';
       f.name += o;

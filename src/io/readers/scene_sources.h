@@ -5,6 +5,7 @@
 
 #include "radmesh/scene.h"
 
+#include <algorithm>
 #include <string>
 #include <vector>
 
@@ -25,6 +26,20 @@ struct SceneSource {
   // whatever material the faces are given.
   std::vector<std::string> geometry_warnings;
 };
+
+// A face's points moved by `apply` (a point map, the JSON scene's or MGF's
+// transform); a map that mirrors reverses each loop (keeping its first
+// vertex), so that the face keeps facing the same side of its surface.
+template <class Apply>
+void transform_face(RawFace& f, Apply&& apply, bool mirrors) {
+  for (Vec3& p : f.points) p = apply(p);
+  for (auto& h : f.holes)
+    for (Vec3& p : h) p = apply(p);
+  if (mirrors) {
+    std::reverse(f.points.begin() + 1, f.points.end());
+    for (auto& h : f.holes) std::reverse(h.begin() + 1, h.end());
+  }
+}
 
 // OBJ + MTL (tinyobjloader, with our own line-numbered checks).
 SceneSource read_obj_source(const std::string& path);
