@@ -13,7 +13,6 @@
 #include "radmesh/summary.h"
 #include "radmesh/version.h"
 
-#include <pybind11/functional.h>
 #include <pybind11/stl.h>
 
 #include <atomic>
@@ -21,15 +20,12 @@
 #include <condition_variable>
 #include <exception>
 #include <mutex>
+#include <optional>
 #include <thread>
 
 namespace py = pybind11;
 using namespace radmesh;
 using namespace radmesh::python;
-
-namespace radmesh::python {
-extern PixmapFiles g_pixmap_files;  // pixmap_files.cpp
-}
 
 namespace {
 

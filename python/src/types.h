@@ -46,6 +46,8 @@ struct PixmapFiles {
                                               const PixmapOutput& out) = nullptr;
 };
 inline constexpr const char* kPixmapFilesCapsule = "radmesh._files.PixmapFiles";
+// _core's (pixmap_files.cpp): empty until _files hands its functions over.
+extern PixmapFiles g_pixmap_files;
 
 // Text from the library as a Python str: bytes that are not UTF-8 (a name
 // read from a file in another encoding) become U+FFFD, as in summary.json.
