@@ -379,6 +379,27 @@ TEST(Mesh, SameInputSameMesh) {
   EXPECT_EQ(a.positions, b.positions);
 }
 
+TEST(Mesh, AScaledOrMovedSceneHasTheSameMesh) {
+  // CGAL sees each patch in units of its own size, snapped (mesher_cgal's
+  // Frame): the Cornell box, its shadow lines and the cocircular corners of
+  // its rectangles included, meshes into the same triangles scaled by 1e-4
+  // or 1e4 or moved by 1e6, at the same points up to their rounding.
+  const Scene s = read_obj_scene(kData + "/cornell_box/cornell_box.obj");
+  const Mesh a = mesh_scene(s, {});
+  const double diagonal = s.diagonal();
+  const std::vector<std::pair<double, double>> maps = {{1e-4, 0.0}, {1e4, 0.0}, {3.0, 0.0}, {1.0, 1e6}};
+  for (const auto& [scale, shift] : maps) {
+    const Scene moved = test::transformed(s, [&](const Vec3& v) { return scale * v + Vec3(shift); });
+    const Mesh b = mesh_scene(moved, {});
+    ASSERT_EQ(a.triangles, b.triangles) << "scaled by " << scale << ", moved by " << shift;
+    ASSERT_EQ(a.positions.size(), b.positions.size());
+    double worst = 0.0;
+    for (size_t i = 0; i < a.positions.size(); ++i)
+      worst = std::max(worst, glm::length((b.positions[i] - Vec3(shift)) / scale - a.positions[i]));
+    EXPECT_LT(worst, 1e-11 * diagonal) << "scaled by " << scale << ", moved by " << shift;
+  }
+}
+
 TEST(Quality, EquilateralTriangle) {
   Mesh m;
   m.positions = {{0, 0, 0}, {1, 0, 0}, {0.5, std::sqrt(3.0) / 2, 0}};

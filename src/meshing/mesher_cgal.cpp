@@ -102,25 +102,62 @@ constexpr int kMaxRounds = 5;
 // 16 digits to its position (the hint of a failed triangulation).
 constexpr double kFarForItsSize = 1e6;
 
-// Orthonormal frame of a patch's plane: (u, v, n) right-handed.
+// A patch's plane as CGAL sees it: an orthonormal frame (u, v, n),
+// right-handed, at the patch's first corner, with lengths in units of the
+// patch's radius about that corner and coordinates snapped to multiples of
+// 2^-33 of that radius. Scaling or moving a scene then hands CGAL the same
+// numbers, not numbers a few ulps apart: the ties among cocircular points
+// (a rectangle's corners, an even split of its edges) and the mesher's
+// Steiner points come out the same, so the mesh is the same mesh, scaled or
+// moved. The snap (1e-10 of the radius) is far below the points' merging
+// distance (1e-9 of the scene's diagonal); the points the mesher adds on
+// the outline and the lines are put back on them (constrained_positions).
 struct Frame {
   Vec3 origin, u, v;
+  double scale = 1.0;  // one unit in the plane, in scene units
   Point2 to2(const Vec3& p) const {
-    const Vec3 d = p - origin;
-    return Point2(glm::dot(d, u), glm::dot(d, v));
+    const Point2 q = unsnapped(p);
+    return Point2(snap(q.x()), snap(q.y()));
   }
-  Vec3 to3(const Point2& q) const { return origin + q.x() * u + q.y() * v; }
+  // For constructions whose result goes back to 3-D (line crossings).
+  Point2 unsnapped(const Vec3& p) const {
+    const Vec3 d = p - origin;
+    return Point2(glm::dot(d, u) / scale, glm::dot(d, v) / scale);
+  }
+  Vec3 to3(const Point2& q) const { return origin + (q.x() * scale) * u + (q.y() * scale) * v; }
+  // A length in scene units, in the plane's units, to 36 bits: the mesher's
+  // bounds, the same numbers for a scaled or moved scene as well.
+  double in_plane(double length) const {
+    int e = 0;
+    const double m = std::frexp(length / scale, &e);
+    return std::ldexp(std::nearbyint(std::ldexp(m, 36)), e - 36);
+  }
+
+ private:
+  // To the nearest multiple of 2^-33, in two steps: first to 2^-39, which
+  // takes off what rounding left on a point (a scene moved by 10^6 has
+  // 3e-13 of a patch's radius) and so gives back exactly a point that the
+  // mesher made halfway between two snapped ones, or a quarter of the way;
+  // then that exact value to 2^-33, ties to even: the same grid point
+  // whether it came back through a scaled scene's rounding or not.
+  static double snap(double x) {
+    const double fine = std::nearbyint(x * 0x1p39) * 0x1p-39;
+    return std::nearbyint(fine * 0x1p33) * 0x1p-33;
+  }
 };
 
 Frame make_frame(const Scene& scene, const Patch& patch) {
   Frame f;
   f.origin = scene.vertices[static_cast<size_t>(patch.outer[0])];
-  // u along the first edge: the frame moves with the patch, so the mesh does
-  // not change when the scene is translated, rotated or scaled.
+  // u along the first edge: the frame moves with the patch.
   const Vec3 n = patch.normal;
   const Vec3 e = scene.vertices[static_cast<size_t>(patch.outer[1])] - f.origin;
   f.u = glm::normalize(e - glm::dot(e, n) * n);
   f.v = glm::cross(n, f.u);
+  double radius = 0.0;
+  for (const int c : patch.outer)
+    radius = std::max(radius, glm::length(scene.vertices[static_cast<size_t>(c)] - f.origin));
+  f.scale = radius;
   return f;
 }
 
@@ -370,7 +407,7 @@ private:
     std::vector<EK::Segment_2> seg2;
     std::vector<Box3> flat;  // each line's box, for the pairs that may cross
     for (size_t i : by_patch[p]) {
-      const Point2 a = frame.to2(lines[i].a), b = frame.to2(lines[i].b);
+      const Point2 a = frame.unsnapped(lines[i].a), b = frame.unsnapped(lines[i].b);
       seg2.emplace_back(EK::Point_2(a.x(), a.y()), EK::Point_2(b.x(), b.y()));
       flat.push_back(flat_box(a.bbox() + b.bbox()));
     }
@@ -446,7 +483,7 @@ private:
     }
     // The kind of discontinuity line an edge lies on (both ends on one
     // piece; points the mesher adds on a piece lie on it too).
-    const SegmentsHolding line_pieces(lines2, eps_);
+    const SegmentsHolding line_pieces(lines2, frame.in_plane(eps_));
     // A constrained edge is on the patch boundary when it lies on one of the
     // outline's (or a hole's) segments, whether or not a line runs along it
     // too: asking "not on a line" instead loses the sliver between a line
@@ -457,12 +494,12 @@ private:
       outline2.push_back({K::Segment_2(frame.to2(positions_[static_cast<size_t>(segments_[s].a)]),
                                        frame.to2(positions_[static_cast<size_t>(segments_[s].b)])),
                           0});
-    const SegmentsHolding outline(outline2, eps_);
+    const SegmentsHolding outline(outline2, frame.in_plane(eps_));
     mark_inside(cdt, outline);
 
     const double patch_area = scene_.patch_area(p);
     if (refine) refine = refinable(cdt, p, patch, frame, my_segments, lines2, patch_area);
-    if (refine) refine = refine_patch(cdt, p, patch, patch_area, outline);
+    if (refine) refine = refine_patch(cdt, p, patch, frame, patch_area, outline);
     number_new_vertices(cdt, frame, p, my_segments, refine);
     collect_features(cdt, p, lines2, line_pieces);
     return patch_triangles(cdt, patch);
@@ -554,20 +591,21 @@ private:
     std::vector<Box3> candidate_boxes(candidates.size());
     for (size_t i = 0; i < candidates.size(); ++i) candidate_boxes[i] = flat_box(candidates[i].first.bbox());
     const BoxTree candidate_tree(candidate_boxes);
+    const double near2 = frame.in_plane(near_);
     for (const auto& constraint : constraints_[static_cast<size_t>(p)]) {
       // Named copies: clang 14 cannot capture structured bindings in a lambda.
       const int a = constraint[0], b = constraint[1];
       CDT::Vertex_handle va = insert_vertex(cdt, frame, a), vb = insert_vertex(cdt, frame, b);
       const K::Segment_2 seg(va->point(), vb->point());
       const CGAL::Bbox_2 sb = seg.bbox();
-      const CGAL::Bbox_2 near(sb.xmin() - near_, sb.ymin() - near_, sb.xmax() + near_, sb.ymax() + near_);
+      const CGAL::Bbox_2 near(sb.xmin() - near2, sb.ymin() - near2, sb.xmax() + near2, sb.ymax() + near2);
       std::vector<std::pair<double, int>> chain;
       auto chain_if_on = [&](const Point2& q, int g) {
-        if (g == a || g == b || !CGAL::do_overlap(q.bbox(), near) || CGAL::squared_distance(q, seg) > near_ * near_)
+        if (g == a || g == b || !CGAL::do_overlap(q.bbox(), near) || CGAL::squared_distance(q, seg) > near2 * near2)
           return;
         const double da = std::sqrt(CGAL::squared_distance(q, va->point()));
         const double db = std::sqrt(CGAL::squared_distance(q, vb->point()));
-        if (da > near_ && db > near_) chain.push_back({da, g});  // inside the line, not at an end
+        if (da > near2 && db > near2) chain.push_back({da, g});  // inside the line, not at an end
       };
       candidate_tree.overlapping(flat_box(near), 0.0, [&](int i) {
         chain_if_on(candidates[static_cast<size_t>(i)].first, candidates[static_cast<size_t>(i)].second);
@@ -615,13 +653,15 @@ private:
     // scale), and no light varies over it.
     std::string gap;
     if (!sliver) {
-      for (const auto& [piece, kind] : lines2)
-        if (piece.squared_length() < kTinyPiece * kTinyPiece * diagonal_ * diagonal_) {
-          gap = "a piece of a discontinuity line on it is " + format_number(std::sqrt(piece.squared_length())) +
+      for (const auto& [piece, kind] : lines2) {
+        const double length = std::sqrt(piece.squared_length()) * frame.scale;
+        if (length < kTinyPiece * diagonal_) {
+          gap = "a piece of a discontinuity line on it is " + format_number(length) +
                 " long, under " + format_number(kTinyPiece) + " of the scene's size, and refining around it is not "
                 "reliable";
           break;
         }
+      }
       if (gap.empty()) {
         gap = narrow(cdt, patch, frame, floor);
         if (!gap.empty())
@@ -643,7 +683,8 @@ private:
   // a point budget. Returns false where the refinement made the patch too
   // dense (kDense): then it is the triangulation before refinement again,
   // and stays so in later rounds.
-  bool refine_patch(CDT& cdt, int p, const Patch& patch, double patch_area, const SegmentsHolding& outline) {
+  bool refine_patch(CDT& cdt, int p, const Patch& patch, const Frame& frame, double patch_area,
+                    const SegmentsHolding& outline) {
     bool refine = true;
     // The triangulation before refinement, kept while a dense patch may
     // fall back to it (below).
@@ -651,7 +692,8 @@ private:
     {
       if (!opt_.refine_narrow_strips) unrefined.emplace(cdt);
       const double s = std::sin(opt_.min_angle * std::numbers::pi / 180.0);
-      Mesher mesher(cdt, Criteria(s * s, opt_.max_edge, opt_.min_separation_fraction * opt_.max_edge));
+      Mesher mesher(cdt, Criteria(s * s, frame.in_plane(opt_.max_edge),
+                                  frame.in_plane(opt_.min_separation_fraction * opt_.max_edge)));
       // What the edge length asks for: the points there are, the constrained
       // edges (outline and lines) cut at --max-edge, the inside filled. The
       // mesher splits a constrained edge while a point lies in its diametral
@@ -662,7 +704,7 @@ private:
       for (auto e = cdt.finite_edges_begin(); e != cdt.finite_edges_end(); ++e)
         if (cdt.is_constrained(*e)) {
           const auto [p0, p1] = edge_points(*e);
-          constrained += std::sqrt(CGAL::squared_distance(p0, p1));
+          constrained += std::sqrt(CGAL::squared_distance(p0, p1)) * frame.scale;
         }
       const double h = opt_.max_edge;
       const double asked =
@@ -702,10 +744,12 @@ private:
   // segment's exact 3-D point and are shared; the others are remembered
   // for a last round without refinement.
   void number_new_vertices(CDT& cdt, const Frame& frame, int p, const std::vector<size_t>& my_segments, bool refine) {
+    const std::map<CDT::Vertex_handle, Vec3> on_edges = constrained_positions(cdt);
     std::vector<Steiner> steiner;
     for (auto v = cdt.finite_vertices_begin(); v != cdt.finite_vertices_end(); ++v) {
       if (v->info().id >= 0) continue;
-      const Vec3 p3 = frame.to3(v->point());
+      const auto known = on_edges.find(v);
+      const Vec3 p3 = known != on_edges.end() ? known->second : frame.to3(v->point());
       int best = -1;
       double best_d = std::numeric_limits<double>::infinity(), best_t = 0.0;
       for (size_t s : my_segments) {
@@ -734,6 +778,53 @@ private:
 
     if (refine) steiner_[p] = std::move(steiner);
   }
+
+  // The points the mesher added on constrained edges (the outline and the
+  // lines), each at its 3-D place: a run of them between two input points
+  // lies on the snapped image of the edge between those points, and each
+  // goes to the same fraction of the way along the edge itself, so that
+  // the outline and lines stay where they are (a midpoint exactly at the
+  // middle). Points where constraints cross are left to Frame::to3.
+  static std::map<CDT::Vertex_handle, Vec3> constrained_positions(CDT& cdt, const std::vector<Vec3>& positions) {
+    auto constrained_neighbours = [&](CDT::Vertex_handle v) {
+      std::vector<CDT::Vertex_handle> out;
+      auto e = cdt.incident_edges(v), end = e;
+      if (e == nullptr) return out;
+      do {
+        if (cdt.is_constrained(*e)) {
+          const CDT::Vertex_handle a = e->first->vertex(CDT::cw(e->second)), b = e->first->vertex(CDT::ccw(e->second));
+          out.push_back(a == v ? b : a);
+        }
+      } while (++e != end);
+      return out;
+    };
+    auto in_run = [&](CDT::Vertex_handle v) { return v->info().id < 0 && constrained_neighbours(v).size() == 2; };
+    std::map<CDT::Vertex_handle, Vec3> placed;
+    for (auto v = cdt.finite_vertices_begin(); v != cdt.finite_vertices_end(); ++v) {
+      if (v->info().id < 0) continue;
+      for (CDT::Vertex_handle first : constrained_neighbours(v)) {
+        if (cdt.is_infinite(first) || !in_run(first)) continue;
+        std::vector<CDT::Vertex_handle> run = {first};
+        CDT::Vertex_handle prev = v, cur = first;
+        for (;;) {
+          const std::vector<CDT::Vertex_handle> nb = constrained_neighbours(cur);
+          const CDT::Vertex_handle next = nb[0] == prev ? nb[1] : nb[0];
+          prev = cur;
+          cur = next;
+          if (cdt.is_infinite(cur) || !in_run(cur)) break;
+          run.push_back(cur);
+        }
+        // Each run once, from its end with the smaller id.
+        if (cdt.is_infinite(cur) || cur->info().id < 0 || cur->info().id < v->info().id) continue;
+        const Vec3 A = positions[static_cast<size_t>(v->info().id)], B = positions[static_cast<size_t>(cur->info().id)];
+        const double length = std::sqrt(CGAL::squared_distance(v->point(), cur->point()));
+        for (CDT::Vertex_handle r : run)
+          placed[r] = A + (std::sqrt(CGAL::squared_distance(v->point(), r->point())) / length) * (B - A);
+      }
+    }
+    return placed;
+  }
+  std::map<CDT::Vertex_handle, Vec3> constrained_positions(CDT& cdt) const { return constrained_positions(cdt, positions_); }
 
   // Constrained edges with the domain on both sides lie on discontinuity
   // lines; those on contact lines (the value jumps) become feature edges.
@@ -816,14 +907,17 @@ private:
       for (int i = 0; i < 3; ++i) {
         if (!cdt.is_constrained(CDT::Edge(f, i))) continue;
         const CDT::Vertex_handle v = f->vertex(i), a = f->vertex(CDT::cw(i)), b = f->vertex(CDT::ccw(i));
-        const K::Vector_2 ab = b->point() - a->point(), av = v->point() - a->point();
-        const double len = std::sqrt(ab.squared_length());
-        const double along = (av * ab) / len, off = std::abs(CGAL::to_double(CGAL::determinant(ab, av))) / len;
-        if (off < floor && std::min(along, len - along) > kNarrowPoints * off && !joined(v, a) && !joined(v, b)) {
-          const Vec3 at = frame.to3(v->point());
+        // In 3-D, at the input points' own places (not snapped).
+        auto at3 = [&](CDT::Vertex_handle w) {
+          return w->info().id >= 0 ? positions_[static_cast<size_t>(w->info().id)] : frame.to3(w->point());
+        };
+        const Vec3 at = at3(v), A = at3(a), ab = at3(b) - A;
+        const double length = glm::length(ab), along = glm::dot(at - A, ab) / length;
+        const double off = glm::length(glm::cross(ab, at - A)) / length;
+        if (off < floor && std::min(along, length - along) > kNarrowPoints * off && !joined(v, a) && !joined(v, b)) {
           return "a vertex at (" + format_number(at.x) + ", " + format_number(at.y) + ", " + format_number(at.z) +
                  ") lies " + format_number(off) + " from one of its edges or lines, " +
-                 format_number(std::min(along, len - along)) + " from that edge's nearer end";
+                 format_number(std::min(along, length - along)) + " from that edge's nearer end";
         }
       }
     return "";

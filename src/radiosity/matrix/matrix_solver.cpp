@@ -88,7 +88,11 @@ void make_reciprocal(const ElementSet& el, std::vector<double>& F) {
         for (size_t j = 0; j < un; ++j) sum += fi[j] * s[j];
         next[u] = s[u];
         misfit[u] = 0.0;
-        if (sum > 0.0) {
+        // A row whose own points see nothing while others' points see its
+        // element (a floor triangle reaching under a box standing on it,
+        // its points all under the box) keeps its scale: the step would
+        // take it to 0 and then to 0/0.
+        if (sum > 0.0 && target[u] > 0.0) {
           next[u] = s[u] * std::pow(target[u] / (s[u] * sum), 0.5 * kOverRelaxation);
           misfit[u] = std::abs(s[u] * sum - target[u]);
         }

@@ -2,7 +2,6 @@
 
 #include "radiosity/transport/visibility.h"
 
-#include "core/power_of_two.h"
 #include "radmesh/errors.h"
 #include "radmesh/mesh.h"
 #include "radiosity/transport/sampling.h"
@@ -55,12 +54,12 @@ struct Visibility::Impl {
   RTCScene scene = nullptr;
   std::vector<int> prim_patch;
   // Embree traces in float: geometry and rays are stored relative to
-  // `origin` and scaled by `scale`, the power of two that brings the scene's
-  // extent near 1, so that its products of coordinates (a cross product
-  // dotted with a third vector: a length cubed) stay far inside float's
-  // range whatever the scene's unit. A power of two scales exactly, so
-  // rounding to float and every decision are the same as at the scene's own
-  // size where that is in range.
+  // `origin` and divided by the scene's largest extent, so that its
+  // products of coordinates (a cross product dotted with a third vector: a
+  // length cubed) stay far inside float's range whatever the scene's unit,
+  // and so that a scene scaled by any factor or moved gives Embree the same
+  // floats (up to the double rounding before, 2^-29 of a float step) and
+  // the same hits.
   Vec3 origin{0.0};
   double scale = 1.0;
   double lift = 0.0;  // how far visible_off_surfaces lifts a segment's ends off their surfaces
@@ -86,7 +85,8 @@ Visibility::Visibility(const Scene& scene) : impl_(std::make_unique<Impl>()) {
     hi = glm::max(hi, p);
   }
   m.origin = mesh.positions.empty() ? Vec3(0.0) : 0.5 * (lo + hi);
-  if (!mesh.positions.empty()) m.scale = 1.0 / internal::power_of_two_above(std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z}));
+  const double extent = std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z});
+  if (extent > 0.0 && std::isfinite(extent)) m.scale = 1.0 / extent;
   // About 17 float steps at the scene's edge: the lifted end lies off its
   // surface (and off a patch coinciding with it, as a two-sided panel's
   // back) in the float coordinates Embree traces in.
