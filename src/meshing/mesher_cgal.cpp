@@ -14,6 +14,7 @@
 // is always conforming.
 
 #include "core/box_tree.h"
+#include "core/snap.h"
 #include "meshing/boundary_points.h"
 #include "radmesh/errors.h"
 #include "radmesh/mesh.h"
@@ -134,16 +135,7 @@ struct Frame {
   }
 
  private:
-  // To the nearest multiple of 2^-33, in two steps: first to 2^-39, which
-  // takes off what rounding left on a point (a scene moved by 10^6 has
-  // 3e-13 of a patch's radius) and so gives back exactly a point that the
-  // mesher made halfway between two snapped ones, or a quarter of the way;
-  // then that exact value to 2^-33, ties to even: the same grid point
-  // whether it came back through a scaled scene's rounding or not.
-  static double snap(double x) {
-    const double fine = std::nearbyint(x * 0x1p39) * 0x1p-39;
-    return std::nearbyint(fine * 0x1p33) * 0x1p-33;
-  }
+  static double snap(double x) { return internal::snap_unit(x); }
 };
 
 Frame make_frame(const Scene& scene, const Patch& patch) {

@@ -5,6 +5,7 @@
 
 #include "radiosity/transport/clusters.h"
 
+#include "core/snap.h"
 #include "radiosity/transport/sampling.h"
 
 #include <algorithm>
@@ -68,10 +69,21 @@ ClusterTree ClusterTree::volume(const std::vector<Triangle>& roots, const std::v
   if (n < 2) return ct;
   std::vector<int> order(roots.size());
   std::vector<Vec3> centroids(roots.size());
+  Vec3 lo(std::numeric_limits<double>::infinity()), hi(-std::numeric_limits<double>::infinity());
   for (int r = 0; r < n; ++r) {
     order[static_cast<size_t>(r)] = r;
     centroids[static_cast<size_t>(r)] = roots[static_cast<size_t>(r)].centroid();
+    lo = glm::min(lo, centroids[static_cast<size_t>(r)]);
+    hi = glm::max(hi, centroids[static_cast<size_t>(r)]);
   }
+  // The splits compare centroids and extents, and the ties among them (a
+  // regular mesh's centroids in rows, a square's equal sides) decide: in
+  // units of the extent, snapped, so that a scaled or moved scene makes the
+  // same tree.
+  const double size = std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z});
+  if (size > 0.0 && std::isfinite(size))
+    for (Vec3& c : centroids)
+      for (int a = 0; a < 3; ++a) c[a] = internal::snap_unit((c[a] - lo[a]) / size);
   std::vector<std::vector<int>> tree;
   tree.reserve(roots.size());
   median_split(0, n, order, centroids, tree);
@@ -97,11 +109,16 @@ ClusterTree ClusterTree::shape(const std::vector<Triangle>& roots, const std::ve
   // a side).
   int depth = 1;
   while (depth < 21 && size / static_cast<double>(Cell{1} << depth) > shortest) ++depth;
-  const double scale = static_cast<double>(Cell{1} << depth) / (size * (1.0 + 1e-12));
+  // Positions in units of the extent, snapped (internal::snap_unit), so
+  // that a point on a cell's edge falls the same way in a scaled or moved
+  // scene.
+  const double scale = static_cast<double>(Cell{1} << depth) / (1.0 + 1e-12);
   const auto last = static_cast<double>((Cell{1} << depth) - 1);
   auto cell = [&](const Vec3& p) {
     Cell c = 0;
-    for (int a = 0; a < 3; ++a) c = (c << 21) | static_cast<Cell>(std::clamp(std::floor((p[a] - lo[a]) * scale), 0.0, last));
+    for (int a = 0; a < 3; ++a)
+      c = (c << 21) |
+          static_cast<Cell>(std::clamp(std::floor(internal::snap_unit((p[a] - lo[a]) / size) * scale), 0.0, last));
     return c;
   };
   struct Entry {
