@@ -4,7 +4,12 @@
 // cluster tree's median split) then come out the same.
 #pragma once
 
+#include "radmesh/geometry.h"
+
+#include <algorithm>
 #include <cmath>
+#include <limits>
+#include <vector>
 
 namespace radmesh::internal {
 
@@ -18,6 +23,24 @@ namespace radmesh::internal {
 inline double snap_unit(double x) {
   const double fine = std::nearbyint(x * 0x1p39) * 0x1p-39;
   return std::nearbyint(fine * 0x1p33) * 0x1p-33;
+}
+
+// Points as keys for splits that compare them: each in units of the set's
+// largest extent from its lowest corner, snapped (snap_unit). A tie among
+// the points (a regular mesh's centroids in rows, a square's equal sides)
+// is then a tie in a scaled or moved scene as well.
+inline std::vector<Vec3> snapped_keys(const std::vector<Vec3>& points) {
+  Vec3 lo(std::numeric_limits<double>::infinity()), hi(-std::numeric_limits<double>::infinity());
+  for (const Vec3& p : points) {
+    lo = glm::min(lo, p);
+    hi = glm::max(hi, p);
+  }
+  const double size = std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z});
+  if (!(size > 0.0) || !std::isfinite(size)) return points;
+  std::vector<Vec3> keys(points.size());
+  for (size_t i = 0; i < points.size(); ++i)
+    for (int a = 0; a < 3; ++a) keys[i][a] = snap_unit((points[i][a] - lo[a]) / size);
+  return keys;
 }
 
 }  // namespace radmesh::internal

@@ -133,7 +133,11 @@ FieldEvaluator::FieldEvaluator(const Scene& scene, const Mesh& mesh, const std::
     for (const auto& h : patch.holes) s.loops.push_back(scene.loop_points(h));
     s.order.resize(s.triangle.size());
     for (size_t i = 0; i < s.order.size(); ++i) s.order[i] = static_cast<int>(i);
+    s.key.resize(s.triangle.size());
+    for (size_t i = 0; i < s.key.size(); ++i) s.key[i] = s.triangle[i].centroid();
+    s.key = internal::snapped_keys(s.key);
     s.build(0, static_cast<int>(s.order.size()));
+    s.key = {};
     // The triangles in node order: a node's are contiguous in memory (the
     // gather's samples and form factors read them node by node).
     std::vector<Triangle> triangle;

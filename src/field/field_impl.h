@@ -10,6 +10,7 @@
 #include "radmesh/field.h"
 
 #include "core/box_tree.h"
+#include "core/snap.h"
 #include "radiosity/transport/clusters.h"
 #include "radmesh/form_factor.h"
 #include "radiosity/transport/gather_node.h"
@@ -64,6 +65,7 @@ struct SourceTree {
   std::vector<Triangle> triangle;        // the patch's triangles of positive area, in node order once built
   std::vector<Rgb> reflected;            // per triangle: B - E
   std::vector<int> order;                // while building: triangle indices, in node order
+  std::vector<Vec3> key;                 // while building: per triangle, its centroid (internal::snapped_keys)
   std::vector<double> cumulative;        // area of triangles [0 .. i), size + 1
   std::vector<Node> nodes;               // nodes[0] is the root
 
@@ -75,8 +77,8 @@ struct SourceTree {
       const size_t k = static_cast<size_t>(order[static_cast<size_t>(i)]);
       t.push_back(&triangle[k]);
       refl.push_back(reflected[k]);
-      lo = glm::min(lo, triangle[k].centroid());
-      hi = glm::max(hi, triangle[k].centroid());
+      lo = glm::min(lo, key[k]);
+      hi = glm::max(hi, key[k]);
     }
     Node n;
     static_cast<internal::GatherNode&>(n) = internal::gather_node(t, refl, normal);
@@ -89,7 +91,8 @@ struct SourceTree {
       const int axis = ext.x >= ext.y && ext.x >= ext.z ? 0 : (ext.y >= ext.z ? 1 : 2);
       const int mid = (begin + end) / 2;
       std::nth_element(order.begin() + begin, order.begin() + mid, order.begin() + end, [&](int a, int b) {
-        return triangle[static_cast<size_t>(a)].centroid()[axis] < triangle[static_cast<size_t>(b)].centroid()[axis];
+        const double ka = key[static_cast<size_t>(a)][axis], kb = key[static_cast<size_t>(b)][axis];
+        return ka < kb || (ka == kb && a < b);
       });
       const int l = build(begin, mid);
       const int r = build(mid, end);

@@ -69,21 +69,12 @@ ClusterTree ClusterTree::volume(const std::vector<Triangle>& roots, const std::v
   if (n < 2) return ct;
   std::vector<int> order(roots.size());
   std::vector<Vec3> centroids(roots.size());
-  Vec3 lo(std::numeric_limits<double>::infinity()), hi(-std::numeric_limits<double>::infinity());
   for (int r = 0; r < n; ++r) {
     order[static_cast<size_t>(r)] = r;
     centroids[static_cast<size_t>(r)] = roots[static_cast<size_t>(r)].centroid();
-    lo = glm::min(lo, centroids[static_cast<size_t>(r)]);
-    hi = glm::max(hi, centroids[static_cast<size_t>(r)]);
   }
-  // The splits compare centroids and extents, and the ties among them (a
-  // regular mesh's centroids in rows, a square's equal sides) decide: in
-  // units of the extent, snapped, so that a scaled or moved scene makes the
-  // same tree.
-  const double size = std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z});
-  if (size > 0.0 && std::isfinite(size))
-    for (Vec3& c : centroids)
-      for (int a = 0; a < 3; ++a) c[a] = internal::snap_unit((c[a] - lo[a]) / size);
+  // The splits compare centroids and extents, whose ties decide.
+  centroids = internal::snapped_keys(centroids);
   std::vector<std::vector<int>> tree;
   tree.reserve(roots.size());
   median_split(0, n, order, centroids, tree);
@@ -288,12 +279,15 @@ void ClusterTree::finish(const std::vector<std::vector<int>>& tree, const std::v
       }
       items = std::move(binned);
     }
+    // The pair nearest in direction merges first; their cosines snapped,
+    // so that ties (a floor's triangles, all facing up) go to the first
+    // pair in a scaled or moved scene as well.
     while (items.size() > static_cast<size_t>(kGroups)) {
       size_t bi = 0, bj = 1;
       double best = -2.0;
       for (size_t i = 0; i < items.size(); ++i)
         for (size_t j = i + 1; j < items.size(); ++j) {
-          const double d = glm::dot(direction(items[i]), direction(items[j]));
+          const double d = internal::snap_unit(glm::dot(direction(items[i]), direction(items[j])));
           if (d > best) {
             best = d;
             bi = i;
