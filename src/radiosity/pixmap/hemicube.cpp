@@ -64,7 +64,7 @@ void Hemicube::render(const Vec3& centre, const Vec3& u, const Vec3& v, const st
   for (const HemicubeTriangle& t : triangles)
     scale = std::max({scale, glm::length(t.a - centre), glm::length(t.b - centre), glm::length(t.c - centre)});
   const double near = 1e-12 * scale;
-  tbb::parallel_for(0, 5, [&](int f) { render_face(f, triangles, near); });
+  tbb::parallel_for(0, 5, [&](int f) { render_face(f, triangles, near, kEdgeOn * scale); });
 }
 
 namespace {
@@ -111,7 +111,7 @@ double edge(double ax, double ay, double bx, double by, double px, double py) {
 
 }  // namespace
 
-void Hemicube::render_face(int f, const std::vector<HemicubeTriangle>& triangles, double near) {
+void Hemicube::render_face(int f, const std::vector<HemicubeTriangle>& triangles, double near, double edge_on) {
   Face& F = faces_[f];
   std::fill(F.id.begin(), F.id.end(), kEmpty);
   std::fill(F.depth.begin(), F.depth.end(), 0.0);
@@ -121,6 +121,11 @@ void Hemicube::render_face(int f, const std::vector<HemicubeTriangle>& triangles
   const double ylo = F.y0 - pixel_;
   for (const HemicubeTriangle& t : triangles) {
     const Vec3 da = t.a - centre_, db = t.b - centre_, dc = t.c - centre_;
+    // A plane through the centre up to rounding (the shooter's own patch,
+    // and those in its plane) is seen edge on: 3e-10 behind the top of a
+    // box moved 10^6 from the origin, the box's top drew itself from
+    // behind over a quarter of the hemicube.
+    if (std::abs(glm::dot(t.normal, da)) <= edge_on) continue;
     Clip a[10], b[10];
     int k = 0;
     for (const Vec3& d : {da, db, dc}) a[k++] = {glm::dot(d, F.right), glm::dot(d, F.up), glm::dot(d, F.forward)};
@@ -145,7 +150,7 @@ void Hemicube::render_face(int f, const std::vector<HemicubeTriangle>& triangles
     // wall.
     const Vec3 n = glm::cross(t.b - t.a, t.c - t.a);
     const double plane = glm::dot(n, da);
-    if (plane == 0.0) continue;  // seen edge on
+    if (plane == 0.0) continue;
     const double dR = glm::dot(n, F.right) / plane, dU = glm::dot(n, F.up) / plane,
                  dF = glm::dot(n, F.forward) / plane;
     double sx[10], sy[10];

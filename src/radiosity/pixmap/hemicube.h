@@ -73,7 +73,10 @@ public:
   double form_factor(int id) const;
 
 private:
-  void render_face(int f, const std::vector<HemicubeTriangle>& triangles, double near);
+  void render_face(int f, const std::vector<HemicubeTriangle>& triangles, double near, double edge_on);
+  // A triangle whose plane passes this close to the centre, relative to
+  // the furthest corner, is seen edge on and not drawn.
+  static constexpr double kEdgeOn = 1e-9;
 
   int resolution_;
   double pixel_;
