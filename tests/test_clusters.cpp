@@ -481,9 +481,9 @@ TEST(Clusters, ATubeUnderTheCeilingLightsAClosedRoomWithACabinetAndLosesNoPower)
   // their ancestors' links, whose rays all got through past the thin
   // tube, which hides the floor from them). Since the rows over 1 are
   // told apart by the leaves' own samples (scale_rows), the tube's part
-  // is nearer 1 (99.3%; the ceiling still up to 1.24x). The sum is
-  // -0.44% to -0.54% for the room as it is, scaled by 1e-4 or by 1e4 (its
-  // meshes alike, the hierarchy's choices not quite); the bound is 0.6%.
+  // is nearer 1 (99.3%; the ceiling still up to 1.24x). The sum is -0.51%
+  // for the room as it is and scaled by 1e-4 or by 1e4 alike (its ties
+  // broken the same way at every scale); the bound is 0.6%.
   for (const double scale : {1.0, 1e-4, 1e4}) {
     std::vector<RawFace> faces;
     auto box = [&](const Vec3& lo, const Vec3& hi, const std::string& name, int material, bool bottom, bool inward) {
