@@ -165,7 +165,7 @@ QueryContext make_context(const std::vector<int>& prim_patch, int ignore_a, int 
 namespace {
 
 // n rays traced into seen[i] (1: nothing hit), each made by ray(i), one by
-// one: Embree's stream call (rtcOccluded1M) answered about 1 in 10^4
+// one: Embree's stream call (rtcOccluded1M) answered about 2 in 10^4
 // random segments of the Cornell box otherwise than the same rays traced
 // alone (grazing edges), and otherwise again for the box scaled by 1e-4,
 // where every float it was given was the same.
