@@ -388,7 +388,8 @@ TEST(Mesh, AScaledOrMovedSceneHasTheSameMesh) {
   const Mesh a = mesh_scene(s, {});
   const double diagonal = s.diagonal();
   const std::vector<std::pair<double, double>> maps = {{1e-4, 0.0}, {1e4, 0.0}, {3.0, 0.0}, {1.0, 1e6}};
-  for (const auto& [scale, shift] : maps) {
+  for (const auto& map : maps) {
+    const double scale = map.first, shift = map.second;  // named: clang 14 cannot capture structured bindings
     const Scene moved = test::transformed(s, [&](const Vec3& v) { return scale * v + Vec3(shift); });
     const Mesh b = mesh_scene(moved, {});
     ASSERT_EQ(a.triangles, b.triangles) << "scaled by " << scale << ", moved by " << shift;
