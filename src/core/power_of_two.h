@@ -1,6 +1,6 @@
 // Units that are powers of two: dividing by one changes no digit, so data
-// kept in float in such a unit (Embree's coordinates, the pixmap method's
-// texels, the hierarchical method's sending weights) stays inside float's
+// kept in float in such a unit (the pixmap method's texels, the
+// hierarchical method's sending weights) stays inside float's
 // range whatever the scene's unit or emission, and a scene at a size where
 // that range was never in question gives the same bits.
 #pragma once

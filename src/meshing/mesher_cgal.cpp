@@ -118,7 +118,7 @@ struct Frame {
   double scale = 1.0;  // one unit in the plane, in scene units
   Point2 to2(const Vec3& p) const {
     const Point2 q = unsnapped(p);
-    return Point2(snap(q.x()), snap(q.y()));
+    return Point2(internal::snap_unit(q.x()), internal::snap_unit(q.y()));
   }
   // For constructions whose result goes back to 3-D (line crossings).
   Point2 unsnapped(const Vec3& p) const {
@@ -133,9 +133,6 @@ struct Frame {
     const double m = std::frexp(length / scale, &e);
     return std::ldexp(std::nearbyint(std::ldexp(m, 36)), e - 36);
   }
-
- private:
-  static double snap(double x) { return internal::snap_unit(x); }
 };
 
 Frame make_frame(const Scene& scene, const Patch& patch) {
@@ -777,7 +774,7 @@ private:
   // goes to the same fraction of the way along the edge itself, so that
   // the outline and lines stay where they are (a midpoint exactly at the
   // middle). Points where constraints cross are left to Frame::to3.
-  static std::map<CDT::Vertex_handle, Vec3> constrained_positions(CDT& cdt, const std::vector<Vec3>& positions) {
+  std::map<CDT::Vertex_handle, Vec3> constrained_positions(CDT& cdt) const {
     auto constrained_neighbours = [&](CDT::Vertex_handle v) {
       std::vector<CDT::Vertex_handle> out;
       auto e = cdt.incident_edges(v), end = e;
@@ -808,7 +805,7 @@ private:
         }
         // Each run once, from its end with the smaller id.
         if (cdt.is_infinite(cur) || cur->info().id < 0 || cur->info().id < v->info().id) continue;
-        const Vec3 A = positions[static_cast<size_t>(v->info().id)], B = positions[static_cast<size_t>(cur->info().id)];
+        const Vec3 A = positions_[static_cast<size_t>(v->info().id)], B = positions_[static_cast<size_t>(cur->info().id)];
         const double length = std::sqrt(CGAL::squared_distance(v->point(), cur->point()));
         for (CDT::Vertex_handle r : run)
           placed[r] = A + (std::sqrt(CGAL::squared_distance(v->point(), r->point())) / length) * (B - A);
@@ -816,7 +813,6 @@ private:
     }
     return placed;
   }
-  std::map<CDT::Vertex_handle, Vec3> constrained_positions(CDT& cdt) const { return constrained_positions(cdt, positions_); }
 
   // Constrained edges with the domain on both sides lie on discontinuity
   // lines; those on contact lines (the value jumps) become feature edges.

@@ -150,7 +150,7 @@ void Hemicube::render_face(int f, const std::vector<HemicubeTriangle>& triangles
     // wall.
     const Vec3 n = glm::cross(t.b - t.a, t.c - t.a);
     const double plane = glm::dot(n, da);
-    if (plane == 0.0) continue;
+    if (plane == 0.0) continue;  // a triangle of no area
     const double dR = glm::dot(n, F.right) / plane, dU = glm::dot(n, F.up) / plane,
                  dF = glm::dot(n, F.forward) / plane;
     double sx[10], sy[10];
