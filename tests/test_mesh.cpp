@@ -401,6 +401,29 @@ TEST(Mesh, AScaledOrMovedSceneHasTheSameMesh) {
   }
 }
 
+TEST(Mesh, AZeroAreaTriangleFarFromTheOriginIsZeroArea) {
+  // A T-vertex closed by a zero-area triangle: the long edge's midpoint,
+  // rounded. A million units from the origin the rounding (1e-10) is more
+  // than 1e-12 of a 5-unit edge, and such a triangle was taken for a real
+  // one (a source of the gather with an area of rounding). A triangle as
+  // thin as 1e-6 of its edge keeps its area.
+  int checked = 0;
+  for (const double shift : {0.0, 1e3, 1e6})
+    for (int k = 0; k < 50; ++k) {
+      Mesh m;
+      const Vec3 a = Vec3(shift) + Vec3(0.1 * k, 0.37 * k, 0.77), b = a + Vec3(3.3, 1.9 + 0.01 * k, 0.7);
+      const Vec3 c = 0.5 * (a + b);
+      const Vec3 off = 1e-6 * glm::length(b - a) * glm::normalize(glm::cross(b - a, Vec3(0, 0, 1)));
+      m.positions = {a, c, b, c + off};
+      m.triangles = {{0, 1, 2}, {0, 3, 2}};
+      m.patch = {0, 0};
+      EXPECT_TRUE(m.zero_area(0)) << "moved by " << shift << ", " << k;
+      EXPECT_FALSE(m.zero_area(1)) << "moved by " << shift << ", " << k;
+      ++checked;
+    }
+  EXPECT_EQ(checked, 150);
+}
+
 TEST(Quality, EquilateralTriangle) {
   Mesh m;
   m.positions = {{0, 0, 0}, {1, 0, 0}, {0.5, std::sqrt(3.0) / 2, 0}};

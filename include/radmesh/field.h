@@ -87,6 +87,13 @@ struct FieldReport {
 // above. The clusters' form factors are not scaled to an exact sum, so a
 // point's row is exact only to the far clusters' error, about
 // (kClusterOpening)^2 of what they send.
+//
+// The evaluator works on a copy of the scene and of the mesh's triangles in
+// units of the scene's size from its lowest corner, snapped to 2^-33 of it,
+// and snaps every point it is given the same way: a scene scaled or moved
+// gives the same values (a point on a floor stays on its plane through a
+// moved scene's rounding), each within 1e-10 of its value for the scene as
+// given.
 enum class GatherSources {
   automatic,    // every patch within kGatherBudget, clusters past it
   every_patch,  // every patch

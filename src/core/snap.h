@@ -43,4 +43,37 @@ inline std::vector<Vec3> snapped_keys(const std::vector<Vec3>& points) {
   return keys;
 }
 
+// A set of points in units of its largest extent from its lowest corner,
+// snapped (snap_unit): what a scene scaled or moved puts a few ulps apart
+// lands on the same numbers, so that a point on a plane stays on it.
+// Directions (unit vectors) are snapped the same way and made unit again.
+struct SnappedFrame {
+  Vec3 lo{0.0};
+  double size = 1.0;
+
+  SnappedFrame() = default;
+  explicit SnappedFrame(const std::vector<Vec3>& points) {
+    Vec3 hi(-std::numeric_limits<double>::infinity());
+    lo = Vec3(std::numeric_limits<double>::infinity());
+    for (const Vec3& p : points) {
+      lo = glm::min(lo, p);
+      hi = glm::max(hi, p);
+    }
+    size = std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z});
+    if (!(size > 0.0) || !std::isfinite(size)) {
+      lo = Vec3(0.0);
+      size = 1.0;
+    }
+  }
+  Vec3 to_local(const Vec3& p) const {
+    return Vec3(snap_unit((p.x - lo.x) / size), snap_unit((p.y - lo.y) / size), snap_unit((p.z - lo.z) / size));
+  }
+  Vec3 to_scene(const Vec3& p) const { return lo + p * size; }
+  static Vec3 direction(const Vec3& d) {
+    const Vec3 s(snap_unit(d.x), snap_unit(d.y), snap_unit(d.z));
+    const double length = glm::length(s);
+    return length > 0.0 ? s / length : d;
+  }
+};
+
 }  // namespace radmesh::internal

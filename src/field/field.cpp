@@ -105,16 +105,15 @@ FieldEvaluator::FieldEvaluator(const Scene& scene, const Mesh& mesh, const std::
                                const SolveOptions& options, GatherSources how)
     : impl_(std::make_unique<Impl>(scene, options)) {
   Impl& m = *impl_;
-  if (!m.occlusion.convex_enclosure()) m.visibility = std::make_unique<Visibility>(scene);
+  if (!m.occlusion.convex_enclosure()) m.visibility = std::make_unique<Visibility>(m.scene);
   m.sources.resize(scene.patches.size());
   for (int t = 0; t < mesh.triangle_count(); ++t) {
     if (mesh.zero_area(t)) continue;
     const int p = mesh.patch[static_cast<size_t>(t)];
-    const Patch& patch = scene.patches[static_cast<size_t>(p)];
+    const Patch& patch = m.scene.patches[static_cast<size_t>(p)];
     const auto& tri = mesh.triangles[static_cast<size_t>(t)];
-    const Triangle triangle = make_triangle(mesh.positions[static_cast<size_t>(tri[0])],
-                                            mesh.positions[static_cast<size_t>(tri[1])],
-                                            mesh.positions[static_cast<size_t>(tri[2])], patch.normal);
+    const auto corner = [&](int k) { return m.frame.to_local(mesh.positions[static_cast<size_t>(tri[static_cast<size_t>(k)])]); };
+    const Triangle triangle = make_triangle(corner(0), corner(1), corner(2), patch.normal);
     if (!(triangle.area > 0.0)) continue;
     SourceTree& s = m.sources[static_cast<size_t>(p)];
     s.triangle.push_back(triangle);
@@ -127,10 +126,10 @@ FieldEvaluator::FieldEvaluator(const Scene& scene, const Mesh& mesh, const std::
       s = SourceTree{};
       continue;
     }
-    const Patch& patch = scene.patches[p];
+    const Patch& patch = m.scene.patches[p];
     s.normal = patch.normal;
-    s.loops.push_back(scene.loop_points(patch.outer));
-    for (const auto& h : patch.holes) s.loops.push_back(scene.loop_points(h));
+    s.loops.push_back(m.scene.loop_points(patch.outer));
+    for (const auto& h : patch.holes) s.loops.push_back(m.scene.loop_points(h));
     s.order.resize(s.triangle.size());
     for (size_t i = 0; i < s.order.size(); ++i) s.order[i] = static_cast<int>(i);
     s.key.resize(s.triangle.size());
@@ -162,8 +161,13 @@ FieldEvaluator::~FieldEvaluator() = default;
 
 bool FieldEvaluator::clustered() const { return !impl_->clusters.empty(); }
 
-Vec3 FieldEvaluator::evaluation_point(const Vec3& x, int patch, const Vec3& inward, FieldReport& report) const {
+Vec3 FieldEvaluator::evaluation_point(const Vec3& at, int patch, const Vec3& towards, FieldReport& report) const {
   const Impl& m = *impl_;
+  return m.frame.to_scene(m.evaluation_point(m.frame.to_local(at), patch, towards / m.frame.size, report));
+}
+
+Vec3 FieldEvaluator::Impl::evaluation_point(const Vec3& x, int patch, const Vec3& inward, FieldReport& report) const {
+  const Impl& m = *this;
   const double diagonal = m.diagonal;
   const double length = glm::length(inward);
   const Vec3& normal = m.scene.patches[static_cast<size_t>(patch)].normal;
@@ -230,7 +234,7 @@ Vec3 FieldEvaluator::evaluation_point(const Vec3& x, int patch, const Vec3& inwa
 }
 
 Rgb FieldEvaluator::direct(const Vec3& x, int patch, FieldReport& report) const {
-  return impl_->direct.reflected(x, patch, &report.direct);
+  return impl_->direct.reflected(impl_->frame.to_local(x), patch, &report.direct);
 }
 
 namespace internal {
@@ -426,8 +430,9 @@ Rgb FieldEvaluator::Impl::gather_patch(size_t q, const Vec3& x, const Vec3& n, i
   return weight > 0.0 ? (fq / weight) * sum : Rgb(0.0);
 }
 
-Rgb FieldEvaluator::indirect(const Vec3& x, int patch, uint64_t id, FieldReport& report, double solved) const {
+Rgb FieldEvaluator::indirect(const Vec3& at, int patch, uint64_t id, FieldReport& report, double solved) const {
   const Impl& m = *impl_;
+  const Vec3 x = m.frame.to_local(at);
   const Patch& receiver = m.scene.patches[static_cast<size_t>(patch)];
   const Rgb rho = m.scene.material_of(receiver).reflectance;
   if (max3(rho) <= 0.0) return Rgb(0.0);
@@ -463,9 +468,12 @@ void display_sides(const Mesh& mesh, const NodalField& field, std::vector<int>& 
                                 [](const auto& a, const auto& b) { return a.second < b.second; })->first;
   std::vector<Vec3> towards(nd, Vec3(0.0));
   std::vector<double> weight(nd, 0.0);
+  // Zero-area triangles (closing T-vertices) give no direction: their
+  // centroid lies on an edge through the vertex, and what the difference
+  // leaves is rounding. A vertex only they use has no inward direction.
   for (int t = 0; t < mesh.triangle_count(); ++t)
     for (int d : field.corners[static_cast<size_t>(t)])
-      if (mesh.patch[static_cast<size_t>(t)] == patch[static_cast<size_t>(d)]) {
+      if (mesh.patch[static_cast<size_t>(t)] == patch[static_cast<size_t>(d)] && !mesh.zero_area(t)) {
         towards[static_cast<size_t>(d)] += mesh.area(t) * mesh.centroid(t);
         weight[static_cast<size_t>(d)] += mesh.area(t);
       }

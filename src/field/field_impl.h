@@ -119,7 +119,14 @@ struct SourceTree {
 namespace radmesh {
 
 struct FieldEvaluator::Impl {
-  const Scene& scene;
+  // The scene as the evaluator sees it: in units of its size, snapped
+  // (internal::SnappedFrame), and every point given to the evaluator with
+  // it. A scene scaled or moved then gives the same numbers, and its
+  // decisions (a point on a plane, a source behind it, a ray grazing a
+  // block's foot) the same answers; form factors are the same in any unit.
+  internal::SnappedFrame frame;
+  Scene local;
+  const Scene& scene = local;
   double diagonal = 0.0;  // the scene's, once (Scene::diagonal visits every vertex)
   int rays_per_node = 1;  // options.rays / 4, at least 1
   DirectIllumination direct;
@@ -136,7 +143,18 @@ struct FieldEvaluator::Impl {
   std::vector<Rgb> group_reflected;     // per group: the area mean of B - E
 
   Impl(const Scene& s, const SolveOptions& o)
-      : scene(s), diagonal(s.diagonal()), rays_per_node(std::max(1, o.rays / 4)), direct(s), occlusion(s) {}
+      : frame(s.vertices),
+        local(snapped(s, frame)),
+        diagonal(local.diagonal()),
+        rays_per_node(std::max(1, o.rays / 4)),
+        direct(local),
+        occlusion(local) {}
+  static Scene snapped(const Scene& s, const internal::SnappedFrame& frame) {
+    Scene out = s;
+    for (Vec3& v : out.vertices) v = frame.to_local(v);
+    for (Patch& p : out.patches) p.normal = internal::SnappedFrame::direction(p.normal);
+    return out;
+  }
 
   // Sample points of a source seen from one point: where each lies, its
   // weight (the point form factor's kernel there) and the reflected
@@ -205,6 +223,8 @@ struct FieldEvaluator::Impl {
     const double k = std::ceil(rays_per_node * light / full);
     return k >= 2 * rays_per_node ? 2 * rays_per_node : std::max(1, static_cast<int>(k));
   }
+  // FieldEvaluator::evaluation_point in the frame's units.
+  Vec3 evaluation_point(const Vec3& x, int patch, const Vec3& inward, FieldReport& report) const;
   Rgb gather_patch(size_t q, const Vec3& x, const Vec3& n, int patch, uint64_t id, double full,
                    FieldReport& report) const;
   Rgb gather_clustered(const Vec3& x, const Vec3& n, int patch, uint64_t id, double full, FieldReport& report) const;

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <string>
 
 namespace radmesh {
@@ -20,7 +21,14 @@ bool Mesh::zero_area(int t) const {
   const auto& tri = triangles[static_cast<size_t>(t)];
   const Vec3 &a = positions[tri[0]], &b = positions[tri[1]], &c = positions[tri[2]];
   const double longest = std::max({glm::length(b - a), glm::length(c - b), glm::length(a - c)});
-  return area(t) <= 1e-12 * longest * longest;
+  // Far from the origin for its size (a room moved by 10^6), a triangle's
+  // corners carry the rounding of their coordinates' magnitude, which can
+  // be more than 1e-12 of its edge: the middle vertex of a zero-area
+  // triangle lies off the long edge by up to that, which bounds its area.
+  const Vec3 m = glm::max(glm::abs(a), glm::max(glm::abs(b), glm::abs(c)));
+  const double far = std::max({m.x, m.y, m.z});
+  const double rounding = 8.0 * std::numeric_limits<double>::epsilon() * far;
+  return area(t) <= 1e-12 * longest * longest + rounding * longest;
 }
 
 Vec3 Mesh::centroid(int t) const {
