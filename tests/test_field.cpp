@@ -820,6 +820,35 @@ TEST(DisplayRefinement, ThePlatesMeanMeetsTheClosedFormThatTheSolversMeshMisses)
   for (const auto& [name, values] : shown.cell_fields) EXPECT_EQ(values.size(), shown.mesh.triangles.size()) << name;
 }
 
+TEST(DisplayRefinement, TheMeansHoldWhereTheRefinementStops) {
+  // Where the display stops splitting, at its budget (the parallel plates
+  // at T = 1e-4) or at kDisplayLevels (two unit squares at a right angle
+  // sharing an edge, whose field bends ever more towards the edge; Howell's
+  // C-14, F = 0.2000438), each triangle still takes its mean by its edge
+  // midpoints. Those rounds fell back to the vertices' linear interpolation
+  // and were further off than a coarser tolerance: -2.6e-4 and +1.7e-4.
+  SolveOptions so;
+  so.field = FieldMode::gather;
+  so.display_tolerance = 1e-4;
+  const Scene parallel = read_obj_scene(kData + "/parallel_plates/parallel_plates.obj");
+  const MethodResult p = solve(parallel, "matrix", 0.0, DiscontinuityMode::off, so);
+  const int receiver = test::patch_named(parallel, "receiver");
+  EXPECT_NEAR(patch_mean_radiosity(parallel, p.mesh, p.solution.nodal)[static_cast<size_t>(receiver)].x / 0.0999124, 1.0, 1e-5);
+  std::vector<RawFace> faces(2);
+  faces[0].name = "emitter";
+  faces[0].material = 0;
+  faces[0].points = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}};
+  faces[1].name = "receiver";
+  faces[1].material = 1;
+  faces[1].points = {{0, 0, 0}, {0, 0, 1}, {1, 0, 1}, {1, 0, 0}};
+  const Scene corner = build_scene(faces, {test::material("lamp", Rgb(0.0), Rgb(1.0)), test::material("grey", Rgb(0.5))},
+                                   "corner");
+  so.display_tolerance = 0.001;
+  const MethodResult c = solve(corner, "hierarchical", 0.0, DiscontinuityMode::off, so);
+  EXPECT_EQ(c.field.display_rounds, kDisplayLevels + 1);
+  EXPECT_NEAR(patch_mean_radiosity(corner, c.mesh, c.solution.nodal)[1].x / (0.5 * 0.2000438), 1.0, 1e-5);
+}
+
 TEST(DisplayRefinement, AFurnaceIsNotSplitAndAShadowIs) {
   // In the furnace every point is E / (1 - rho): no midpoint misses, no
   // split. Under the floating occluder the field bends at the penumbra:

@@ -166,9 +166,11 @@ public:
     report_.display_vertices = static_cast<long long>(nd);
   }
 
-  // Evaluates the midpoints of the leaves' edges that may still be split
-  // and splits the leaves the interpolation misses there by more than the
-  // tolerance. Returns the number of splits.
+  // Evaluates the midpoints of the leaves' edges, which give every leaf its
+  // mean, and splits the leaves the interpolation misses there by more than
+  // the tolerance, unless they are at kDisplayLevels or the display has
+  // passed its budget: the means hold wherever the refinement stops.
+  // Returns the number of splits.
   long long split(const Mesh& mesh, const std::vector<Rgb>& element, const NodalField& field) {
     means_.clear();
     double largest = 0.0;  // the largest reflected radiosity shown
@@ -178,7 +180,7 @@ public:
                                          scene_.material_of(mesh.patch[t]).emission));
     if (!(largest > 0.0)) return 0;
     // A bound on the display's size, whatever the tolerance.
-    if (static_cast<double>(mesh.triangles.size()) > budget) return 0;
+    const bool may_split = static_cast<double>(mesh.triangles.size()) <= budget;
     const double miss = options_.display_tolerance * largest;
     // The candidates, one per edge and root (two leaves of one root share
     // an edge's side), in leaf order.
@@ -188,7 +190,7 @@ public:
     std::vector<size_t> leaves;
     for (size_t t = 0; t < mesh.triangles.size(); ++t) {
       const int n = leaf_[t];
-      if (n < 0 || tree_.node(n).level >= kDisplayLevels || !(mesh.area(static_cast<int>(t)) > 0.0)) continue;
+      if (n < 0 || !(mesh.area(static_cast<int>(t)) > 0.0)) continue;
       leaves.push_back(t);
       const int root = tree_.node(n).root;
       for (int k = 0; k < 3; ++k) {
@@ -219,6 +221,7 @@ public:
     }
     long long splits = 0;
     for (const size_t t : leaves) {
+      if (!may_split || tree_.node(leaf_[t]).level >= kDisplayLevels) continue;
       bool off = false;
       for (int k = 0; k < 3 && !off; ++k) {
         const Rgb ends = 0.5 * (field.radiosity[static_cast<size_t>(field.corners[t][static_cast<size_t>(k)])] +
@@ -271,10 +274,12 @@ NodalField refine_display(const Scene& scene, const Mesh& initial, Mesh& mesh, s
   // The display's size is bounded by the solver's: a few times its triangles.
   refinement.budget = kDisplayGrowth * static_cast<double>(std::max(initial.triangles.size(), mesh.triangles.size()));
   NodalField field;
+  // A leaf is tested once (its midpoints and corners keep their values), so
+  // every round after the first tests only the last round's children, one
+  // level down: the rounds end by kDisplayLevels + 1.
   for (int round = 0;; ++round) {
     refinement.show(mesh, element, origin, field);
-    if (progress) progress("display", std::min(1.0, (round + 1.0) / (kDisplayLevels + 1.0)));
-    if (round == kDisplayLevels) break;
+    if (progress) progress("display", std::min(1.0, (round + 1.0) / (kDisplayLevels + 2.0)));
     rep.display_rounds = round + 1;
     if (refinement.split(mesh, element, field) == 0) {
       field.triangle_mean = refinement.take_means();
