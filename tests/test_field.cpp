@@ -849,6 +849,31 @@ TEST(DisplayRefinement, TheMeansHoldWhereTheRefinementStops) {
   EXPECT_NEAR(patch_mean_radiosity(corner, c.mesh, c.solution.nodal)[1].x / (0.5 * 0.2000438), 1.0, 1e-5);
 }
 
+TEST(DisplayRefinement, TheDisplayKeepsToItsBudget) {
+  // Past twice the solver's triangles no leaf is split: a round that would
+  // pass it splits the largest misses first, up to what is left. Rounds
+  // that split all they flagged once took the floating occluder's display
+  // to 1.6 times its budget at T = 0.001.
+  const Scene scene = read_obj_scene(kData + "/floating_occluder/floating_occluder.obj");
+  SolveOptions so;
+  so.field = FieldMode::gather;
+  const OptionValues coarse = {{"epsilon", "0.01"}};
+  auto with_area = [](const Mesh& m) {
+    int n = 0;
+    for (int t = 0; t < m.triangle_count(); ++t) n += m.zero_area(t) ? 0 : 1;
+    return n;
+  };
+  const Method& method = find_method("hierarchical");
+  MeshingOptions mo = method.meshing(scene);
+  const Mesh initial = mesh_scene(scene, mo);
+  const MethodResult plain = run_method(method, scene, initial, so, coarse);
+  const int budget = 2 * std::max(with_area(initial), with_area(plain.mesh));
+  so.display_tolerance = 0.0005;
+  const MethodResult shown = run_method(method, scene, initial, so, coarse);
+  EXPECT_GT(with_area(shown.mesh), budget * 9 / 10);
+  EXPECT_LE(with_area(shown.mesh), budget);
+}
+
 TEST(DisplayRefinement, AFurnaceIsNotSplitAndAShadowIs) {
   // In the furnace every point is E / (1 - rho): no midpoint misses, no
   // split. Under the floating occluder the field bends at the penumbra:

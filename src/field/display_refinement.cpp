@@ -33,6 +33,9 @@ uint64_t vertex_key(int vertex, int root) {
 // The display holds at most this many times the solver's triangles (a
 // round that starts past it splits nothing).
 constexpr double kDisplayGrowth = 2.0;
+// Past the budget, a round takes half the splits left, or all of them once
+// they are this few (each round rebuilds the whole display).
+constexpr long long kLastRoom = 256;
 
 // A random stream's seed for a midpoint: its edge and root, mixed.
 uint64_t midpoint_seed(int a, int b, int root) {
@@ -168,9 +171,9 @@ public:
 
   // Evaluates the midpoints of the leaves' edges, which give every leaf its
   // mean, and splits the leaves the interpolation misses there by more than
-  // the tolerance, unless they are at kDisplayLevels or the display has
-  // passed its budget: the means hold wherever the refinement stops.
-  // Returns the number of splits.
+  // the tolerance, unless they are at kDisplayLevels, within the display's
+  // budget: the means hold wherever the refinement stops. Returns the
+  // number of splits.
   long long split(const Mesh& mesh, const std::vector<Rgb>& element, const NodalField& field) {
     means_.clear();
     double largest = 0.0;  // the largest reflected radiosity shown
@@ -179,8 +182,6 @@ public:
         largest = std::max(largest, max3(field.radiosity[static_cast<size_t>(d)] -
                                          scene_.material_of(mesh.patch[t]).emission));
     if (!(largest > 0.0)) return 0;
-    // A bound on the display's size, whatever the tolerance.
-    const bool may_split = static_cast<double>(mesh.triangles.size()) <= budget;
     const double miss = options_.display_tolerance * largest;
     // The candidates, one per edge and root (two leaves of one root share
     // an edge's side), in leaf order.
@@ -219,16 +220,34 @@ public:
       means_[t] = Rgb(0.0);
       for (int k = 0; k < 3; ++k) means_[t] += b(of[t][static_cast<size_t>(k)]) / 3.0;
     }
-    long long splits = 0;
+    // The leaves the interpolation misses, with their largest miss.
+    std::vector<std::pair<double, size_t>> flagged;
     for (const size_t t : leaves) {
-      if (!may_split || tree_.node(leaf_[t]).level >= kDisplayLevels) continue;
-      bool off = false;
-      for (int k = 0; k < 3 && !off; ++k) {
+      if (tree_.node(leaf_[t]).level >= kDisplayLevels) continue;
+      double worst = 0.0;
+      for (int k = 0; k < 3; ++k) {
         const Rgb ends = 0.5 * (field.radiosity[static_cast<size_t>(field.corners[t][static_cast<size_t>(k)])] +
                                 field.radiosity[static_cast<size_t>(field.corners[t][static_cast<size_t>((k + 1) % 3)])]);
-        off = max3(glm::abs(b(of[t][static_cast<size_t>(k)]) - ends)) > miss;
+        worst = std::max(worst, max3(glm::abs(b(of[t][static_cast<size_t>(k)]) - ends)));
       }
-      if (!off) continue;
+      if (worst > miss) flagged.emplace_back(worst, t);
+    }
+    // All of them while they take at most half of the budget left (a split
+    // adds three triangles; all of what is left once that is kLastRoom
+    // splits or fewer), else the largest misses first up to that: the
+    // others are tested again with the children of those split, so that a
+    // shadow's edge goes deeper before a smooth field's broad misses use up
+    // the display.
+    const long long room = static_cast<long long>((budget - static_cast<double>(leaves.size())) / 3.0);
+    const size_t allowed = static_cast<size_t>(std::max(0LL, room > kLastRoom ? room / 2 : room));
+    if (flagged.size() > allowed) {
+      std::sort(flagged.begin(), flagged.end(),
+                [](const auto& x, const auto& y) { return x.first > y.first || (x.first == y.first && x.second < y.second); });
+      flagged.resize(allowed);
+      std::sort(flagged.begin(), flagged.end(), [](const auto& x, const auto& y) { return x.second < y.second; });
+    }
+    long long splits = 0;
+    for (const auto& [worst, t] : flagged) {
       const int n = leaf_[t], root = tree_.node(n).root;
       const auto corners = tree_.node(n).v;
       tree_.split(n);
@@ -258,7 +277,7 @@ private:
   std::vector<Rgb> means_;  // per display triangle of the last split's mesh (see split)
 
 public:
-  double budget = 0.0;  // display triangles past which no round splits
+  double budget = 0.0;  // display triangles of positive area past which no round splits
   // The means of the last split's triangles, when it sampled them.
   std::vector<Rgb> take_means() { return std::move(means_); }
 };
@@ -272,11 +291,16 @@ NodalField refine_display(const Scene& scene, const Mesh& initial, Mesh& mesh, s
   rep.mode = FieldMode::gather;
   Refinement refinement(scene, initial, mesh, element, options, rep);
   // The display's size is bounded by the solver's: a few times its triangles.
-  refinement.budget = kDisplayGrowth * static_cast<double>(std::max(initial.triangles.size(), mesh.triangles.size()));
+  auto with_area = [](const Mesh& m) {  // zero-area closures left out
+    double n = 0.0;
+    for (int t = 0; t < m.triangle_count(); ++t) n += m.zero_area(t) ? 0.0 : 1.0;
+    return n;
+  };
+  refinement.budget = kDisplayGrowth * std::max(with_area(initial), with_area(mesh));
   NodalField field;
-  // A leaf is tested once (its midpoints and corners keep their values), so
-  // every round after the first tests only the last round's children, one
-  // level down: the rounds end by kDisplayLevels + 1.
+  // A round splits every leaf it flags, whose children are a level down (at
+  // most kDisplayLevels rounds of those), or past the budget half of what
+  // is left of it: the rounds end.
   for (int round = 0;; ++round) {
     refinement.show(mesh, element, origin, field);
     if (progress) progress("display", std::min(1.0, (round + 1.0) / (kDisplayLevels + 2.0)));
