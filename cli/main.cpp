@@ -57,6 +57,7 @@ struct Params {
   bool png = true;
   std::string nodal;  // --nodal fit|mean: the older name of --field fit|mean
   std::string method = methods().front().name;
+  std::string preset = "default";  // --preset: Method::presets, filling in what is not given
   GivenOptions scene_given, meshing_given, solve_given, method_given;
   // Read and checked by check_params.
   SceneOptions scene_options;
@@ -155,6 +156,8 @@ void check_params(Params& p, bool solving) {
     p.solve_given.given["field"] = p.nodal;
   }
   p.scene_options = scene_option_table().parse(p.scene_given.given);
+  if (solving)
+    apply_preset(find_method(p.method), p.preset, p.solve_given.given, p.meshing_given.given, p.method_given.given);
   p.meshing = meshing_option_table().parse(p.meshing_given.given);
   if (solving) {
     p.solve = solve_option_table().parse(p.solve_given.given);
@@ -241,6 +244,7 @@ Computed compute(const Params& p, const Method* method, Reporter& rep) {
   c.info.meshing = resolve_meshing_options(c.scene, meshing_for(p, c.scene, method));
   c.info.method = method ? method->name : "none";
   c.info.method_options = p.method_options.values();
+  c.info.preset = p.preset;
   rep.begin("mesh");
   c.mesh = mesh_scene(c.scene, c.info.meshing, &c.info.mesh_report);
   c.info.seconds.push_back({"mesh", rep.end()});
@@ -418,6 +422,14 @@ void add_method_options(CLI::App* cmd, Params& p) {
   std::vector<std::string> names;
   for (const Method& m : methods()) names.push_back(m.name);
   cmd->add_option("--method", p.method, "solver, one of:" + list)->check(CLI::IsMember(names));
+  std::string presets = "options set together (any given by name wins): default (the defaults)";
+  for (const Method& m : methods())
+    for (const Preset& preset : m.presets) {
+      std::string values;
+      for (const auto& [name, value] : preset.values) values += (values.empty() ? "" : " ") + option_flag(name) + " " + value;
+      presets += "\n  " + preset.name + " (--method " + m.name + "): " + values + "; " + preset.help;
+    }
+  cmd->add_option("--preset", p.preset, presets)->check(CLI::IsMember(preset_names()));
   for (const auto& [spec, takers] : all_method_options()) {
     std::string who;
     for (const std::string& t : takers) who += (who.empty() ? "" : ", ") + t;

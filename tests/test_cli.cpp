@@ -162,6 +162,32 @@ TEST(Cli, DefaultMethodIsHierarchicalAndMatchesHowellOnThePlates) {
   EXPECT_EQ(receivers, 1);
 }
 
+TEST(Cli, APresetFillsInTheOptionsNotGivenAndTheSummarySaysWhich) {
+  // --preset draft is --epsilon 0.01 (Method::presets); an option given by
+  // name wins over it; a method without that preset, or a preset that is
+  // none, is refused naming it.
+  const test::TempDir tmp;
+  const std::string plates = kData + "/parallel_plates/parallel_plates.obj --no-png -q -o ";
+  const Result draft = run_cli("run " + plates + (tmp / "draft").string() + " --preset draft");
+  ASSERT_EQ(draft.status, 0) << draft.err;
+  const nlohmann::json s = read_summary(tmp / "draft");
+  EXPECT_EQ(s["options"]["preset"], "draft");
+  EXPECT_EQ(s["solver"]["epsilon"].get<double>(), 0.01);
+  const Result given = run_cli("run " + plates + (tmp / "given").string() + " --preset draft --epsilon 0.005");
+  ASSERT_EQ(given.status, 0) << given.err;
+  EXPECT_EQ(read_summary(tmp / "given")["solver"]["epsilon"].get<double>(), 0.005);
+  const Result plain = run_cli("run " + plates + (tmp / "plain").string());
+  ASSERT_EQ(plain.status, 0) << plain.err;
+  EXPECT_EQ(read_summary(tmp / "plain")["options"]["preset"], "default");
+  const Result matrix = run_cli("run " + plates + (tmp / "matrix").string() + " --preset fine --method matrix");
+  EXPECT_EQ(matrix.status, 1);
+  EXPECT_TRUE(test::contains(matrix.err, "--preset fine: --method matrix has none")) << matrix.err;
+  EXPECT_FALSE(fs::exists(tmp / "matrix" / "summary.json"));
+  const Result none = run_cli("run " + plates + (tmp / "none").string() + " --preset huge");
+  EXPECT_NE(none.status, 0);
+  EXPECT_TRUE(test::contains(none.err, "huge")) << none.err;
+}
+
 TEST(Cli, MeshWritesMeshAndSummary) {
   const test::TempDir tmp;
   const fs::path out = tmp / "mesh";

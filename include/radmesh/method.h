@@ -135,6 +135,21 @@ private:
   std::vector<OptionValue> values_;
 };
 
+// A named set of option values (solve, meshing and the method's own, by
+// name) that a user can reason about: `draft` for a quick look, `fine` for
+// a closer answer, each with its measured error and time in
+// docs/methods.md. `default` is the options' defaults.
+struct Preset {
+  std::string name;
+  std::string help;  // what it trades, one line
+  OptionValues values;
+};
+// The preset names every method answers to, in order.
+inline const std::vector<std::string>& preset_names() {
+  static const std::vector<std::string> names = {"draft", "default", "fine"};
+  return names;
+}
+
 struct Method {
   std::string name;
   std::string help;  // one sentence for --help
@@ -163,6 +178,8 @@ struct Method {
   // Every file name its results' MethodFiles may hold (for clearing an
   // output directory of an earlier run's).
   std::vector<std::string> files;
+  // Its presets other than `default` (draft and fine; see preset_names).
+  std::vector<Preset> presets;
 };
 
 // The table. The first entry is the default method.
@@ -181,6 +198,13 @@ std::vector<std::pair<OptionSpec, std::vector<std::string>>> all_method_options(
 // `given` read for `method` (Method::parse): InputError for an option the
 // method does not take, naming the methods that do.
 MethodOptions method_options(const Method& method, const OptionValues& given);
+
+// Adds the values of `method`'s preset `preset` to the options given by
+// name (of the solve, of the meshing, of the method) where they are not
+// given: an option named by the user wins over the preset. InputError
+// naming the presets when `preset` is none of them.
+void apply_preset(const Method& method, const std::string& preset, OptionValues& solve, OptionValues& meshing,
+                  OptionValues& method_given);
 
 // InputError naming the first of `given` (options of the solve or the
 // meshing, by name) that `method` does not use. `field` is the field asked

@@ -26,6 +26,7 @@ namespace radmesh {
 struct Result : MethodResult {
   std::shared_ptr<const Scene> scene;
   std::string method;                // the method's name in the table
+  std::string preset = "default";    // the preset its options were filled from (apply_preset)
   std::vector<OptionValue> options;  // the method's options as solved with
   SolveOptions solve_options;
   MeshingOptions meshing;            // the initial meshing, resolved

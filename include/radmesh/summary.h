@@ -25,6 +25,7 @@ struct RunInfo {
   std::vector<std::pair<std::string, double>> seconds;  // phase -> wall seconds, in order
   std::string method = "none";  // the solver (methods() name), "none" for mesh only
   std::vector<OptionValue> method_options;  // the method's options as solved with (empty for mesh only)
+  std::string preset = "default";  // the preset the options were filled from (Method::presets)
 };
 
 // Writes the summary document atomically (tmp + rename; IoError); `result`

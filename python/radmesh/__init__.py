@@ -37,19 +37,21 @@ def read_scene(path, **scene_options):
     return _core.read_scene(_os.fspath(path), **scene_options)
 
 
-def solve(scene, method=None, progress=None, resume=None, **options):
+def solve(scene, method=None, progress=None, resume=None, preset="default", **options):
     """Meshes `scene` as `method` recommends (meshing options on top) and solves it.
 
     progress: called as progress(phase, fraction) from this thread, at most
     ten times a second (tqdm works). Ctrl-C stops the solve within about a
     second and raises KeyboardInterrupt; nothing is kept. resume: an output
     folder where a pixmap run saved its state (Result.write) to continue from.
+    preset: "draft", "default" or "fine", the options of the method's preset
+    (methods()[k]["presets"]) where `options` does not name them.
     """
     if method is None:
         method = methods()[0]["name"]
     if resume is not None:
         from . import _files  # noqa: F401  (the pixmap state is a set of VTK images)
-    return _core.solve(scene, method, progress, None if resume is None else _os.fspath(resume), **options)
+    return _core.solve(scene, method, progress, None if resume is None else _os.fspath(resume), preset, **options)
 
 
 def _summary(self):

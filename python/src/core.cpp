@@ -305,9 +305,10 @@ PyMesh mesh_of(const PyScene& s, const py::kwargs& kwargs) {
 }
 
 PyResult solve_scene(const PyScene& s, const std::string& method_name, const py::object& progress,
-                     const py::object& resume, const py::kwargs& kwargs) {
+                     const py::object& resume, const std::string& preset, const py::kwargs& kwargs) {
   const Method& method = find_method(method_name);
-  const SortedOptions o = sort_options(&method, kwargs);
+  SortedOptions o = sort_options(&method, kwargs);
+  apply_preset(method, preset, o.solve, o.meshing, o.method);
   const MethodOptions mo = method_options(method, o.method);
   const SolveOptions common = solve_option_table().parse(o.solve);
   std::shared_ptr<const MethodState> state;
@@ -316,7 +317,9 @@ PyResult solve_scene(const PyScene& s, const std::string& method_name, const py:
   r.result = run_interruptible<std::shared_ptr<const Result>>(progress, [&](const SolveCallbacks& cb) {
     SolveCallbacks with = cb;
     with.resume = state;
-    auto out = std::make_shared<const Result>(solve(*s.scene, method, mo, common, with, o.meshing));
+    auto solved = std::make_shared<Result>(solve(*s.scene, method, mo, common, with, o.meshing));
+    solved->preset = preset;
+    std::shared_ptr<const Result> out = std::move(solved);
     if (out->interrupted) throw Stopped{};  // a method that stops on its own when asked (cb.cancelled)
     return out;
   });
@@ -485,7 +488,7 @@ PYBIND11_MODULE(_core, m) {
   }, py::arg("path"));
   m.def("mesh", &mesh_of, py::arg("scene"));
   m.def("solve", &solve_scene, py::arg("scene"), py::arg("method") = methods().front().name,
-        py::arg("progress") = py::none(), py::arg("resume") = py::none());
+        py::arg("progress") = py::none(), py::arg("resume") = py::none(), py::arg("preset") = "default");
   m.def("quality", [](const PyMesh& me) {
     return quality_of(*me.mesh, static_cast<int>(me.scene->patches.size()), me.report.discontinuities);
   }, py::arg("mesh"));
@@ -498,6 +501,9 @@ PYBIND11_MODULE(_core, m) {
       d["options"] = spec_list(method.options);
       d["unused"] = method.unused;
       d["resumable"] = method.resumable();
+      py::dict presets;
+      for (const Preset& p : method.presets) presets[py::str(p.name)] = p.values;
+      d["presets"] = presets;
       l.append(d);
     }
     return l;

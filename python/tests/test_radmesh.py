@@ -49,6 +49,19 @@ def test_the_cornell_box_from_python_is_the_programs_bit_for_bit(tmp_path):
         assert list(means[p]) == entry["mean_radiosity"]
 
 
+def test_a_preset_solves_as_the_program_with_the_same_preset(tmp_path):
+    # The preset's options, filled in where not named, as `radmesh run --preset`.
+    subprocess.run([CLI, "run", CORNELL, "-o", str(tmp_path / "cli"), "-q", "--no-png", "--preset", "draft",
+                    "--max-edge", "150"], check=True, capture_output=True)
+    result = radmesh.solve(radmesh.read_scene(CORNELL), preset="draft", max_edge=150.0)
+    cli_summary = json.loads((tmp_path / "cli" / "summary.json").read_text())
+    assert without_times(result.summary()) == without_times(cli_summary)
+    assert cli_summary["options"]["preset"] == "draft"
+    assert radmesh.methods()[0]["presets"]["draft"] == {"epsilon": "0.01"}
+    with pytest.raises(radmesh.InputError, match="preset fine: method matrix has none"):
+        radmesh.solve(radmesh.read_scene(CORNELL), method="matrix", preset="fine")
+
+
 def arrays_of(scene):
     offsets, indices = scene.patches
     return scene.vertices, (offsets, indices), scene.patch_materials, scene.materials

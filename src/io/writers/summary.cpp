@@ -188,6 +188,7 @@ nlohmann::json make_summary(const RunInfo& info, const Scene& scene, const Mesh&
                     {"field", to_string(info.solve.field)},
                     {"nodal", to_string(nodal_method(info.solve.field) == NodalMethod::mean ? FieldMode::mean
                                                                                           : FieldMode::fit)}};
+  if (info.method != "none") doc["options"]["preset"] = info.preset;
   doc["counts"] = {{"faces_read", scene.report.faces_read},
                    {"patches", scene.patches.size()},
                    {"materials", scene.materials.size()},
@@ -296,6 +297,7 @@ RunInfo run_info(const Result& result) {
   info.seconds = result.seconds;
   info.method = result.method;
   info.method_options = result.options;
+  info.preset = result.preset;
   return info;
 }
 

@@ -104,6 +104,27 @@ MethodOptions method_options(const Method& method, const OptionValues& given) {
   return method.parse(given);
 }
 
+void apply_preset(const Method& method, const std::string& preset, OptionValues& solve, OptionValues& meshing,
+                  OptionValues& method_given) {
+  const auto& names = preset_names();
+  if (std::find(names.begin(), names.end(), preset) == names.end())
+    throw InputError("preset " + preset + ": expected one of " + joined(names), {"preset"});
+  if (preset == "default") return;
+  const auto it = std::find_if(method.presets.begin(), method.presets.end(),
+                               [&](const Preset& p) { return p.name == preset; });
+  if (it == method.presets.end())
+    throw InputError("preset " + preset + ": method " + method.name + " has none", {"preset", "method"});
+  auto has = [](const std::vector<OptionSpec>& specs, const std::string& name) {
+    return std::any_of(specs.begin(), specs.end(), [&](const OptionSpec& s) { return s.name == name; });
+  };
+  for (const auto& [name, value] : it->values) {
+    OptionValues& to = has(solve_option_table().specs(), name)     ? solve
+                       : has(meshing_option_table().specs(), name) ? meshing
+                                                                   : method_given;
+    to.emplace(name, value);  // a value given by name stays
+  }
+}
+
 void check_shared_options(const Method& method, const std::vector<std::string>& given, FieldMode field) {
   for (const std::string& name : given) {
     if (std::find(method.unused.begin(), method.unused.end(), name) == method.unused.end()) continue;
