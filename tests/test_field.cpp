@@ -834,13 +834,9 @@ TEST(DisplayRefinement, TheMeansHoldWhereTheRefinementStops) {
   const MethodResult p = solve(parallel, "matrix", 0.0, DiscontinuityMode::off, so);
   const int receiver = test::patch_named(parallel, "receiver");
   EXPECT_NEAR(patch_mean_radiosity(parallel, p.mesh, p.solution.nodal)[static_cast<size_t>(receiver)].x / 0.0999124, 1.0, 1e-5);
-  std::vector<RawFace> faces(2);
-  faces[0].name = "emitter";
-  faces[0].material = 0;
-  faces[0].points = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}};
-  faces[1].name = "receiver";
-  faces[1].material = 1;
-  faces[1].points = {{0, 0, 0}, {0, 0, 1}, {1, 0, 1}, {1, 0, 0}};
+  std::vector<RawFace> faces;
+  test::add_face(faces, "emitter", 0, {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}});
+  test::add_face(faces, "receiver", 1, {{0, 0, 0}, {0, 0, 1}, {1, 0, 1}, {1, 0, 0}});
   const Scene corner = build_scene(faces, {test::material("lamp", Rgb(0.0), Rgb(1.0)), test::material("grey", Rgb(0.5))},
                                    "corner");
   so.display_tolerance = 0.001;

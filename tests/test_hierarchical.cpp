@@ -35,14 +35,6 @@ Mesh coarse_mesh(const Scene& s, double edge, DiscontinuityMode mode = Discontin
   return mesh_scene(s, o);
 }
 
-void add_face(std::vector<RawFace>& faces, const std::string& name, int material, std::vector<Vec3> pts) {
-  RawFace f;
-  f.name = name;
-  f.material = material;
-  f.points = std::move(pts);
-  faces.push_back(f);
-}
-
 double relative_imbalance(const SolveStats& st) {
   return (st.power_emitted.x - st.power_absorbed.x - st.power_escaped.x) / st.power_emitted.x;
 }
@@ -337,7 +329,7 @@ TEST(HierarchicalStress, ThinPolygonsAndRefinementAtContactLines) {
   // the minimum area next to the box's contact lines and along the strip.
   std::vector<RawFace> faces;
   auto quad = [&](const std::string& name, int material, std::vector<Vec3> pts) {
-    add_face(faces, name, material, std::move(pts));
+    test::add_face(faces, name, material, std::move(pts));
   };
   quad("floor", 0, {{0, 0, 0}, {0, 0, 4}, {4, 0, 4}, {4, 0, 0}});
   quad("strip", 0, {{0.5, 1.5, 2.0}, {0.5, 1.5, 2.004}, {3.5, 1.5, 2.004}, {3.5, 1.5, 2.0}});  // 3 x 0.003 (aspect 1000), faces up
@@ -380,7 +372,7 @@ TEST(Hierarchical, TwoSidedPanelAndBlocksInContactShareCornersButNotInsides) {
   // solve stopped with "vertex ... is inside another root").
   std::vector<RawFace> faces;
   auto quad = [&](const std::string& name, int material, std::vector<Vec3> pts) {
-    add_face(faces, name, material, std::move(pts));
+    test::add_face(faces, name, material, std::move(pts));
   };
   auto block = [&](const std::string& name, Vec3 lo, Vec3 hi) {  // faces out
     for (const RawFace& f : test::box_faces(name, 0, lo, hi)) faces.push_back(f);
@@ -684,7 +676,7 @@ TEST(Hierarchical, AFurnaceWithATileLyingInItsFloorStaysUniform) {
   // second surface over the floor, the walls' rows would count the tile's
   // area twice.
   std::vector<RawFace> faces = test::box_faces("room", 0, {0, 0, 0}, {1, 1, 1}, false);
-  add_face(faces, "tile", 0, {{0.2, 0, 0.2}, {0.2, 0, 0.5}, {0.5, 0, 0.5}, {0.5, 0, 0.2}});
+  test::add_face(faces, "tile", 0, {{0.2, 0, 0.2}, {0.2, 0, 0.5}, {0.5, 0, 0.5}, {0.5, 0, 0.2}});
   const Scene s = build_scene(faces, {test::material("f", Rgb(0.8), Rgb(1.0))}, "furnace with a tile");
   ASSERT_EQ(s.report.faces_cut_out, 1);
   HierarchicalOptions ho;

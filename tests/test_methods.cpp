@@ -156,13 +156,9 @@ TEST_P(Conformance, NearlyTouchingPlatesExchangeAllTheirLight) {
   // Two unit squares 1e-6 apart, front to front, the upper one a black
   // emitter (E = 1): the lower one (rho = 0.5) sees it with F = 1 - O(1e-6),
   // so B = 0.5, and nearly nothing escapes.
-  std::vector<RawFace> faces(2);
-  faces[0].name = "lower";
-  faces[0].material = 1;
-  faces[0].points = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}};
-  faces[1].name = "upper";
-  faces[1].material = 0;
-  faces[1].points = {{0, 0, 1e-6}, {0, 1, 1e-6}, {1, 1, 1e-6}, {1, 0, 1e-6}};
+  std::vector<RawFace> faces;
+  test::add_face(faces, "lower", 1, {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}});
+  test::add_face(faces, "upper", 0, {{0, 0, 1e-6}, {0, 1, 1e-6}, {1, 1, 1e-6}, {1, 0, 1e-6}});
   std::vector<Material> materials(2);
   materials[0].name = "lamp";
   materials[0].emission = Rgb(1.0);

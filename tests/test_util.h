@@ -83,6 +83,15 @@ inline Material material(const std::string& name, const Rgb& reflectance, const 
   return m;
 }
 
+// Appends a face named `name` of material `material` with outline `pts`.
+inline void add_face(std::vector<RawFace>& faces, const std::string& name, int material, std::vector<Vec3> pts) {
+  RawFace f;
+  f.name = name;
+  f.material = material;
+  f.points = std::move(pts);
+  faces.push_back(std::move(f));
+}
+
 // The six faces of the box [lo, hi] as quads named `name` with material
 // `material`, facing out (a block) or in (a room).
 inline std::vector<RawFace> box_faces(const std::string& name, int material, const Vec3& lo, const Vec3& hi,
