@@ -369,6 +369,48 @@ std::vector<Rgb> brute_gather(const Scene& scene, const Mesh& mesh, const std::v
   return out;
 }
 
+// The gather field's noise at its vertices: the same solve's field at the
+// setting's rays and at 16 times as many (its seeds differ, so the two are
+// independent draws), the relative difference per lit display vertex of
+// a reflecting patch (first channel): its 95th percentile and largest.
+// Each draw's own noise is then about this over sqrt(1 + 1/16).
+int field_noise(const Scenario& sc, const Scene& scene, const Settings& set) {
+  const Method& method = find_method(set.method);
+  MeshingOptions mo = method.meshing(scene);
+  mo.max_edge = set.max_edge;
+  mo.discontinuity = set.discontinuity;
+  SolveOptions so;
+  so.rays = set.rays;
+  so.quadrature.max_level = set.quad_level;
+  so.field = FieldMode::gather;
+  const MethodResult r = run_method(method, scene, mesh_scene(scene, mo), so, set.options);
+  SolveOptions many = so;
+  many.rays = 16 * set.rays;
+  const auto t0 = std::chrono::steady_clock::now();
+  const NodalField fine = compute_field(scene, r.mesh, r.solution.element, many);
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const NodalField& shown = r.solution.nodal;
+  double top = 0.0;
+  for (const Rgb& b : fine.radiosity) top = std::max(top, b.x);
+  std::vector<double> diff;
+  std::vector<int> patch(shown.points.size(), -1);
+  for (size_t t = 0; t < r.mesh.triangles.size(); ++t)
+    for (int d : shown.corners[t]) patch[static_cast<size_t>(d)] = r.mesh.patch[t];
+  for (size_t d = 0; d < shown.points.size(); ++d) {
+    const Material& m = scene.material_of(patch[d]);
+    const double b = fine.radiosity[d].x;
+    if (max3(m.emission) > 0.0 || max3(m.reflectance) <= 0.0 || !(b > 1e-3 * top)) continue;
+    diff.push_back(std::abs(shown.radiosity[d].x / b - 1.0));
+  }
+  std::sort(diff.begin(), diff.end());
+  const double p95 = diff.empty() ? 0.0 : diff[static_cast<size_t>(0.95 * static_cast<double>(diff.size() - 1))];
+  std::printf("%s: %zu lit vertices, rays %d against %d (%.2f s): relative difference p95 %.3e, median %.3e, "
+              "max %.3e\n",
+              sc.name.c_str(), diff.size(), so.rays, many.rays, seconds, p95,
+              diff.empty() ? 0.0 : diff[diff.size() / 2], diff.empty() ? 0.0 : diff.back());
+  return 0;
+}
+
 // Where the gather field's error comes from: its direct and indirect parts
 // evaluated at the samples themselves (no interpolation), the brute-force
 // gather of the same element values beside the tree gather, and the field
@@ -670,6 +712,10 @@ int main(int argc, char** argv) {
                "off, contacts and full; writes direct.csv and direct.png");
   bool parts = false;
   app.add_flag("--field-parts", parts, "with one --settings: the direct and gathered parts' errors per patch");
+  bool noise = false;
+  app.add_flag("--field-noise", noise,
+               "with one --settings: the gather field's vertex values against the same solve's field at 16 times "
+               "the rays (95th percentile and largest relative difference)");
   bool progressive = false;
   app.add_flag("--progressive", progressive,
                "the pixmap method's error at every tenth of its shots (with one --settings: its options); writes "
@@ -731,6 +777,7 @@ int main(int argc, char** argv) {
         for (const std::string& c : custom) sweep.push_back(parse_settings(c));
       }
       if (parts) return field_parts(sc, scene, samples, ref, sweep.at(0));
+      if (noise) return field_noise(sc, scene, sweep.at(0));
       if (progressive)
         return progressive_study(sc, scene, samples, ref, custom.empty() ? Settings{} : sweep.at(0), out_dir);
       for (const Settings& set : sweep) {
