@@ -86,10 +86,17 @@ def _method_xml():
             '</StringListDomain><Documentation>The radiosity method.</Documentation></StringVectorProperty>')
 
 
+def _preset_xml():
+    entries = "".join(f'<String value="{name}"/>' for name in ("draft", "default", "fine"))
+    return ('<StringVectorProperty name="Preset" command="SetPreset" number_of_elements="1" default_values="default">'
+            f'<StringListDomain name="list">{entries}</StringListDomain><Documentation>The method\'s options set '
+            'together (radmesh run --preset); an option set here wins over it.</Documentation></StringVectorProperty>')
+
+
 def _add_options(cls):
     """Gives the class a setter and a property per option (the scene file's too where it reads one), and the
-    Method property."""
-    xmls = [_method_xml()]
+    Method and Preset properties."""
+    xmls = [_method_xml(), _preset_xml()]
     for owner, spec in _option_tables(cls._reads_scene):
         def setter(self, value, _spec=spec):
             self._set_option(_spec, value)
@@ -130,12 +137,18 @@ class _Solving(VTKPythonAlgorithmBase):
     def __init__(self, inputs, output):
         VTKPythonAlgorithmBase.__init__(self, nInputPorts=inputs, nOutputPorts=1, outputType=output)
         self._method = radmesh.methods()[0]["name"]
+        self._preset = "default"
         self._options = {}
         self._owners = {spec["name"]: owner for owner, spec in _option_tables(self._reads_scene)}
 
     def SetMethod(self, method):
         if method != self._method:
             self._method = method
+            self.Modified()
+
+    def SetPreset(self, preset):
+        if preset != self._preset:
+            self._preset = preset
             self.Modified()
 
     def _set_option(self, spec, value):
@@ -156,7 +169,7 @@ class _Solving(VTKPythonAlgorithmBase):
 
     def _solve(self, scene):
         # Options of another method are left out: their properties are hidden.
-        return radmesh.solve(scene, method=self._method, **self._given((None, self._method)))
+        return radmesh.solve(scene, method=self._method, preset=self._preset, **self._given((None, self._method)))
 
 
 @smproxy.source(name="radmeshScene", label="radmesh Scene")

@@ -75,7 +75,8 @@ for name in ("reflectance", "emission"):
     poly.GetCellData().AddArray(a)
 producer = TrivialProducer()
 producer.GetClientSideObject().SetOutput(poly)
-lit = radmeshRadiosity(Input=producer, Method="hierarchical", Epsilon=0.01, MaxEdge=150.0)
+# --preset draft is --epsilon 0.01: the same run.
+lit = radmeshRadiosity(Input=producer, Method="hierarchical", Preset="draft", MaxEdge=150.0)
 compare("radmesh Radiosity", arrays(lit), reference)
 
 if screenshot:
