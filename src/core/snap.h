@@ -25,24 +25,6 @@ inline double snap_unit(double x) {
   return std::nearbyint(fine * 0x1p33) * 0x1p-33;
 }
 
-// Points as keys for splits that compare them: each in units of the set's
-// largest extent from its lowest corner, snapped (snap_unit). A tie among
-// the points (a regular mesh's centroids in rows, a square's equal sides)
-// is then a tie in a scaled or moved scene as well.
-inline std::vector<Vec3> snapped_keys(const std::vector<Vec3>& points) {
-  Vec3 lo(std::numeric_limits<double>::infinity()), hi(-std::numeric_limits<double>::infinity());
-  for (const Vec3& p : points) {
-    lo = glm::min(lo, p);
-    hi = glm::max(hi, p);
-  }
-  const double size = std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z});
-  if (!(size > 0.0) || !std::isfinite(size)) return points;
-  std::vector<Vec3> keys(points.size());
-  for (size_t i = 0; i < points.size(); ++i)
-    for (int a = 0; a < 3; ++a) keys[i][a] = snap_unit((points[i][a] - lo[a]) / size);
-  return keys;
-}
-
 // A set of points in units of its largest extent from its lowest corner,
 // snapped (snap_unit): what a scene scaled or moved puts a few ulps apart
 // lands on the same numbers, so that a point on a plane stays on it.
@@ -50,6 +32,7 @@ inline std::vector<Vec3> snapped_keys(const std::vector<Vec3>& points) {
 struct SnappedFrame {
   Vec3 lo{0.0};
   double size = 1.0;
+  bool sized = false;  // the points span a finite, positive extent (else lo 0, size 1)
 
   SnappedFrame() = default;
   explicit SnappedFrame(const std::vector<Vec3>& points) {
@@ -60,7 +43,8 @@ struct SnappedFrame {
       hi = glm::max(hi, p);
     }
     size = std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z});
-    if (!(size > 0.0) || !std::isfinite(size)) {
+    sized = size > 0.0 && std::isfinite(size);
+    if (!sized) {
       lo = Vec3(0.0);
       size = 1.0;
     }
@@ -75,5 +59,17 @@ struct SnappedFrame {
     return length > 0.0 ? s / length : d;
   }
 };
+
+// Points as keys for splits that compare them: each in units of the set's
+// largest extent from its lowest corner, snapped (SnappedFrame). A tie
+// among the points (a regular mesh's centroids in rows, a square's equal
+// sides) is then a tie in a scaled or moved scene as well.
+inline std::vector<Vec3> snapped_keys(const std::vector<Vec3>& points) {
+  const SnappedFrame frame(points);
+  if (!frame.sized) return points;
+  std::vector<Vec3> keys(points.size());
+  for (size_t i = 0; i < points.size(); ++i) keys[i] = frame.to_local(points[i]);
+  return keys;
+}
 
 }  // namespace radmesh::internal

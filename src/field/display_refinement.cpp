@@ -30,8 +30,8 @@ uint64_t vertex_key(int vertex, int root) {
   return (static_cast<uint64_t>(static_cast<uint32_t>(vertex)) << 32) | static_cast<uint32_t>(root);
 }
 
-// The display holds at most this many times the solver's triangles (a
-// round that starts past it splits nothing).
+// The display holds at most this many times the solver's triangles (of
+// positive area, as the display's are counted).
 constexpr double kDisplayGrowth = 2.0;
 // Past the budget, a round takes half the splits left, or all of them once
 // they are this few (each round rebuilds the whole display).
@@ -247,7 +247,7 @@ public:
       std::sort(flagged.begin(), flagged.end(), [](const auto& x, const auto& y) { return x.second < y.second; });
     }
     long long splits = 0;
-    for (const auto& [worst, t] : flagged) {
+    for (const auto& [by, t] : flagged) {
       const int n = leaf_[t], root = tree_.node(n).root;
       const auto corners = tree_.node(n).v;
       tree_.split(n);
