@@ -315,20 +315,30 @@ Settings parse_settings(const std::string& text) {
   return set;
 }
 
-Row run_one(const Scenario& sc, const Scene& scene, const std::vector<SurfaceSample>& samples,
-            const std::vector<Rgb>& reference, const Settings& set) {
-  const auto t0 = std::chrono::steady_clock::now();
+// The solve options of `set` (its rays and quadrature) with the field `field`.
+SolveOptions solve_options_of(const Settings& set, FieldMode field) {
+  SolveOptions so;
+  so.rays = set.rays;
+  so.quadrature.max_level = set.quad_level;
+  so.field = field;
+  return so;
+}
+
+// `set`'s run: its method's initial meshing with its edge and lines, solved with `so`.
+MethodResult run_settings(const Scene& scene, const Settings& set, const SolveOptions& so) {
   const Method& method = find_method(set.method);
   MeshingOptions mo = method.meshing(scene);
   mo.max_edge = set.max_edge;
   mo.discontinuity = set.discontinuity;
-  const Mesh mesh = mesh_scene(scene, mo);
-  SolveOptions so;
-  so.rays = set.rays;
-  so.quadrature.max_level = set.quad_level;
-  so.field = set.field;
+  return run_method(method, scene, mesh_scene(scene, mo), so, set.options);
+}
+
+Row run_one(const Scenario& sc, const Scene& scene, const std::vector<SurfaceSample>& samples,
+            const std::vector<Rgb>& reference, const Settings& set) {
+  const auto t0 = std::chrono::steady_clock::now();
+  SolveOptions so = solve_options_of(set, set.field);
   so.display_tolerance = set.display_tolerance;
-  const MethodResult r = run_method(method, scene, mesh, so, set.options);
+  const MethodResult r = run_settings(scene, set, so);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   const Solution& sol = r.solution;
   const std::vector<Rgb> values = interpolate_nodal(scene, r.mesh, sol.nodal, samples);
@@ -370,20 +380,12 @@ std::vector<Rgb> brute_gather(const Scene& scene, const Mesh& mesh, const std::v
 }
 
 // The gather field's noise at its vertices: the same solve's field at the
-// setting's rays and at 16 times as many (its seeds differ, so the two are
-// independent draws), the relative difference per lit display vertex of
-// a reflecting patch (first channel): its 95th percentile and largest.
-// Each draw's own noise is then about this over sqrt(1 + 1/16).
+// setting's rays and at 16 times as many (each part's rays drawn in 16
+// times as many strata), the relative difference per lit display vertex
+// of a reflecting patch (first channel): its 95th percentile and largest.
 int field_noise(const Scenario& sc, const Scene& scene, const Settings& set) {
-  const Method& method = find_method(set.method);
-  MeshingOptions mo = method.meshing(scene);
-  mo.max_edge = set.max_edge;
-  mo.discontinuity = set.discontinuity;
-  SolveOptions so;
-  so.rays = set.rays;
-  so.quadrature.max_level = set.quad_level;
-  so.field = FieldMode::gather;
-  const MethodResult r = run_method(method, scene, mesh_scene(scene, mo), so, set.options);
+  const SolveOptions so = solve_options_of(set, FieldMode::gather);
+  const MethodResult r = run_settings(scene, set, so);
   SolveOptions many = so;
   many.rays = 16 * set.rays;
   const auto t0 = std::chrono::steady_clock::now();
@@ -418,15 +420,8 @@ int field_noise(const Scenario& sc, const Scene& scene, const Settings& set) {
 // then the samples the interpolation misses most.
 int field_parts(const Scenario& sc, const Scene& scene, const std::vector<SurfaceSample>& samples,
                 const std::vector<Rgb>& reference, const Settings& set) {
-  const Method& method = find_method(set.method);
-  MeshingOptions mo = method.meshing(scene);
-  mo.max_edge = set.max_edge;
-  mo.discontinuity = set.discontinuity;
-  SolveOptions so;
-  so.rays = set.rays;
-  so.quadrature.max_level = set.quad_level;
-  so.field = FieldMode::gather;
-  const MethodResult r = run_method(method, scene, mesh_scene(scene, mo), so, set.options);
+  const SolveOptions so = solve_options_of(set, FieldMode::gather);
+  const MethodResult r = run_settings(scene, set, so);
   const FieldEvaluator ev(scene, r.mesh, r.solution.element, so);
   const size_t n = samples.size();
   std::vector<Rgb> direct(n), indirect(n), ref_indirect(n), total(n);

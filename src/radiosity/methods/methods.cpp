@@ -114,13 +114,10 @@ void apply_preset(const Method& method, const std::string& preset, OptionValues&
                                [&](const Preset& p) { return p.name == preset; });
   if (it == method.presets.end())
     throw InputError("preset " + preset + ": method " + method.name + " has none", {"preset", "method"});
-  auto has = [](const std::vector<OptionSpec>& specs, const std::string& name) {
-    return std::any_of(specs.begin(), specs.end(), [&](const OptionSpec& s) { return s.name == name; });
-  };
   for (const auto& [name, value] : it->values) {
-    OptionValues& to = has(solve_option_table().specs(), name)     ? solve
-                       : has(meshing_option_table().specs(), name) ? meshing
-                                                                   : method_given;
+    OptionValues& to = solve_option_table().has(name)     ? solve
+                       : meshing_option_table().has(name) ? meshing
+                                                          : method_given;
     to.emplace(name, value);  // a value given by name stays
   }
 }
